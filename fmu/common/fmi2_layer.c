@@ -1,0 +1,618 @@
+/* Generic FMI 2.0 Co-Simulation layer: the entry points, the call-sequence checks of the FMI 2.0
+ * state machine, logging, validation of what is set, FMU state get/set/serialize and input
+ * extrapolation. It is compiled once per model, against that model's variables.h; the model
+ * itself only implements the four hooks of fmu_common.h.
+ */
+#include "fmu_common.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#ifndef MODEL_GUID
+#error "MODEL_GUID must be defined by the build (a hash of the model's variables.h)"
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Logging                                                                                     */
+
+void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, const char *format, ...) {
+    if (!fmu || !fmu->callbacks.logger) return;
+    int enabled = fmu->log_all || (status >= fmi2Error && fmu->log_errors) ||
+                  (status == fmi2Warning && fmu->log_warnings) ||
+                  (strcmp(category, "logEvents") == 0 && fmu->log_events);
+    if (!enabled) return;
+    char message[1024], escaped[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    /* The importer may treat the message as a format string: escape '%'. */
+    size_t j = 0;
+    for (size_t i = 0; message[i] && j + 2 < sizeof escaped; i++) {
+        if (message[i] == '%') escaped[j++] = '%';
+        escaped[j++] = message[i];
+    }
+    escaped[j] = '\0';
+    fmu->callbacks.logger(fmu->callbacks.componentEnvironment, fmu->instance_name, status, category,
+                          escaped);
+}
+
+#define LOG_ERROR(fmu, ...) fmu_log((fmu), fmi2Error, "logStatusError", __VA_ARGS__)
+
+static const char *phase_name(int phase) {
+    switch (phase) {
+    case PHASE_INSTANTIATED: return "instantiated";
+    case PHASE_INITIALIZATION: return "initialization mode";
+    case PHASE_STEP_COMPLETE: return "step complete";
+    case PHASE_STEP_FAILED: return "step failed";
+    case PHASE_TERMINATED: return "terminated";
+    case PHASE_ERROR: return "error";
+    }
+    return "unknown";
+}
+
+/* The call-sequence check: `allowed` is the set of phases in which `call` may be made. */
+static int allowed(FmuInstance *fmu, const char *call, int phases) {
+    if (!fmu) return 0;
+    if (fmu->s.phase & phases) return 1;
+    LOG_ERROR(fmu, "%s: illegal call sequence: not allowed in state '%s'", call, phase_name(fmu->s.phase));
+    return 0;
+}
+
+#define ANY_LIVE_PHASE                                                                            \
+    (PHASE_INSTANTIATED | PHASE_INITIALIZATION | PHASE_STEP_COMPLETE | PHASE_STEP_FAILED |         \
+     PHASE_TERMINATED | PHASE_ERROR)
+#define AFTER_INITIALIZATION (PHASE_STEP_COMPLETE | PHASE_STEP_FAILED | PHASE_TERMINATED | PHASE_ERROR)
+
+/* ------------------------------------------------------------------------------------------ */
+/* Variables                                                                                   */
+
+static void *value_address(FmuInstance *fmu, int vr) {
+    return (char *)&fmu->s.v + fmu_variables[vr].offset;
+}
+
+static void set_start_values(FmuInstance *fmu) {
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        const FmuVariable *var = &fmu_variables[vr];
+        if (var->type == FMU_REAL) *(double *)value_address(fmu, vr) = var->start;
+        else *(int *)value_address(fmu, vr) = (int)var->start;
+    }
+}
+
+static const char *type_name(FmuType t) {
+    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "Boolean";
+}
+
+static int check_reference(FmuInstance *fmu, const char *call, fmi2ValueReference vr, FmuType type) {
+    if (vr < 1 || vr >= VR_COUNT) {
+        LOG_ERROR(fmu, "%s: unknown value reference %u", call, (unsigned)vr);
+        return 0;
+    }
+    if (fmu_variables[vr].type != type) {
+        LOG_ERROR(fmu, "%s: variable '%s' (value reference %u) is of type %s, not %s", call,
+                  fmu_variables[vr].name, (unsigned)vr, type_name(fmu_variables[vr].type), type_name(type));
+        return 0;
+    }
+    return 1;
+}
+
+/* May `vr` be set now, and is `value` acceptable? Logs the reason when not. */
+static int check_settable(FmuInstance *fmu, const char *call, int vr, double value) {
+    const FmuVariable *var = &fmu_variables[vr];
+    if (var->causality == FMU_OUTPUT || var->causality == FMU_LOCAL) {
+        LOG_ERROR(fmu, "%s: '%s' is an output; it cannot be set", call, var->name);
+        return 0;
+    }
+    if (fmu->s.phase & (PHASE_STEP_COMPLETE)) {
+        if (var->causality == FMU_PARAMETER && var->variability != FMU_TUNABLE) {
+            LOG_ERROR(fmu, "%s: '%s' is a fixed parameter; it can only be set before initialization ends",
+                      call, var->name);
+            return 0;
+        }
+    } else if (!(fmu->s.phase & (PHASE_INSTANTIATED | PHASE_INITIALIZATION))) {
+        LOG_ERROR(fmu, "%s: illegal call sequence: '%s' cannot be set in state '%s'", call, var->name,
+                  phase_name(fmu->s.phase));
+        return 0;
+    }
+    if (!isfinite(value)) {
+        LOG_ERROR(fmu, "%s: '%s' = %g rejected: not a finite number", call, var->name, value);
+        return 0;
+    }
+    if (value < var->min || value > var->max) {
+        LOG_ERROR(fmu, "%s: '%s' = %g rejected: outside [%g, %g] %s", call, var->name, value, var->min,
+                  var->max, var->unit);
+        return 0;
+    }
+    return 1;
+}
+
+/* Called after values were set: outputs must be recomputed; a tunable parameter changed after
+ * initialization must leave the model valid, or it is put back. */
+static fmi2Status after_set(FmuInstance *fmu, const ModelVariables *before, int any_input) {
+    if (any_input) fmu->s.input_time = fmu->s.time;
+    fmu->outputs_stale = 1;
+    if ((fmu->s.phase & PHASE_STEP_COMPLETE) && model_validate(fmu) != fmi2OK) {
+        fmu->s.v = *before;
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+static void refresh_outputs(FmuInstance *fmu) {
+    if (!fmu->outputs_stale) return;
+    if (fmu->s.phase & PHASE_INITIALIZATION) model_initialize(fmu);
+    if (fmu->s.phase & (PHASE_INITIALIZATION | AFTER_INITIALIZATION)) model_compute_outputs(fmu);
+    fmu->outputs_stale = 0;
+}
+
+double fmu_input_at(const FmuInstance *fmu, int vr, double t) {
+    double value = *(const double *)((const char *)&fmu->s.v + fmu_variables[vr].offset);
+    if (fmu->s.input_derivative_given[vr]) value += fmu->s.input_derivative[vr] * (t - fmu->s.input_time);
+    return value;
+}
+
+int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }
+
+fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step) {
+    OdeSolver *solver = &fmu->s.solver;
+    solver->method = fmu->s.v.solver_method;
+    solver->step = (max_step > 0.0 && max_step < fmu->s.v.solver_step) ? max_step : fmu->s.v.solver_step;
+    solver->rtol = fmu->s.v.solver_rtol;
+    solver->atol = fmu->s.v.solver_atol;
+    double t_failed;
+    OdeResult r = ode_integrate(solver, problem, ctx, fmu->s.x, fmu->s.time, fmu->s.time + h, &t_failed);
+    if (r == ODE_OK) return fmi2OK;
+    LOG_ERROR(fmu, "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s", t_failed,
+              fmu->s.time, ode_result_text(r));
+    return fmi2Error;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Instance life cycle                                                                         */
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2SetDebugLogging", ANY_LIVE_PHASE)) return fmi2Error;
+    fmu->logging_on = loggingOn;
+    if (nCategories == 0) {
+        fmu->log_events = fmu->log_warnings = fmu->log_all = loggingOn;
+        fmu->log_errors = 1;
+        return fmi2OK;
+    }
+    for (size_t i = 0; i < nCategories; i++) {
+        const char *cat = categories[i];
+        if (!cat) { LOG_ERROR(fmu, "fmi2SetDebugLogging: category %zu is NULL", i); return fmi2Error; }
+        if (strcmp(cat, "logEvents") == 0) fmu->log_events = loggingOn;
+        else if (strcmp(cat, "logStatusWarning") == 0) fmu->log_warnings = loggingOn;
+        else if (strcmp(cat, "logStatusError") == 0) fmu->log_errors = loggingOn;
+        else if (strcmp(cat, "logAll") == 0) fmu->log_all = loggingOn;
+        else {
+            LOG_ERROR(fmu, "fmi2SetDebugLogging: unknown log category '%s'", cat);
+            return fmi2Error;
+        }
+    }
+    return fmi2OK;
+}
+
+static void reset_to_start(FmuInstance *fmu) {
+    memset(&fmu->s, 0, sizeof fmu->s);
+    fmu->s.phase = PHASE_INSTANTIATED;
+    set_start_values(fmu);
+    fmu->outputs_stale = 1;
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    (void)fmuResourceLocation;
+    (void)visible;
+    if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
+    FmuInstance probe;
+    memset(&probe, 0, sizeof probe);
+    probe.callbacks = *functions;
+    probe.instance_name = (char *)(instanceName ? instanceName : "?");
+    probe.log_errors = 1;
+    if (!instanceName || !instanceName[0]) {
+        LOG_ERROR(&probe, "fmi2Instantiate: missing instance name");
+        return NULL;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        LOG_ERROR(&probe, "fmi2Instantiate: %s is a Co-Simulation FMU; Model Exchange is not supported",
+                  MODEL_IDENTIFIER_STRING);
+        return NULL;
+    }
+    if (!fmuGUID || strcmp(fmuGUID, MODEL_GUID) != 0) {
+        LOG_ERROR(&probe, "fmi2Instantiate: GUID '%s' does not match this binary's '%s'",
+                  fmuGUID ? fmuGUID : "(null)", MODEL_GUID);
+        return NULL;
+    }
+    FmuInstance *fmu = (FmuInstance *)functions->allocateMemory(1, sizeof(FmuInstance));
+    if (!fmu) return NULL;
+    memset(fmu, 0, sizeof *fmu);
+    fmu->callbacks = *functions;
+    fmu->instance_name = (char *)functions->allocateMemory(strlen(instanceName) + 1, 1);
+    if (!fmu->instance_name) { functions->freeMemory(fmu); return NULL; }
+    strcpy(fmu->instance_name, instanceName);
+    fmu->logging_on = loggingOn;
+    fmu->log_errors = 1;
+    fmu->log_warnings = 1;
+    fmu->log_events = fmu->log_all = loggingOn;
+    reset_to_start(fmu);
+    return fmu;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!fmu) return;
+    fmi2CallbackFreeMemory release = fmu->callbacks.freeMemory;
+    release(fmu->instance_name);
+    release(fmu);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)toleranceDefined; (void)tolerance;
+    if (!allowed(fmu, "fmi2SetupExperiment", PHASE_INSTANTIATED)) return fmi2Error;
+    if (!isfinite(startTime) || (stopTimeDefined && !(stopTime >= startTime))) {
+        LOG_ERROR(fmu, "fmi2SetupExperiment: invalid times start = %g, stop = %g", startTime, stopTime);
+        return fmi2Error;
+    }
+    fmu->s.time = fmu->s.input_time = startTime;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2EnterInitializationMode", PHASE_INSTANTIATED)) return fmi2Error;
+    if (model_validate(fmu) != fmi2OK) return fmi2Error;
+    fmu->s.phase = PHASE_INITIALIZATION;
+    fmu->outputs_stale = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2ExitInitializationMode", PHASE_INITIALIZATION)) return fmi2Error;
+    if (model_validate(fmu) != fmi2OK) return fmi2Error;
+    model_initialize(fmu);
+    fmu->s.phase = PHASE_STEP_COMPLETE;
+    model_compute_outputs(fmu);
+    fmu->outputs_stale = 0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2Terminate", PHASE_STEP_COMPLETE | PHASE_STEP_FAILED)) return fmi2Error;
+    fmu->s.phase = PHASE_TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2Reset", ANY_LIVE_PHASE)) return fmi2Error;
+    reset_to_start(fmu);
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Get and set                                                                                 */
+
+#define GET_PHASES (PHASE_INITIALIZATION | AFTER_INITIALIZATION | PHASE_INSTANTIATED)
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2GetReal", GET_PHASES)) return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2GetReal: NULL array"); return fmi2Error; }
+    refresh_outputs(fmu);
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, "fmi2GetReal", vr[i], FMU_REAL)) return fmi2Error;
+        value[i] = *(double *)value_address(fmu, (int)vr[i]);
+    }
+    return fmi2OK;
+}
+
+static fmi2Status get_ints(FmuInstance *fmu, const char *call, FmuType type,
+                           const fmi2ValueReference vr[], size_t nvr, int value[]) {
+    if (!allowed(fmu, call, GET_PHASES)) return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "%s: NULL array", call); return fmi2Error; }
+    refresh_outputs(fmu);
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, call, vr[i], type)) return fmi2Error;
+        value[i] = *(int *)value_address(fmu, (int)vr[i]);
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
+    return get_ints((FmuInstance *)c, "fmi2GetInteger", FMU_INTEGER, vr, nvr, value);
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
+    return get_ints((FmuInstance *)c, "fmi2GetBoolean", FMU_BOOLEAN, vr, nvr, value);
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)vr; (void)value;
+    if (!allowed(fmu, "fmi2GetString", GET_PHASES)) return fmi2Error;
+    if (nvr == 0) return fmi2OK;
+    LOG_ERROR(fmu, "fmi2GetString: %s has no String variables", MODEL_IDENTIFIER_STRING);
+    return fmi2Error;
+}
+
+#define SET_PHASES (PHASE_INSTANTIATED | PHASE_INITIALIZATION | PHASE_STEP_COMPLETE)
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2SetReal", SET_PHASES)) return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2SetReal: NULL array"); return fmi2Error; }
+    /* Check all first, so that a rejected call changes nothing. */
+    for (size_t i = 0; i < nvr; i++)
+        if (!check_reference(fmu, "fmi2SetReal", vr[i], FMU_REAL) ||
+            !check_settable(fmu, "fmi2SetReal", (int)vr[i], value[i]))
+            return fmi2Error;
+    ModelVariables before = fmu->s.v;
+    int any_input = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        *(double *)value_address(fmu, (int)vr[i]) = value[i];
+        if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
+    }
+    return after_set(fmu, &before, any_input);
+}
+
+static fmi2Status set_ints(FmuInstance *fmu, const char *call, FmuType type,
+                           const fmi2ValueReference vr[], size_t nvr, const int value[]) {
+    if (!allowed(fmu, call, SET_PHASES)) return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "%s: NULL array", call); return fmi2Error; }
+    for (size_t i = 0; i < nvr; i++)
+        if (!check_reference(fmu, call, vr[i], type) ||
+            !check_settable(fmu, call, (int)vr[i], type == FMU_BOOLEAN ? (value[i] != 0) : value[i]))
+            return fmi2Error;
+    ModelVariables before = fmu->s.v;
+    int any_input = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        *(int *)value_address(fmu, (int)vr[i]) = type == FMU_BOOLEAN ? (value[i] != 0) : value[i];
+        if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
+    }
+    return after_set(fmu, &before, any_input);
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
+    return set_ints((FmuInstance *)c, "fmi2SetInteger", FMU_INTEGER, vr, nvr, value);
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
+    return set_ints((FmuInstance *)c, "fmi2SetBoolean", FMU_BOOLEAN, vr, nvr, value);
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)vr; (void)value;
+    if (!allowed(fmu, "fmi2SetString", SET_PHASES)) return fmi2Error;
+    if (nvr == 0) return fmi2OK;
+    LOG_ERROR(fmu, "fmi2SetString: %s has no String variables", MODEL_IDENTIFIER_STRING);
+    return fmi2Error;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* FMU state                                                                                   */
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2GetFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
+    if (!state) { LOG_ERROR(fmu, "fmi2GetFMUstate: NULL state pointer"); return fmi2Error; }
+    if (!*state) *state = fmu->callbacks.allocateMemory(1, sizeof(FmuSnapshot));
+    if (!*state) { LOG_ERROR(fmu, "fmi2GetFMUstate: out of memory"); return fmi2Error; }
+    memcpy(*state, &fmu->s, sizeof(FmuSnapshot));
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2SetFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
+    if (!state) { LOG_ERROR(fmu, "fmi2SetFMUstate: NULL state"); return fmi2Error; }
+    memcpy(&fmu->s, state, sizeof(FmuSnapshot));
+    fmu->outputs_stale = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!fmu) return fmi2Error;
+    if (state && *state) {
+        fmu->callbacks.freeMemory(*state);
+        *state = NULL;
+    }
+    return fmi2OK;
+}
+
+/* Serialized form: a header that identifies the model build, then the snapshot's bytes. */
+typedef struct {
+    char magic[8];
+    char guid[48];
+    unsigned long long snapshot_size;
+} SerialHeader;
+
+static const char SERIAL_MAGIC[8] = "STEWFMU";
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)state;
+    if (!allowed(fmu, "fmi2SerializedFMUstateSize", ANY_LIVE_PHASE)) return fmi2Error;
+    *size = sizeof(SerialHeader) + sizeof(FmuSnapshot);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2SerializeFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
+    if (!state || !bytes || size < sizeof(SerialHeader) + sizeof(FmuSnapshot)) {
+        LOG_ERROR(fmu, "fmi2SerializeFMUstate: NULL state or buffer, or buffer of %zu bytes < %zu", size,
+                  sizeof(SerialHeader) + sizeof(FmuSnapshot));
+        return fmi2Error;
+    }
+    SerialHeader header;
+    memset(&header, 0, sizeof header);
+    memcpy(header.magic, SERIAL_MAGIC, sizeof header.magic);
+    strncpy(header.guid, MODEL_GUID, sizeof header.guid - 1);
+    header.snapshot_size = sizeof(FmuSnapshot);
+    memcpy(bytes, &header, sizeof header);
+    memcpy(bytes + sizeof header, state, sizeof(FmuSnapshot));
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2DeSerializeFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
+    SerialHeader header;
+    if (!bytes || !state || size != sizeof header + sizeof(FmuSnapshot)) {
+        LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: expected %zu bytes, got %zu",
+                  sizeof header + sizeof(FmuSnapshot), size);
+        return fmi2Error;
+    }
+    memcpy(&header, bytes, sizeof header);
+    if (memcmp(header.magic, SERIAL_MAGIC, sizeof header.magic) != 0 ||
+        strncmp(header.guid, MODEL_GUID, sizeof header.guid) != 0 ||
+        header.snapshot_size != sizeof(FmuSnapshot)) {
+        LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: the bytes are not a state of this build of %s (%s)",
+                  MODEL_IDENTIFIER_STRING, MODEL_GUID);
+        return fmi2Error;
+    }
+    if (!*state) *state = fmu->callbacks.allocateMemory(1, sizeof(FmuSnapshot));
+    if (!*state) { LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: out of memory"); return fmi2Error; }
+    memcpy(*state, bytes + sizeof header, sizeof(FmuSnapshot));
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
+    LOG_ERROR((FmuInstance *)c, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative=false)");
+    return fmi2Error;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Co-simulation                                                                               */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2SetRealInputDerivatives", SET_PHASES)) return fmi2Error;
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, "fmi2SetRealInputDerivatives", vr[i], FMU_REAL)) return fmi2Error;
+        if (fmu_variables[vr[i]].causality != FMU_INPUT) {
+            LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: '%s' is not an input", fmu_variables[vr[i]].name);
+            return fmi2Error;
+        }
+        if (order[i] != 1) {
+            LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: '%s': derivative order %d not supported (only 1)",
+                      fmu_variables[vr[i]].name, (int)order[i]);
+            return fmi2Error;
+        }
+        if (!isfinite(value[i])) {
+            LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: derivative of '%s' = %g rejected: not finite",
+                      fmu_variables[vr[i]].name, value[i]);
+            return fmi2Error;
+        }
+    }
+    for (size_t i = 0; i < nvr; i++) {
+        fmu->s.input_derivative[vr[i]] = value[i];
+        fmu->s.input_derivative_given[vr[i]] = 1;
+    }
+    fmu->s.input_time = fmu->s.time;
+    fmu->outputs_stale = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    (void)vr; (void)nvr; (void)order; (void)value;
+    LOG_ERROR((FmuInstance *)c, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=0)");
+    return fmi2Error;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!allowed(fmu, "fmi2DoStep", PHASE_STEP_COMPLETE)) return fmi2Error;
+    double t0 = fmu->s.time, h = communicationStepSize;
+    if (!(h > 0.0) || !isfinite(h)) {
+        LOG_ERROR(fmu, "fmi2DoStep: communication step size %g must be positive and finite", h);
+        return fmi2Error;
+    }
+    if (!(fabs(currentCommunicationPoint - t0) <= 1e-9 * fmax(1.0, fabs(t0)))) {
+        LOG_ERROR(fmu, "fmi2DoStep: current communication point %.12g s differs from the FMU's time %.12g s",
+                  currentCommunicationPoint, t0);
+        return fmi2Error;
+    }
+    /* A failed step leaves the instance exactly as it was before it, for inspection or retry. */
+    FmuSnapshot before = fmu->s;
+    if (model_do_step(fmu, h) != fmi2OK) {
+        fmu->s = before;
+        fmu->s.phase = PHASE_ERROR;
+        return fmi2Error;
+    }
+    fmu->s.time = t0 + h;
+    model_compute_outputs(fmu);
+    fmu->outputs_stale = 0;
+    memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given);
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL &&
+            !isfinite(*(double *)value_address(fmu, vr))) {
+            LOG_ERROR(fmu, "fmi2DoStep: output '%s' is not finite at t = %.9g s", fmu_variables[vr].name,
+                      fmu->s.time);
+            fmu->s = before;
+            fmu->s.phase = PHASE_ERROR;
+            return fmi2Error;
+        }
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    LOG_ERROR((FmuInstance *)c, "fmi2CancelStep: illegal call sequence: fmi2DoStep never runs asynchronously");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    (void)s; (void)value;
+    LOG_ERROR((FmuInstance *)c, "fmi2GetStatus: no asynchronous step is pending");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2GetRealStatus", AFTER_INITIALIZATION)) return fmi2Error;
+    if (s == fmi2LastSuccessfulTime) { *value = fmu->s.time; return fmi2OK; }
+    LOG_ERROR(fmu, "fmi2GetRealStatus: status kind %d not provided", (int)s);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    (void)s; (void)value;
+    LOG_ERROR((FmuInstance *)c, "fmi2GetIntegerStatus: no integer status is provided");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2GetBooleanStatus", AFTER_INITIALIZATION)) return fmi2Error;
+    if (s == fmi2Terminated) { *value = fmi2False; return fmi2OK; }
+    LOG_ERROR(fmu, "fmi2GetBooleanStatus: status kind %d not provided", (int)s);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    (void)s; (void)value;
+    LOG_ERROR((FmuInstance *)c, "fmi2GetStringStatus: no string status is provided");
+    return fmi2Error;
+}

@@ -1,0 +1,74 @@
+/* The generic FMI 2.0 Co-Simulation layer every model shares (fmi2_layer.c), and the few hooks
+ * a model implements in its model.c.
+ *
+ * Everything that defines where a simulation is lives in one plain struct, FmuSnapshot: variable
+ * values, the internal ODE state, the solver's memory and the model's own discrete state. FMU
+ * state get/set and serialization copy that struct, so a restored instance continues bit for bit.
+ */
+#ifndef FMU_COMMON_H
+#define FMU_COMMON_H
+
+#include "fmi2Functions.h"
+#include "fmu_table.h"
+#include "ode.h"
+
+typedef enum {
+    PHASE_INSTANTIATED = 1 << 0,
+    PHASE_INITIALIZATION = 1 << 1,
+    PHASE_STEP_COMPLETE = 1 << 2,
+    PHASE_STEP_FAILED = 1 << 3,
+    PHASE_TERMINATED = 1 << 4,
+    PHASE_ERROR = 1 << 5
+} FmuPhase;
+
+typedef struct {
+    int phase;                             /* FmuPhase */
+    double time;                           /* communication point reached */
+    double input_time;                     /* time at which the inputs were last set */
+    ModelVariables v;                      /* every variable of the table */
+    double input_derivative[VR_COUNT];     /* fmi2SetRealInputDerivatives, order 1 */
+    int input_derivative_given[VR_COUNT];  /* cleared after each step */
+    double x[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1]; /* internal ODE state */
+    OdeSolver solver;
+    ModelInternal internal;                /* the model's own discrete state */
+} FmuSnapshot;
+
+typedef struct {
+    FmuSnapshot s;
+    char *instance_name;
+    fmi2CallbackFunctions callbacks;
+    int logging_on;
+    int log_events, log_warnings, log_errors, log_all; /* categories */
+    int outputs_stale;                     /* inputs or parameters changed since outputs were computed */
+} FmuInstance;
+
+/* ---- hooks implemented by each model (model.c) ---- */
+
+/* Checks that need more than the table's bounds (strictly positive values, relations between
+ * parameters). Logs each violation with fmu_log and returns fmi2Error if there is one. */
+fmi2Status model_validate(FmuInstance *fmu);
+/* Sets the internal state from the parameters at the end of initialization. */
+void model_initialize(FmuInstance *fmu);
+/* Advances from fmu->s.time by h; the layer updates time afterwards. */
+fmi2Status model_do_step(FmuInstance *fmu, double h);
+/* Computes every output from the state and the inputs at fmu->s.time. */
+void model_compute_outputs(FmuInstance *fmu);
+
+/* ---- services of the layer for models ---- */
+
+void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* Value of the real input `vr` at time t: the value set, extrapolated to first order with the
+ * derivative given through fmi2SetRealInputDerivatives (if any) from the time it was set. */
+double fmu_input_at(const FmuInstance *fmu, int vr, double t);
+int fmu_input_has_derivative(const FmuInstance *fmu, int vr);
+
+/* Runs the internal solver (solver.* parameters) over [time, time + h] on the model's ODE, with
+ * steps no longer than max_step if that is > 0, and logs a failure with the time it happened. */
+fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step);
+
+#endif

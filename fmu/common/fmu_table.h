@@ -1,0 +1,102 @@
+/* The one table of an FMU's variables, expanded into everything that must agree with it.
+ *
+ * Each model folder has a `variables.h` that defines MODEL_VARIABLES(X), one X(...) row per
+ * variable:
+ *
+ *   X(type, field, "name", causality, variability, "unit", start, min, max, "description")
+ *
+ *   type         Real | Integer | Boolean
+ *   field        C name of the variable in ModelVariables (the FMI name with '.' -> '_')
+ *   causality    parameter | input | output | local
+ *   variability  fixed | tunable | discrete | continuous
+ *   min, max     inclusive bounds; -FMU_INF / FMU_INF for none. The FMI layer rejects a parameter
+ *                or input outside them with fmi2Error, naming the variable.
+ *
+ * From this one table follow: the ModelVariables struct the C model reads and writes, the value
+ * references (VR_<field>, counted from 1 in table order), the metadata array the FMI layer uses
+ * for get/set and validation, and modelDescription.xml and documentation/index.html (written at
+ * build time by model_description.c from the same table). They cannot drift apart.
+ */
+#ifndef FMU_TABLE_H
+#define FMU_TABLE_H
+
+#include <math.h>
+#include <stddef.h>
+
+#define FMU_INF HUGE_VAL
+
+/* Rows every model puts in its table: the internal solver's settings. */
+#define FMU_SOLVER_VARIABLES(X, method, step, rtol, atol)                                          \
+    X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 2,                 \
+      "Internal ODE solver: 1 = classic Runge-Kutta 4 with fixed step solver.step, "               \
+      "2 = Dormand-Prince 5(4) with error control (solver.rtol, solver.atol), steps <= solver.step") \
+    X(Real, solver_step, "solver.step", parameter, fixed, "s", step, 1e-9, 1.0,                    \
+      "RK4: the integration step; Dormand-Prince: the largest step")                               \
+    X(Real, solver_rtol, "solver.rtol", parameter, fixed, "1", rtol, 1e-14, 0.1,                   \
+      "Relative error tolerance per step (Dormand-Prince)")                                        \
+    X(Real, solver_atol, "solver.atol", parameter, fixed, "1", atol, 1e-16, 1.0,                   \
+      "Absolute error tolerance per step, in each state's own unit (Dormand-Prince)")
+
+#include "model_guid.h" /* MODEL_GUID, written by the build */
+#include "variables.h"
+
+typedef enum { FMU_REAL, FMU_INTEGER, FMU_BOOLEAN } FmuType;
+typedef enum { FMU_PARAMETER, FMU_INPUT, FMU_OUTPUT, FMU_LOCAL } FmuCausality;
+typedef enum { FMU_FIXED, FMU_TUNABLE, FMU_DISCRETE, FMU_CONTINUOUS } FmuVariability;
+
+#define FMU_TYPE_Real FMU_REAL
+#define FMU_TYPE_Integer FMU_INTEGER
+#define FMU_TYPE_Boolean FMU_BOOLEAN
+#define FMU_CTYPE_Real double
+#define FMU_CTYPE_Integer int
+#define FMU_CTYPE_Boolean int
+#define FMU_CAUSALITY_parameter FMU_PARAMETER
+#define FMU_CAUSALITY_input FMU_INPUT
+#define FMU_CAUSALITY_output FMU_OUTPUT
+#define FMU_CAUSALITY_local FMU_LOCAL
+#define FMU_VARIABILITY_fixed FMU_FIXED
+#define FMU_VARIABILITY_tunable FMU_TUNABLE
+#define FMU_VARIABILITY_discrete FMU_DISCRETE
+#define FMU_VARIABILITY_continuous FMU_CONTINUOUS
+
+typedef struct {
+#define FMU_X_FIELD(type, field, name, causality, variability, unit, start, min, max, doc) \
+    FMU_CTYPE_##type field;
+    MODEL_VARIABLES(FMU_X_FIELD)
+#undef FMU_X_FIELD
+} ModelVariables;
+
+enum {
+    VR_NONE = 0,
+#define FMU_X_VR(type, field, name, causality, variability, unit, start, min, max, doc) VR_##field,
+    MODEL_VARIABLES(FMU_X_VR)
+#undef FMU_X_VR
+    VR_COUNT
+};
+
+typedef struct {
+    FmuType type;
+    const char *name;
+    FmuCausality causality;
+    FmuVariability variability;
+    const char *unit;
+    double start, min, max;
+    const char *description;
+    size_t offset; /* of the value in ModelVariables */
+} FmuVariable;
+
+/* Indexed by value reference; entry 0 is unused. */
+static const FmuVariable fmu_variables[VR_COUNT] = {
+    {FMU_REAL, NULL, FMU_LOCAL, FMU_FIXED, NULL, 0, 0, 0, NULL, 0},
+#define FMU_X_META(type, field, name, causality, variability, unit, start, min, max, doc) \
+    {FMU_TYPE_##type, name, FMU_CAUSALITY_##causality, FMU_VARIABILITY_##variability, unit, \
+     (double)(start), (double)(min), (double)(max), doc, offsetof(ModelVariables, field)},
+    MODEL_VARIABLES(FMU_X_META)
+#undef FMU_X_META
+};
+
+#define FMU_STRINGIFY2(x) #x
+#define FMU_STRINGIFY(x) FMU_STRINGIFY2(x)
+#define MODEL_IDENTIFIER_STRING FMU_STRINGIFY(MODEL_IDENTIFIER)
+
+#endif

@@ -1,0 +1,214 @@
+/* Build-time generator: writes an FMU's modelDescription.xml and documentation/index.html from
+ * the same variable table (variables.h) that the FMU binary is compiled from.
+ *
+ * usage: model_description OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...
+ *   OUT_DIR/modelDescription.xml and OUT_DIR/documentation/index.html are written; the source
+ *   file names are listed under <SourceFiles> so another tool can rebuild the binary.
+ */
+#include "fmu_table.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef MODEL_GUID
+#error "MODEL_GUID must be defined by the build"
+#endif
+
+/* SI base-unit exponents of every unit a table may use: kg, m, s, A, rad. */
+typedef struct { const char *name; int kg, m, s, A, rad; } UnitDefinition;
+static const UnitDefinition UNITS[] = {
+    {"1", 0, 0, 0, 0, 0},       {"s", 0, 0, 1, 0, 0},        {"m", 0, 1, 0, 0, 0},
+    {"m/s", 0, 1, -1, 0, 0},    {"m/s2", 0, 1, -2, 0, 0},    {"kg", 1, 0, 0, 0, 0},
+    {"kg.m2", 1, 2, 0, 0, 0},   {"rad", 0, 0, 0, 0, 1},      {"rad/s", 0, 0, -1, 0, 1},
+    {"rad/s2", 0, 0, -2, 0, 1}, {"rad/m", 0, -1, 0, 0, 1},   {"1/s", 0, 0, -1, 0, 0},
+    {"1/s2", 0, 0, -2, 0, 0},   {"N", 1, 1, -2, 0, 0},       {"N.m", 1, 2, -2, 0, 0},
+    {"N.s/m", 1, 0, -1, 0, 0},  {"N.m.s/rad", 1, 2, -1, 0, -1}, {"A", 0, 0, 0, 1, 0},
+    {"V", 1, 2, -3, -1, 0},     {"Ohm", 1, 2, -3, -2, 0},    {"H", 1, 2, -2, -2, 0},
+    {"Wb", 1, 2, -2, -1, 0},    {"W", 1, 2, -3, 0, 0},       {"J", 1, 2, -2, 0, 0},
+    {"N.m/A", 1, 2, -2, -1, 0}, {"N/A", 1, 1, -2, -1, 0},    {"V.s/m", 1, 1, -2, -1, 0},
+    {"A.s/rad", 0, 0, 1, 1, -1}, {"A/rad", 0, 0, 0, 1, -1},  {"V/A", 1, 2, -3, -2, 0},
+    {"A/m", 0, -1, 0, 1, 0},    {"1/A", 0, 0, 0, -1, 0},    {"1/(A.s)", 0, 0, -1, -1, 0},    {"A/(m.s)", 0, -1, -1, 1, 0}, {"A.s/m", 0, -1, 1, 1, 0},
+};
+#define N_UNITS (sizeof UNITS / sizeof UNITS[0])
+
+static const UnitDefinition *find_unit(const char *name) {
+    for (size_t i = 0; i < N_UNITS; i++)
+        if (strcmp(UNITS[i].name, name) == 0) return &UNITS[i];
+    return NULL;
+}
+
+static void put_escaped(FILE *f, const char *text) {
+    for (; *text; text++) {
+        switch (*text) {
+        case '&': fputs("&amp;", f); break;
+        case '<': fputs("&lt;", f); break;
+        case '>': fputs("&gt;", f); break;
+        case '"': fputs("&quot;", f); break;
+        default: fputc(*text, f);
+        }
+    }
+}
+
+static const char *causality_name(FmuCausality c) {
+    static const char *names[] = {"parameter", "input", "output", "local"};
+    return names[c];
+}
+
+static const char *variability_name(FmuVariability v) {
+    static const char *names[] = {"fixed", "tunable", "discrete", "continuous"};
+    return names[v];
+}
+
+static const char *type_element(FmuType t) {
+    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "Boolean";
+}
+
+static int has_start(const FmuVariable *v) { return v->causality != FMU_OUTPUT; }
+
+static void put_number(FILE *f, FmuType type, double value) {
+    if (type == FMU_REAL) fprintf(f, "%.17g", value);
+    else if (type == FMU_INTEGER) fprintf(f, "%d", (int)value);
+    else fputs(value != 0.0 ? "true" : "false", f);
+}
+
+static int write_model_description(const char *path, int n_sources, char **sources) {
+    FILE *f = fopen(path, "w");
+    if (!f) { perror(path); return 1; }
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"%s\" guid=\"%s\"\n",
+            MODEL_IDENTIFIER_STRING, MODEL_GUID);
+    fprintf(f, "  description=\"");
+    put_escaped(f, MODEL_DESCRIPTION);
+    fprintf(f, "\"\n  version=\"%s\" generationTool=\"stewart-cosim fmu/common/model_description.c\"\n"
+               "  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n",
+            MODEL_VERSION);
+    fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
+               "    canInterpolateInputs=\"true\" maxOutputDerivativeOrder=\"0\" canGetAndSetFMUstate=\"true\"\n"
+               "    canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\">\n",
+            MODEL_IDENTIFIER_STRING);
+    fprintf(f, "    <SourceFiles>\n");
+    for (int i = 0; i < n_sources; i++) {
+        const char *base = strrchr(sources[i], '/');
+        base = base ? base + 1 : sources[i];
+        if (strlen(base) > 2 && strcmp(base + strlen(base) - 2, ".c") == 0)
+            fprintf(f, "      <File name=\"%s\"/>\n", base);
+    }
+    fprintf(f, "    </SourceFiles>\n  </CoSimulation>\n");
+
+    /* Units actually used, each once. */
+    fprintf(f, "  <UnitDefinitions>\n");
+    for (size_t u = 0; u < N_UNITS; u++) {
+        int used = 0;
+        for (int vr = 1; vr < VR_COUNT; vr++)
+            if (fmu_variables[vr].type == FMU_REAL && strcmp(fmu_variables[vr].unit, UNITS[u].name) == 0) used = 1;
+        if (!used) continue;
+        const UnitDefinition *d = &UNITS[u];
+        fprintf(f, "    <Unit name=\"%s\"><BaseUnit", d->name);
+        if (d->kg) fprintf(f, " kg=\"%d\"", d->kg);
+        if (d->m) fprintf(f, " m=\"%d\"", d->m);
+        if (d->s) fprintf(f, " s=\"%d\"", d->s);
+        if (d->A) fprintf(f, " A=\"%d\"", d->A);
+        if (d->rad) fprintf(f, " rad=\"%d\"", d->rad);
+        fprintf(f, "/></Unit>\n");
+    }
+    fprintf(f, "  </UnitDefinitions>\n");
+    fprintf(f, "  <LogCategories>\n"
+               "    <Category name=\"logEvents\" description=\"Events, limits reached, solver notes\"/>\n"
+               "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
+               "    <Category name=\"logStatusError\" description=\"Errors: bad input, illegal call sequence, solver failure\"/>\n"
+               "    <Category name=\"logAll\" description=\"Everything\"/>\n"
+               "  </LogCategories>\n");
+    fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%g\" stepSize=\"%g\"/>\n", MODEL_STOP_TIME,
+            MODEL_COMMUNICATION_STEP);
+
+    fprintf(f, "  <ModelVariables>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        const FmuVariable *v = &fmu_variables[vr];
+        if (v->type == FMU_REAL && !find_unit(v->unit)) {
+            fprintf(stderr, "model_description: variable '%s' uses unit '%s', which has no definition\n",
+                    v->name, v->unit);
+            fclose(f);
+            return 1;
+        }
+        fprintf(f, "    <!-- %d --><ScalarVariable name=\"%s\" valueReference=\"%d\" causality=\"%s\" variability=\"%s\"",
+                vr, v->name, vr, causality_name(v->causality),
+                (v->type != FMU_REAL && v->variability == FMU_CONTINUOUS) ? "discrete" : variability_name(v->variability));
+        if (v->causality == FMU_OUTPUT) fprintf(f, " initial=\"calculated\"");
+        fprintf(f, "\n      description=\"");
+        put_escaped(f, v->description);
+        fprintf(f, "\">\n      <%s", type_element(v->type));
+        if (v->type == FMU_REAL && v->unit[0]) fprintf(f, " unit=\"%s\"", v->unit);
+        if (v->type != FMU_BOOLEAN && isfinite(v->min)) { fputs(" min=\"", f); put_number(f, v->type, v->min); fputc('"', f); }
+        if (v->type != FMU_BOOLEAN && isfinite(v->max)) { fputs(" max=\"", f); put_number(f, v->type, v->max); fputc('"', f); }
+        if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
+        fprintf(f, "/>\n    </ScalarVariable>\n");
+    }
+    fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
+    fprintf(f, "    </Outputs>\n    <InitialUnknowns>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
+    fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+    return fclose(f) != 0;
+}
+
+static void write_variable_table(FILE *f, FmuCausality causality, const char *title) {
+    fprintf(f, "<h2>%s</h2>\n<table>\n<tr><th>name</th><th>type</th><th>unit</th>", title);
+    if (causality != FMU_OUTPUT) fprintf(f, "<th>default</th><th>min</th><th>max</th>");
+    fprintf(f, "<th>description</th></tr>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        const FmuVariable *v = &fmu_variables[vr];
+        if (v->causality != causality) continue;
+        fprintf(f, "<tr><td><code>%s</code></td><td>%s%s</td><td>%s</td>", v->name, type_element(v->type),
+                v->variability == FMU_TUNABLE ? " (tunable)" : "", v->unit);
+        if (causality != FMU_OUTPUT) {
+            fputs("<td>", f); put_number(f, v->type, v->start); fputs("</td><td>", f);
+            if (isfinite(v->min) && v->type != FMU_BOOLEAN) put_number(f, v->type, v->min);
+            fputs("</td><td>", f);
+            if (isfinite(v->max) && v->type != FMU_BOOLEAN) put_number(f, v->type, v->max);
+            fputs("</td>", f);
+        }
+        fputs("<td>", f);
+        put_escaped(f, v->description);
+        fputs("</td></tr>\n", f);
+    }
+    fprintf(f, "</table>\n");
+}
+
+static int write_documentation(const char *path, const char *fragment_path) {
+    FILE *fragment = fopen(fragment_path, "r");
+    if (!fragment) { perror(fragment_path); return 1; }
+    FILE *f = fopen(path, "w");
+    if (!f) { perror(path); fclose(fragment); return 1; }
+    fprintf(f, "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>%s</title>\n"
+               "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
+               "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;text-align:left}"
+               "code{white-space:nowrap}</style></head><body>\n<h1>%s</h1>\n<p>",
+            MODEL_IDENTIFIER_STRING, MODEL_IDENTIFIER_STRING);
+    put_escaped(f, MODEL_DESCRIPTION);
+    fprintf(f, "</p>\n");
+    char buffer[4096];
+    size_t n;
+    while ((n = fread(buffer, 1, sizeof buffer, fragment)) > 0) fwrite(buffer, 1, n, f);
+    fclose(fragment);
+    write_variable_table(f, FMU_INPUT, "Inputs");
+    write_variable_table(f, FMU_OUTPUT, "Outputs");
+    write_variable_table(f, FMU_PARAMETER, "Parameters");
+    fprintf(f, "<p>GUID %s; generated from the variable table the binary is compiled from.</p>\n</body></html>\n",
+            MODEL_GUID);
+    return fclose(f) != 0;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 3) {
+        fprintf(stderr, "usage: %s OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n", argv[0]);
+        return 2;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/modelDescription.xml", argv[1]);
+    if (write_model_description(path, argc - 3, argv + 3)) return 1;
+    snprintf(path, sizeof path, "%s/documentation/index.html", argv[1]);
+    return write_documentation(path, argv[2]);
+}

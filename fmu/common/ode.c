@@ -1,0 +1,220 @@
+/* Internal ODE solvers: fixed-step RK4 and adaptive Dormand-Prince 5(4), with state events.
+ * See ode.h for the contract. */
+#include "ode.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Dormand & Prince (1980), the RK5(4)7M pair. */
+static const double C2 = 1.0 / 5, C3 = 3.0 / 10, C4 = 4.0 / 5, C5 = 8.0 / 9;
+static const double A21 = 1.0 / 5;
+static const double A31 = 3.0 / 40, A32 = 9.0 / 40;
+static const double A41 = 44.0 / 45, A42 = -56.0 / 15, A43 = 32.0 / 9;
+static const double A51 = 19372.0 / 6561, A52 = -25360.0 / 2187, A53 = 64448.0 / 6561,
+                    A54 = -212.0 / 729;
+static const double A61 = 9017.0 / 3168, A62 = -355.0 / 33, A63 = 46732.0 / 5247,
+                    A64 = 49.0 / 176, A65 = -5103.0 / 18656;
+static const double B1 = 35.0 / 384, B3 = 500.0 / 1113, B4 = 125.0 / 192, B5 = -2187.0 / 6784,
+                    B6 = 11.0 / 84;
+/* Error weights: 5th-order minus embedded 4th-order solution. */
+static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
+                    E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
+
+const char *ode_result_text(OdeResult r) {
+    switch (r) {
+    case ODE_OK: return "ok";
+    case ODE_NONFINITE: return "a state or derivative became NaN or infinite";
+    case ODE_STEP_TOO_SMALL: return "the adaptive step fell below the round-off floor";
+    case ODE_BAD_SETTINGS: return "invalid solver settings";
+    case ODE_EVENT_LOOP: return "an event handler did not clear its event";
+    }
+    return "unknown";
+}
+
+static int all_finite(int n, const double *x) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+/* One step of length h from (t, x) into x_new. Returns the scaled error norm for DOPRI5
+ * (0 for RK4). */
+static double one_step(const OdeSolver *s, const OdeProblem *p, void *ctx, double t,
+                       const double *x, double h, double *x_new) {
+    const int n = p->n_states;
+    double k1[ODE_MAX_STATES], k2[ODE_MAX_STATES], k3[ODE_MAX_STATES], k4[ODE_MAX_STATES],
+        k5[ODE_MAX_STATES], k6[ODE_MAX_STATES], k7[ODE_MAX_STATES], y[ODE_MAX_STATES];
+    int i;
+
+    if (s->method == ODE_RK4) {
+        p->rhs(ctx, t, x, k1);
+        for (i = 0; i < n; i++) y[i] = x[i] + 0.5 * h * k1[i];
+        p->rhs(ctx, t + 0.5 * h, y, k2);
+        for (i = 0; i < n; i++) y[i] = x[i] + 0.5 * h * k2[i];
+        p->rhs(ctx, t + 0.5 * h, y, k3);
+        for (i = 0; i < n; i++) y[i] = x[i] + h * k3[i];
+        p->rhs(ctx, t + h, y, k4);
+        for (i = 0; i < n; i++) x_new[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        return 0.0;
+    }
+
+    p->rhs(ctx, t, x, k1);
+    for (i = 0; i < n; i++) y[i] = x[i] + h * A21 * k1[i];
+    p->rhs(ctx, t + C2 * h, y, k2);
+    for (i = 0; i < n; i++) y[i] = x[i] + h * (A31 * k1[i] + A32 * k2[i]);
+    p->rhs(ctx, t + C3 * h, y, k3);
+    for (i = 0; i < n; i++) y[i] = x[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+    p->rhs(ctx, t + C4 * h, y, k4);
+    for (i = 0; i < n; i++)
+        y[i] = x[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+    p->rhs(ctx, t + C5 * h, y, k5);
+    for (i = 0; i < n; i++)
+        y[i] = x[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+    p->rhs(ctx, t + h, y, k6);
+    for (i = 0; i < n; i++)
+        x_new[i] = x[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
+    p->rhs(ctx, t + h, x_new, k7);
+
+    double sum = 0.0;
+    for (i = 0; i < n; i++) {
+        double err = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+        double scale = s->atol + s->rtol * fmax(fabs(x[i]), fabs(x_new[i]));
+        sum += (err / scale) * (err / scale);
+    }
+    double norm = sqrt(sum / n);
+    return isfinite(norm) ? norm : HUGE_VAL;
+}
+
+/* Index of the first event component that went from negative to non-negative, the one with the
+ * earliest linear estimate of its crossing; -1 if none. */
+static int first_crossing(int m, const double *g_a, const double *g_b) {
+    int best = -1;
+    double best_fraction = 2.0;
+    for (int k = 0; k < m; k++) {
+        if (g_a[k] < 0.0 && g_b[k] >= 0.0) {
+            double fraction = g_a[k] / (g_a[k] - g_b[k]);
+            if (fraction < best_fraction) { best_fraction = fraction; best = k; }
+        }
+    }
+    return best;
+}
+
+/* The step [t, t+h] crossed event k. Finds the shortest step length b such that some event
+ * component is >= 0 at the end of a step of length b, to within a small fraction of h, by the
+ * Illinois method; writes the state there to x_event. Returns the crossing component. */
+static int locate_event(OdeSolver *s, const OdeProblem *p, void *ctx, double t, const double *x,
+                        const double *g_start, double h, double *x_event, double *h_event,
+                        int k, const double *g_end) {
+    const int n = p->n_states, m = p->n_events;
+    double x_trial[ODE_MAX_STATES], g_trial[ODE_MAX_EVENTS];
+    double a = 0.0, b = h, ga = g_start[k], gb = g_end[k];
+    const double tolerance = 1e-7 * h;
+    int side = 0;
+
+    one_step(s, p, ctx, t, x, h, x_event); /* b starts at the full step */
+    for (int iteration = 0; iteration < 60 && b - a > tolerance; iteration++) {
+        double c = (a * gb - b * ga) / (gb - ga);
+        if (!(c > a && c < b)) c = 0.5 * (a + b);
+        one_step(s, p, ctx, t, x, c, x_trial);
+        p->events(ctx, t + c, x_trial, g_trial);
+        int other = first_crossing(m, g_start, g_trial);
+        if (other >= 0) { /* some component has crossed by c: the event is in [a, c] */
+            if (other != k) { k = other; ga = g_start[k]; side = 0; }
+            b = c; gb = g_trial[k];
+            memcpy(x_event, x_trial, sizeof(double) * (size_t)n);
+            if (side == +1) ga *= 0.5;
+            side = +1;
+        } else {
+            a = c; ga = g_trial[k];
+            if (side == -1) gb *= 0.5;
+            side = -1;
+        }
+    }
+    *h_event = b;
+    return k;
+}
+
+/* Lets on_event clear every non-negative event function at (t, x). */
+static OdeResult handle_events_now(OdeSolver *s, const OdeProblem *p, void *ctx, double t,
+                                   const double *x, double *g) {
+    for (int round = 0; round < 2 * ODE_MAX_EVENTS + 2; round++) {
+        p->events(ctx, t, x, g);
+        int pending = -1;
+        for (int k = 0; k < p->n_events && pending < 0; k++)
+            if (g[k] >= 0.0) pending = k;
+        if (pending < 0) return ODE_OK;
+        p->on_event(ctx, t, x, pending);
+        s->events += 1;
+    }
+    return ODE_EVENT_LOOP;
+}
+
+OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x, double t0,
+                        double t1, double *t_reached) {
+    const int n = p->n_states, m = p->n_events;
+    double x_new[ODE_MAX_STATES], x_event[ODE_MAX_STATES];
+    double g_start[ODE_MAX_EVENTS], g_end[ODE_MAX_EVENTS];
+    double t = t0;
+    OdeResult result = ODE_OK;
+
+    if (t_reached) *t_reached = t0;
+    if (n < 1 || n > ODE_MAX_STATES || m < 0 || m > ODE_MAX_EVENTS || !(s->step > 0.0) ||
+        (s->method != ODE_RK4 && s->method != ODE_DOPRI5) ||
+        (s->method == ODE_DOPRI5 && !(s->rtol > 0.0 && s->atol > 0.0)))
+        return ODE_BAD_SETTINGS;
+    if (m > 0 && (result = handle_events_now(s, p, ctx, t, x, g_start)) != ODE_OK) return result;
+
+    const double t_eps = 1e-13 * fmax(1.0, fabs(t1));
+    while (t1 - t > t_eps) {
+        double remaining = t1 - t, h;
+        int reaches_end;
+        if (s->method == ODE_RK4) {
+            double steps = ceil(remaining / s->step - 1e-9);
+            h = remaining / (steps < 1.0 ? 1.0 : steps);
+            reaches_end = steps <= 1.0;
+        } else {
+            double planned = s->h_next > 0.0 ? fmin(s->h_next, s->step) : fmin(s->step, 1e-2 * remaining + 1e-9);
+            reaches_end = planned >= remaining;
+            h = reaches_end ? remaining : planned;
+        }
+
+        double error = one_step(s, p, ctx, t, x, h, x_new);
+        s->rhs_calls += (s->method == ODE_RK4) ? 4 : 7;
+        if (s->method == ODE_DOPRI5) {
+            if (error > 1.0 || !all_finite(n, x_new)) {
+                s->rejected += 1;
+                s->h_next = h * (isfinite(error) ? fmax(0.2, 0.9 * pow(error, -0.2)) : 0.2);
+                if (s->h_next < 1e-14 * fmax(1.0, fabs(t))) { result = ODE_STEP_TOO_SMALL; break; }
+                continue;
+            }
+            double factor = error > 0.0 ? fmin(5.0, fmax(0.2, 0.9 * pow(error, -0.2))) : 5.0;
+            double proposal = fmin(s->step, h * factor);
+            /* A step cut short to meet t1 says little about the next one; keep the plan. */
+            s->h_next = (reaches_end && s->h_next > proposal) ? s->h_next : proposal;
+        } else if (!all_finite(n, x_new)) {
+            result = ODE_NONFINITE;
+            break;
+        }
+
+        if (m > 0) {
+            p->events(ctx, t + h, x_new, g_end);
+            int k = first_crossing(m, g_start, g_end);
+            if (k >= 0) {
+                double h_event;
+                locate_event(s, p, ctx, t, x, g_start, h, x_event, &h_event, k, g_end);
+                t = (h_event >= h) ? t + h : t + h_event;
+                memcpy(x, x_event, sizeof(double) * (size_t)n);
+                s->steps += 1;
+                if ((result = handle_events_now(s, p, ctx, t, x, g_start)) != ODE_OK) break;
+                continue;
+            }
+            memcpy(g_start, g_end, sizeof(double) * (size_t)m);
+        }
+        memcpy(x, x_new, sizeof(double) * (size_t)n);
+        t = reaches_end ? t1 : t + h;
+        s->steps += 1;
+    }
+    if (result == ODE_OK) t = t1;
+    if (t_reached) *t_reached = t;
+    return result;
+}

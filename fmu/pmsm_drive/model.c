@@ -1,0 +1,268 @@
+/* pmsm_drive: one leg's PMSM vector-control drive (Meng et al. 2010, Section 3, Figs 3-4).
+ *
+ * The drive computes the electromagnetic torque only; the rotor's inertia and viscous friction
+ * belong to the platform mechanics (Eq 23), which returns the shaft angle and speed.
+ *
+ *   motor (Eqs 24-26)  u_d = R i_d + L_d di_d/dt - w_r L_q i_q
+ *                      u_q = R i_q + L_q di_q/dt + w_r L_d i_d + w_r psi_r
+ *                      T   = P (psi_r i_q + (L_d - L_q) i_d i_q),   w_r = P w_m,  psi_r = K_m / P
+ *   control (Fig 4)    APR: w*  = clamp(Kp_p e_theta + int Ki_p e_theta + speed_ff, w_max)
+ *                      ASR: i_q* = clamp(Kp_w e_w + int Ki_w e_w + torque_ff / K_m, I_max)
+ *                      ACR: u    = clamp(Kp_c e_i + int Ki_c e_i, V_max / K_v), d and q, i_d* given
+ *                      PI integrators with back-calculation anti-windup (tracking gain Ki / Kp).
+ *   inverter           1 ideal u_dq = K_v u;  2 averaged tau_v du_dq/dt = K_v u - u_dq  (Fig 4);
+ *                      3 switching: hysteresis comparators on the three phase currents drive a
+ *                        two-level inverter fed by V_dc (Fig 3); the motor is integrated in dq,
+ *                        which for a star-connected machine with isolated neutral is the abc model.
+ * The dq quantities use the power-invariant transform, in which Eqs 24-26 hold as printed
+ * (no factor 3/2) and u_d i_d + u_q i_q is the electrical power.
+ */
+#include "fmu_common.h"
+
+#include <string.h>
+
+enum { I_D, I_Q, V_D, V_Q, INT_POSITION, INT_SPEED, INT_CURRENT_D, INT_CURRENT_Q,
+       E_ELECTRICAL, E_COPPER, E_MECHANICAL };
+
+enum { INVERTER_IDEAL = 1, INVERTER_AVERAGED = 2, INVERTER_SWITCHING = 3 };
+enum { MODE_POSITION = 1, MODE_SPEED = 2, MODE_TORQUE = 3 };
+
+static const double SQRT_2_3 = 0.816496580927726032732428; /* sqrt(2/3) */
+static const double SQRT_3_2 = 0.866025403784438646763723; /* sqrt(3)/2 */
+
+static double clamp(double value, double limit) {
+    return value > limit ? limit : (value < -limit ? -limit : value);
+}
+
+/* Every algebraic quantity of the drive at one instant. */
+typedef struct {
+    double angle, speed, electrical_angle, electrical_speed;
+    double angle_error, speed_ref_raw, speed_ref, speed_error;
+    double current_ref_q_raw, current_ref_q, current_ref_d;
+    double command_d_raw, command_d, command_q_raw, command_q; /* current-controller outputs */
+    double voltage_d, voltage_q;                                /* applied to the motor */
+    double phase_current[3], phase_current_ref[3];
+    double torque;
+} Signals;
+
+/* Power-invariant inverse Park + Clarke: dq at electrical angle theta -> phases a, b, c. */
+static void dq_to_abc(double d, double q, double cos_t, double sin_t, double abc[3]) {
+    double alpha = d * cos_t - q * sin_t, beta = d * sin_t + q * cos_t;
+    abc[0] = SQRT_2_3 * alpha;
+    abc[1] = SQRT_2_3 * (-0.5 * alpha + SQRT_3_2 * beta);
+    abc[2] = SQRT_2_3 * (-0.5 * alpha - SQRT_3_2 * beta);
+}
+
+static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals *s) {
+    const ModelVariables *v = &fmu->s.v;
+    const double pole_pairs = v->motor_pole_pairs, psi_r = v->motor_torque_constant / pole_pairs;
+    const double dt = t - fmu->s.input_time;
+
+    /* Inputs at t: the shaft angle advances with the speed inside a step unless the master gave
+     * the angle's own derivative. */
+    s->speed = fmu_input_at(fmu, VR_speed, t);
+    s->angle = fmu_input_has_derivative(fmu, VR_angle)
+                   ? fmu_input_at(fmu, VR_angle, t)
+                   : v->angle + 0.5 * (v->speed + s->speed) * dt;
+    s->electrical_angle = pole_pairs * s->angle;
+    s->electrical_speed = pole_pairs * s->speed;
+    const double torque_ff = fmu_input_at(fmu, VR_torque_ff, t);
+    const double speed_ff = fmu_input_at(fmu, VR_speed_ff, t);
+
+    /* Position loop (APR) and speed loop (ASR). */
+    s->angle_error = fmu_input_at(fmu, VR_angle_ref, t) - s->angle;
+    s->current_ref_d = v->control_current_d_ref;
+    const double current_q_limit = sqrt(v->limit_current * v->limit_current - s->current_ref_d * s->current_ref_d);
+    if (v->control_mode == MODE_TORQUE) {
+        s->speed_ref_raw = s->speed_ref = s->speed_error = 0.0;
+        s->current_ref_q_raw = torque_ff / v->motor_torque_constant;
+    } else {
+        s->speed_ref_raw = speed_ff;
+        if (v->control_mode == MODE_POSITION)
+            s->speed_ref_raw += v->control_position_kp * s->angle_error + x[INT_POSITION];
+        s->speed_ref = clamp(s->speed_ref_raw, v->limit_speed);
+        s->speed_error = s->speed_ref - s->speed;
+        s->current_ref_q_raw = v->control_speed_kp * s->speed_error + x[INT_SPEED] + torque_ff / v->motor_torque_constant;
+    }
+    s->current_ref_q = clamp(s->current_ref_q_raw, current_q_limit);
+
+    /* Current loops (ACR) and the inverter. */
+    const double cos_t = cos(s->electrical_angle), sin_t = sin(s->electrical_angle);
+    if (v->inverter_model == INVERTER_SWITCHING) {
+        const int *sw = fmu->s.internal.switch_state;
+        double phase_voltage[3];
+        for (int k = 0; k < 3; k++)
+            phase_voltage[k] = v->inverter_dc_link_voltage / 3.0 * (2 * sw[k] - sw[(k + 1) % 3] - sw[(k + 2) % 3]);
+        double alpha = SQRT_2_3 * (phase_voltage[0] - 0.5 * phase_voltage[1] - 0.5 * phase_voltage[2]);
+        double beta = SQRT_2_3 * SQRT_3_2 * (phase_voltage[1] - phase_voltage[2]);
+        s->voltage_d = alpha * cos_t + beta * sin_t;
+        s->voltage_q = -alpha * sin_t + beta * cos_t;
+        s->command_d_raw = s->command_d = s->command_q_raw = s->command_q = 0.0;
+    } else {
+        const double command_limit = v->limit_voltage / v->inverter_gain;
+        s->command_d_raw = v->control_current_kp * (s->current_ref_d - x[I_D]) + x[INT_CURRENT_D];
+        s->command_q_raw = v->control_current_kp * (s->current_ref_q - x[I_Q]) + x[INT_CURRENT_Q];
+        s->command_d = clamp(s->command_d_raw, command_limit);
+        s->command_q = clamp(s->command_q_raw, command_limit);
+        if (v->inverter_model == INVERTER_IDEAL) {
+            s->voltage_d = v->inverter_gain * s->command_d;
+            s->voltage_q = v->inverter_gain * s->command_q;
+        } else {
+            s->voltage_d = x[V_D];
+            s->voltage_q = x[V_Q];
+        }
+    }
+    dq_to_abc(x[I_D], x[I_Q], cos_t, sin_t, s->phase_current);
+    dq_to_abc(s->current_ref_d, s->current_ref_q, cos_t, sin_t, s->phase_current_ref);
+
+    /* Eq 26 */
+    s->torque = pole_pairs * (psi_r * x[I_Q] + (v->motor_inductance_d - v->motor_inductance_q) * x[I_D] * x[I_Q]);
+}
+
+/* Back-calculation anti-windup: while the output is clamped the integrator tracks it. */
+static double pi_integrator_rate(double ki, double kp, double error, double clamped, double raw) {
+    return ki * error + (ki / kp) * (clamped - raw);
+}
+
+static void rhs(void *ctx, double t, const double *x, double *dxdt) {
+    const FmuInstance *fmu = (const FmuInstance *)ctx;
+    const ModelVariables *v = &fmu->s.v;
+    Signals s;
+    evaluate(fmu, t, x, &s);
+    const double R = v->motor_resistance, L_d = v->motor_inductance_d, L_q = v->motor_inductance_q;
+    const double psi_r = v->motor_torque_constant / v->motor_pole_pairs, w_r = s.electrical_speed;
+
+    dxdt[I_D] = (s.voltage_d - R * x[I_D] + w_r * L_q * x[I_Q]) / L_d;          /* Eq 24 */
+    dxdt[I_Q] = (s.voltage_q - R * x[I_Q] - w_r * L_d * x[I_D] - w_r * psi_r) / L_q; /* Eq 25 */
+
+    if (v->inverter_model == INVERTER_AVERAGED) {
+        dxdt[V_D] = (v->inverter_gain * s.command_d - x[V_D]) / v->inverter_time_constant;
+        dxdt[V_Q] = (v->inverter_gain * s.command_q - x[V_Q]) / v->inverter_time_constant;
+    } else {
+        dxdt[V_D] = dxdt[V_Q] = 0.0;
+    }
+    dxdt[INT_POSITION] = v->control_mode == MODE_POSITION
+                             ? pi_integrator_rate(v->control_position_ki, v->control_position_kp, s.angle_error,
+                                                  s.speed_ref, s.speed_ref_raw)
+                             : 0.0;
+    dxdt[INT_SPEED] = v->control_mode != MODE_TORQUE
+                          ? pi_integrator_rate(v->control_speed_ki, v->control_speed_kp, s.speed_error,
+                                               s.current_ref_q, s.current_ref_q_raw)
+                          : 0.0;
+    if (v->inverter_model == INVERTER_SWITCHING) {
+        dxdt[INT_CURRENT_D] = dxdt[INT_CURRENT_Q] = 0.0;
+    } else {
+        dxdt[INT_CURRENT_D] = pi_integrator_rate(v->control_current_ki, v->control_current_kp,
+                                                 s.current_ref_d - x[I_D], s.command_d, s.command_d_raw);
+        dxdt[INT_CURRENT_Q] = pi_integrator_rate(v->control_current_ki, v->control_current_kp,
+                                                 s.current_ref_q - x[I_Q], s.command_q, s.command_q_raw);
+    }
+    dxdt[E_ELECTRICAL] = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q];
+    dxdt[E_COPPER] = R * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q]);
+    dxdt[E_MECHANICAL] = s.torque * s.speed;
+}
+
+/* Hysteresis comparators: phase k with its upper switch open (current falling or free) switches
+ * when the error i_k* - i_k reaches +band; with it closed, when the error reaches -band. */
+static void hysteresis_events(void *ctx, double t, const double *x, double *g) {
+    const FmuInstance *fmu = (const FmuInstance *)ctx;
+    const double band = fmu->s.v.inverter_hysteresis_band;
+    Signals s;
+    evaluate(fmu, t, x, &s);
+    for (int k = 0; k < 3; k++) {
+        double error = s.phase_current_ref[k] - s.phase_current[k];
+        g[k] = fmu->s.internal.switch_state[k] ? (-band - error) : (error - band);
+    }
+}
+
+static void commutate(void *ctx, double t, const double *x, int phase) {
+    FmuInstance *fmu = (FmuInstance *)ctx;
+    (void)x;
+    fmu->s.internal.switch_state[phase] = !fmu->s.internal.switch_state[phase];
+    fmu->s.internal.switchings += 1;
+    if (fmu->log_all)
+        fmu_log(fmu, fmi2OK, "logEvents", "t = %.9g s: phase %c upper switch %s", t, 'a' + phase,
+                fmu->s.internal.switch_state[phase] ? "on" : "off");
+}
+
+fmi2Status model_do_step(FmuInstance *fmu, double h) {
+    const int switching = fmu->s.v.inverter_model == INVERTER_SWITCHING;
+    const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate};
+    return fmu_integrate(fmu, &problem, fmu, h, switching ? fmu->s.v.inverter_max_step : 0.0);
+}
+
+void model_initialize(FmuInstance *fmu) {
+    const ModelVariables *v = &fmu->s.v;
+    const double i_q0 = v->initial_current_q, u_q0 = v->motor_resistance * i_q0; /* at rest */
+    memset(fmu->s.x, 0, sizeof fmu->s.x);
+    memset(&fmu->s.internal, 0, sizeof fmu->s.internal);
+    memset(&fmu->s.solver, 0, sizeof fmu->s.solver);
+    fmu->s.x[I_Q] = i_q0;
+    fmu->s.x[V_Q] = u_q0;
+    fmu->s.x[INT_SPEED] = i_q0;
+    fmu->s.x[INT_CURRENT_Q] = u_q0 / v->inverter_gain;
+}
+
+void model_compute_outputs(FmuInstance *fmu) {
+    ModelVariables *v = &fmu->s.v;
+    const double *x = fmu->s.x;
+    Signals s;
+    evaluate(fmu, fmu->s.time, x, &s);
+    v->torque = s.torque;
+    v->current_d = x[I_D];
+    v->current_q = x[I_Q];
+    v->voltage_d = s.voltage_d;
+    v->voltage_q = s.voltage_q;
+    v->power_electrical = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q];
+    v->power_mechanical = s.torque * s.speed;
+    v->power_copper_loss = v->motor_resistance * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q]);
+    v->energy_magnetic = 0.5 * (v->motor_inductance_d * x[I_D] * x[I_D] + v->motor_inductance_q * x[I_Q] * x[I_Q]);
+    v->energy_electrical = x[E_ELECTRICAL];
+    v->energy_copper_loss = x[E_COPPER];
+    v->energy_mechanical = x[E_MECHANICAL];
+    v->current_a = s.phase_current[0];
+    v->current_b = s.phase_current[1];
+    v->current_c = s.phase_current[2];
+    v->current_error_max = 0.0;
+    for (int k = 0; k < 3; k++)
+        v->current_error_max = fmax(v->current_error_max, fabs(s.phase_current_ref[k] - s.phase_current[k]));
+    v->speed_ref = s.speed_ref;
+    v->current_ref_q = s.current_ref_q;
+    v->inverter_switchings = fmu->s.internal.switchings;
+}
+
+/* Logs and counts one violated rule. */
+static int reject(const FmuInstance *fmu, int vr, const char *rule) {
+    const FmuVariable *var = &fmu_variables[vr];
+    double value = var->type == FMU_REAL ? *(const double *)((const char *)&fmu->s.v + var->offset)
+                                         : *(const int *)((const char *)&fmu->s.v + var->offset);
+    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name, value, var->unit, rule);
+    return 1;
+}
+
+#define REQUIRE_POSITIVE(field) \
+    if (!(v->field > 0.0)) errors += reject(fmu, VR_##field, "must be > 0")
+
+fmi2Status model_validate(FmuInstance *fmu) {
+    const ModelVariables *v = &fmu->s.v;
+    int errors = 0;
+    REQUIRE_POSITIVE(motor_torque_constant);
+    REQUIRE_POSITIVE(motor_inductance_d);
+    REQUIRE_POSITIVE(motor_inductance_q);
+    REQUIRE_POSITIVE(motor_resistance);
+    REQUIRE_POSITIVE(inverter_gain);
+    REQUIRE_POSITIVE(inverter_time_constant);
+    REQUIRE_POSITIVE(inverter_dc_link_voltage);
+    REQUIRE_POSITIVE(inverter_hysteresis_band);
+    REQUIRE_POSITIVE(control_position_kp);
+    REQUIRE_POSITIVE(control_speed_kp);
+    REQUIRE_POSITIVE(control_current_kp);
+    REQUIRE_POSITIVE(limit_speed);
+    REQUIRE_POSITIVE(limit_current);
+    REQUIRE_POSITIVE(limit_voltage);
+    if (!(fabs(v->control_current_d_ref) < v->limit_current))
+        errors += reject(fmu, VR_control_current_d_ref, "|i_d*| must be below limit.current");
+    if (!(fabs(v->initial_current_q) <= v->limit_current))
+        errors += reject(fmu, VR_initial_current_q, "must not exceed limit.current");
+    return errors ? fmi2Error : fmi2OK;
+}
