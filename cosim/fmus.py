@@ -1,0 +1,46 @@
+"""Where the built FMUs are, and building them when they are missing or older than their sources."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+BUILD_DIR = ROOT / "build"
+FMU_DIR = BUILD_DIR / "fmus"
+
+
+def _newest_source_time() -> float:
+    paths = [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*")]
+    return max(p.stat().st_mtime for p in paths if p.is_file())
+
+
+def _cmake() -> str:
+    local = Path(sys.executable).parent / "cmake"
+    return str(local) if local.exists() else (shutil.which("cmake") or "cmake")
+
+
+def build_fmus() -> None:
+    """Configures (once) and builds every FMU with CMake; raises with the build log on failure."""
+    cmake = _cmake()
+    steps = []
+    if not (BUILD_DIR / "CMakeCache.txt").exists():
+        steps.append([cmake, "-S", str(ROOT), "-B", str(BUILD_DIR), f"-DPython3_EXECUTABLE={sys.executable}"])
+    steps.append([cmake, "--build", str(BUILD_DIR), "-j", str(os.cpu_count() or 2)])
+    for command in steps:
+        result = subprocess.run(command, capture_output=True, text=True)
+        if result.returncode != 0:
+            raise RuntimeError(f"FMU build failed: {' '.join(command)}\n{result.stdout}\n{result.stderr}")
+
+
+def fmu_path(name: str, rebuild_if_stale: bool = True) -> Path:
+    """Path of build/fmus/<name>.fmu, built first if it is missing or older than the C sources."""
+    path = FMU_DIR / f"{name}.fmu"
+    if rebuild_if_stale and (not path.exists() or path.stat().st_mtime < _newest_source_time()):
+        build_fmus()
+    if not path.exists():
+        raise FileNotFoundError(f"no FMU '{name}': {path} was not built (is there a fmu/{name}/ folder?)")
+    return path

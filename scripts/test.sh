@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Sets up (scripts/setup.sh) and runs the test suite. Extra arguments go to pytest
+# (e.g. -m slow for the long studies). Exits non-zero when a test fails or none ran.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+status=0
+.venv/bin/python -m pytest -ra "$@" || status=$?
+if [ "$status" -eq 5 ]; then
+  echo "pytest collected no tests: failing the run" >&2
+fi
+exit "$status"

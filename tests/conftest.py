@@ -1,0 +1,45 @@
+"""Shared fixtures: the built FMUs (built on demand) and drive instances that are freed after use."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+from fmpy import extract
+
+from cosim.fmu_instance import FmuInstance
+from cosim.fmus import ROOT, fmu_path
+
+
+@pytest.fixture(scope="session")
+def pmsm_fmu() -> Path:
+    return fmu_path("pmsm_drive")
+
+
+@pytest.fixture(scope="session")
+def pmsm_unzip_dir(pmsm_fmu, tmp_path_factory) -> Path:
+    return Path(extract(str(pmsm_fmu), unzipdir=str(tmp_path_factory.mktemp("pmsm_drive"))))
+
+
+@pytest.fixture(scope="session")
+def meng_params() -> dict:
+    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
+        return tomllib.load(f)
+
+
+@pytest.fixture
+def make_drive(pmsm_fmu, pmsm_unzip_dir):
+    """make_drive(start_values, initialize=True) -> FmuInstance of pmsm_drive, freed after the test."""
+    made = []
+
+    def make(start_values: dict | None = None, initialize: bool = True, name: str = "leg1") -> FmuInstance:
+        drive = FmuInstance(pmsm_fmu, name, unzip_dir=pmsm_unzip_dir)
+        made.append(drive)
+        if initialize:
+            drive.initialize(start_values or {})
+        return drive
+
+    yield make
+    for drive in made:
+        drive.free()

@@ -1,0 +1,138 @@
+"""The pmsm_drive FMU as a file: FMI validity, the interface contract, defaults equal to the
+canonical parameter set, documentation, a second FMI tool, and a rebuild from its sources/."""
+
+from __future__ import annotations
+
+import shutil
+import tomllib
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from cosim.fmus import ROOT
+
+SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
+
+# FMU parameter -> (section, key) of params/meng2010.toml
+DEFAULTS_FROM_PARAMS = {
+    "motor.pole_pairs": ("motor", "pole_pairs"),
+    "motor.torque_constant": ("motor", "torque_constant"),
+    "motor.inductance_d": ("motor", "inductance_d"),
+    "motor.inductance_q": ("motor", "inductance_q"),
+    "motor.resistance": ("motor", "resistance"),
+    "limit.speed": ("motor", "max_speed"),
+    "limit.current": ("motor", "max_current"),
+    "inverter.gain": ("inverter", "gain"),
+    "inverter.time_constant": ("inverter", "time_constant"),
+    "inverter.dc_link_voltage": ("inverter", "dc_link_voltage"),
+    "inverter.hysteresis_band": ("inverter", "hysteresis_band"),
+    "control.current_kp": ("control", "current_kp"),
+    "control.current_ki": ("control", "current_ki"),
+    "control.speed_kp": ("control", "speed_kp"),
+    "control.speed_ki": ("control", "speed_ki"),
+    "control.position_kp": ("control", "position_kp"),
+    "control.position_ki": ("control", "position_ki"),
+}
+
+
+def test_fmpy_validation_finds_no_problem(pmsm_fmu):
+    assert validate_fmu(str(pmsm_fmu)) == []
+
+
+def test_interface_contract(pmsm_fmu):
+    """The ports and capabilities ../shared/INTERFACES.md promises for pmsm_drive."""
+    md = read_model_description(str(pmsm_fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    expected = {
+        "angle_ref": ("input", "rad"), "angle": ("input", "rad"), "speed": ("input", "rad/s"),
+        "torque_ff": ("input", "N.m"), "torque": ("output", "N.m"),
+        "current.d": ("output", "A"), "current.q": ("output", "A"),
+        "voltage.d": ("output", "V"), "voltage.q": ("output", "V"),
+        "power.electrical": ("output", "W"), "power.mechanical": ("output", "W"),
+    }
+    for name, (causality, unit) in expected.items():
+        assert name in variables, name
+        assert (variables[name].causality, variables[name].unit) == (causality, unit), name
+    assert float(variables["torque_ff"].start) == 0.0
+    cs = md.coSimulation
+    assert cs.modelIdentifier == "pmsm_drive"
+    assert cs.canHandleVariableCommunicationStepSize and cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+    assert md.defaultExperiment is not None and float(md.defaultExperiment.stepSize) > 0
+    assert all(v.description for v in md.modelVariables)
+
+
+def test_defaults_equal_the_parameter_set(pmsm_fmu):
+    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
+        params = tomllib.load(f)
+    variables = {v.name: v for v in read_model_description(str(pmsm_fmu)).modelVariables}
+    for name, (section, key) in DEFAULTS_FROM_PARAMS.items():
+        assert float(variables[name].start) == pytest.approx(params[section][key], rel=1e-12), name
+    # psi_r is derived (K_m / P), never a second copy
+    assert params["motor"]["torque_constant"] / params["motor"]["pole_pairs"] == pytest.approx(
+        params["motor"]["flux_linkage"], rel=1e-12)
+
+
+@pytest.mark.skipif(not SHARED_PARAMS.exists(), reason="../shared/params is not beside this checkout")
+def test_project_parameter_copy_equals_the_canonical_set():
+    with open(SHARED_PARAMS, "rb") as f:
+        canonical = tomllib.load(f)
+    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
+        ours = tomllib.load(f)
+    assert ours == canonical
+
+
+def test_fmu_layout_and_documentation(pmsm_fmu):
+    with zipfile.ZipFile(pmsm_fmu) as z:
+        names = set(z.namelist())
+        assert {"modelDescription.xml", "binaries/linux64/pmsm_drive.so", "documentation/index.html",
+                "sources/model.c", "sources/fmi2_layer.c", "sources/ode.c", "sources/variables.h"} <= names
+        doc = z.read("documentation/index.html").decode()
+    md = read_model_description(str(pmsm_fmu))
+    for v in md.modelVariables:  # every port and parameter, with its unit, is documented
+        assert f"<code>{v.name}</code>" in doc, v.name
+    for equation in ("Eqs 24-26", "modulus", "hysteresis"):
+        assert equation in doc
+
+
+def test_runs_in_libcosim(pmsm_fmu):
+    """The Open Simulation Platform's engine loads, initializes and steps the FMU: torque mode,
+    15 N.m commanded at standstill gives 15 N.m once the current loop has settled."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    md = read_model_description(str(pmsm_fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    execution = CosimExecution.from_step_size(step_size=int(1e6))  # 1 ms in ns
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(pmsm_fmu), instance_name="leg1"))
+    assert execution.integer_initial_value(index, vr["control.mode"], 3)
+    assert execution.real_initial_value(index, vr["torque_ff"], 15.0)
+    assert execution.simulate_until(target_time=int(0.1e9))
+    torque, current_q = observer.last_real_values(index, [vr["torque"], vr["current.q"]])
+    assert torque == pytest.approx(15.0, rel=1e-4)
+    assert current_q == pytest.approx(10.0, rel=1e-4)
+
+
+def test_rebuilds_from_its_sources(pmsm_fmu, tmp_path):
+    """sources/ alone rebuilds a binary (fmpy's CMake build) that gives the same results."""
+    from fmpy.build import build_platform_binary
+
+    rebuilt = tmp_path / "unzipped"
+    with zipfile.ZipFile(pmsm_fmu) as z:
+        z.extractall(rebuilt)
+    shutil.rmtree(rebuilt / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(rebuilt, build_dir=tmp_path / "build")
+    assert (rebuilt / "binaries" / "linux64" / "pmsm_drive.so").exists()
+
+    settings = dict(stop_time=0.02, output_interval=1e-3, output=["torque", "current.q"],
+                    start_values={"control.mode": 3, "torque_ff": 12.0})
+    original = simulate_fmu(str(pmsm_fmu), **settings)
+    from_sources = simulate_fmu(str(rebuilt), **settings)
+    np.testing.assert_allclose(from_sources["torque"], original["torque"], rtol=1e-9, atol=1e-12)
