@@ -11,7 +11,7 @@ PSI_R = K_M / P
 # Steady-state checks run the solver far tighter than its defaults, so that what is left is the
 # model's steady state, not the solver's noise (the current loop amplifies a current error
 # by K_v Kp_c = 34.5 V/A into the voltage).
-TIGHT = {"solver.rtol": 1e-10, "solver.atol": 1e-10}
+TIGHT = {"solver.method": 2, "solver.rtol": 1e-10, "solver.atol": 1e-10}
 
 
 def hold(drive, inputs: dict, duration: float, step: float = 1e-3) -> None:
@@ -95,7 +95,7 @@ def test_power_balance(make_drive, settings):
     relative error of order rtol times the steps' error growth; 1e-5 of the throughput bounds the
     residual with margin, while a torque law inconsistent with the voltage equations (e.g. dropping
     the reluctance term) breaks it by percent."""
-    drive = make_drive({"control.mode": 1, **settings})
+    drive = make_drive({"control.mode": 1, "solver.method": 2, **settings})
     residual, throughput = energy_residual(drive, 0.3)
     assert throughput > 10.0  # the duty really moves energy
     assert residual <= 1e-5 * throughput

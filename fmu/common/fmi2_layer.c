@@ -562,6 +562,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         return fmi2Error;
     }
     fmu->s.time = t0 + h;
+    fmu->s.v.solver_steps = (int)fmu->s.solver.steps;
+    fmu->s.v.solver_rejected = (int)fmu->s.solver.rejected;
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
     memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given);

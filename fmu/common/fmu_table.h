@@ -35,7 +35,11 @@
     X(Real, solver_rtol, "solver.rtol", parameter, fixed, "1", rtol, 1e-14, 0.1,                   \
       "Relative error tolerance per step (Dormand-Prince)")                                        \
     X(Real, solver_atol, "solver.atol", parameter, fixed, "1", atol, 1e-16, 1.0,                   \
-      "Absolute error tolerance per step, in each state's own unit (Dormand-Prince)")
+      "Absolute error tolerance per step, in each state's own unit (Dormand-Prince)")              \
+    X(Integer, solver_steps, "solver.steps", output, discrete, "", 0, -FMU_INF, FMU_INF,           \
+      "Internal solver steps accepted since the start (cost indicator)")                           \
+    X(Integer, solver_rejected, "solver.rejected", output, discrete, "", 0, -FMU_INF, FMU_INF,     \
+      "Internal solver steps rejected by the error control since the start")
 
 #include "model_guid.h" /* MODEL_GUID, written by the build */
 #include "variables.h"

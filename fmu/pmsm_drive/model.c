@@ -53,7 +53,9 @@ static void dq_to_abc(double d, double q, double cos_t, double sin_t, double abc
     abc[2] = SQRT_2_3 * (-0.5 * alpha - SQRT_3_2 * beta);
 }
 
-static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals *s) {
+/* Computes the drive's signals at t; the phase quantities only when `with_phases` (outputs,
+ * switching inverter), since the dq model does not need them. */
+static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals *s, int with_phases) {
     const ModelVariables *v = &fmu->s.v;
     const double pole_pairs = v->motor_pole_pairs, psi_r = v->motor_torque_constant / pole_pairs;
     const double dt = t - fmu->s.input_time;
@@ -87,8 +89,10 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
     s->current_ref_q = clamp(s->current_ref_q_raw, current_q_limit);
 
     /* Current loops (ACR) and the inverter. */
-    const double cos_t = cos(s->electrical_angle), sin_t = sin(s->electrical_angle);
-    if (v->inverter_model == INVERTER_SWITCHING) {
+    const int switching = v->inverter_model == INVERTER_SWITCHING;
+    const double cos_t = (with_phases || switching) ? cos(s->electrical_angle) : 1.0;
+    const double sin_t = (with_phases || switching) ? sin(s->electrical_angle) : 0.0;
+    if (switching) {
         const int *sw = fmu->s.internal.switch_state;
         double phase_voltage[3];
         for (int k = 0; k < 3; k++)
@@ -112,8 +116,10 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
             s->voltage_q = x[V_Q];
         }
     }
-    dq_to_abc(x[I_D], x[I_Q], cos_t, sin_t, s->phase_current);
-    dq_to_abc(s->current_ref_d, s->current_ref_q, cos_t, sin_t, s->phase_current_ref);
+    if (with_phases) {
+        dq_to_abc(x[I_D], x[I_Q], cos_t, sin_t, s->phase_current);
+        dq_to_abc(s->current_ref_d, s->current_ref_q, cos_t, sin_t, s->phase_current_ref);
+    }
 
     /* Eq 26 */
     s->torque = pole_pairs * (psi_r * x[I_Q] + (v->motor_inductance_d - v->motor_inductance_q) * x[I_D] * x[I_Q]);
@@ -128,7 +134,7 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     const FmuInstance *fmu = (const FmuInstance *)ctx;
     const ModelVariables *v = &fmu->s.v;
     Signals s;
-    evaluate(fmu, t, x, &s);
+    evaluate(fmu, t, x, &s, 0);
     const double R = v->motor_resistance, L_d = v->motor_inductance_d, L_q = v->motor_inductance_q;
     const double psi_r = v->motor_torque_constant / v->motor_pole_pairs, w_r = s.electrical_speed;
 
@@ -141,7 +147,11 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     } else {
         dxdt[V_D] = dxdt[V_Q] = 0.0;
     }
-    dxdt[INT_POSITION] = v->control_mode == MODE_POSITION
+    /* Cascade anti-windup: the position integral also stops while the current limit holds the
+     * inner loops back in the direction it would push. */
+    const double current_excess = s.current_ref_q_raw - s.current_ref_q;
+    const int inner_saturated = current_excess * s.angle_error > 0.0;
+    dxdt[INT_POSITION] = (v->control_mode == MODE_POSITION && !inner_saturated)
                              ? pi_integrator_rate(v->control_position_ki, v->control_position_kp, s.angle_error,
                                                   s.speed_ref, s.speed_ref_raw)
                              : 0.0;
@@ -168,7 +178,7 @@ static void hysteresis_events(void *ctx, double t, const double *x, double *g) {
     const FmuInstance *fmu = (const FmuInstance *)ctx;
     const double band = fmu->s.v.inverter_hysteresis_band;
     Signals s;
-    evaluate(fmu, t, x, &s);
+    evaluate(fmu, t, x, &s, 1);
     for (int k = 0; k < 3; k++) {
         double error = s.phase_current_ref[k] - s.phase_current[k];
         g[k] = fmu->s.internal.switch_state[k] ? (-band - error) : (error - band);
@@ -207,7 +217,7 @@ void model_compute_outputs(FmuInstance *fmu) {
     ModelVariables *v = &fmu->s.v;
     const double *x = fmu->s.x;
     Signals s;
-    evaluate(fmu, fmu->s.time, x, &s);
+    evaluate(fmu, fmu->s.time, x, &s, 1);
     v->torque = s.torque;
     v->current_d = x[I_D];
     v->current_q = x[I_Q];
