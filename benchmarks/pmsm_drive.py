@@ -1,66 +1,72 @@
 """CPU time per simulated second of one pmsm_drive instance, per inverter model, at the default
-internal solver settings (Dormand-Prince 5(4), rtol = atol = 1e-6; switching: steps <= 5 us).
+internal solver settings (RK4 at 0.1 ms; switching: steps <= 5 us) and with Dormand-Prince 5(4).
 
-Duty: position loop following a 2 Hz, 10 rad sine (22 A peak) of the angle reference on the rigid motor-side
-inertia of one leg (J_eq = 0.0209 kg m^2), coupled by cosim.bench. Only the time inside fmi2DoStep
-is counted (time.process_time around each call), so the Python test bench is not in the figure;
-the communication step is 1 ms (the platform's macro step) and 10 ms (fewer calls, showing the
-per-call overhead). Ratios in the last columns come from the same run.
+Duty: the position loop follows a 2 Hz, 10 rad sine of the angle reference (22 A peak) on the
+motor-side inertia of one leg (J_eq = 0.0209 kg m^2), at the platform's 1 ms communication step.
+The FMU is stepped from C (benchmarks/drive_bench.c), so the figure is the FMU's own cost; the same
+duty stepped from Python through fmpy (cosim.bench) is measured in the same run, and the ratio is
+the per-call cost a Python master adds.
 
-    python benchmarks/pmsm_drive.py [--seconds 2]
+    python benchmarks/pmsm_drive.py [--seconds 5]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from cosim.fmu_instance import FmuInstance
-from cosim.fmus import fmu_path
-from cosim.loads import RigidInertia
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import run_native  # noqa: E402
 
-MODELS = {1: "ideal", 2: "averaged", 3: "switching"}
+from cosim.bench import run_on_inertia  # noqa: E402
+from cosim.fmu_instance import FmuInstance  # noqa: E402
+from cosim.fmus import fmu_path  # noqa: E402
+from cosim.loads import RigidInertia  # noqa: E402
+
+J_EQ, AMPLITUDE, FREQUENCY, STEP = 0.0209, 10.0, 2.0, 1e-3
+PORTS = ("angle_ref", "angle", "speed", "torque")
+CASES = [  # name, parameters, goal [s CPU per simulated s]
+    ("ideal, RK4 0.1 ms (default)", {"inverter.model": 1}, 2e-3),
+    ("averaged, RK4 0.1 ms (default)", {"inverter.model": 2}, 2e-3),
+    ("averaged, Dormand-Prince 1e-6", {"inverter.model": 2, "solver.method": 2}, 2e-3),
+    ("switching, RK4 <= 5 us (default)", {"inverter.model": 3}, 0.5),
+    ("switching, Dormand-Prince 1e-6", {"inverter.model": 3, "solver.method": 2}, 0.5),
+]
 
 
-def cpu_per_simulated_second(model: int, step: float, seconds: float) -> tuple[float, float]:
-    drive = FmuInstance(fmu_path("pmsm_drive"), f"bench{model}")
-    drive.initialize({"inverter.model": model})
-    load = RigidInertia(0.0209)
-    inputs = drive.real_group(["angle_ref", "angle", "speed"])
-    torque = drive.real_group(["torque"])
-    cpu = 0.0
-    for k in range(int(round(seconds / step))):
-        t = k * step
-        inputs.write([10.0 * np.sin(2 * np.pi * 2 * t), load.angle, load.speed])
-        start = time.process_time()
-        drive.do_step(step)
-        cpu += time.process_time() - start
-        load.step(torque.read()[0], step)
-    tracking = abs(load.angle - 10.0 * np.sin(2 * np.pi * 2 * seconds))
-    switchings = drive.get("inverter.switchings")
+def python_loop_cost(parameters: dict, seconds: float) -> float:
+    drive = FmuInstance(fmu_path("pmsm_drive"), "python_loop")
+    drive.initialize(parameters)
+    start = time.process_time()
+    run_on_inertia(drive, RigidInertia(J_EQ), seconds, STEP,
+                   lambda t: {"angle_ref": AMPLITUDE * np.sin(2 * np.pi * FREQUENCY * t)})
+    cost = (time.process_time() - start) / seconds
     drive.free()
-    return cpu / seconds, tracking if model != 3 else switchings / seconds
+    return cost
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=2.0, help="simulated seconds per point")
+    parser.add_argument("--seconds", type=float, default=5.0, help="simulated seconds per case")
     args = parser.parse_args()
-    goals = {1: 2e-3, 2: 2e-3, 3: 0.5}
-    print(f"{'inverter':<10} {'comm step':>9} {'CPU ms / sim s':>15} {'real-time factor':>17} {'vs goal':>8}  note")
-    results = {}
-    for model, name in MODELS.items():
-        for step in (1e-3, 1e-2):
-            if model == 3 and step == 1e-2:
-                continue
-            cpu, extra = cpu_per_simulated_second(model, step, args.seconds if model != 3 else min(args.seconds, 1.0))
-            results[(model, step)] = cpu
-            note = f"{extra:.0f} commutations/s" if model == 3 else f"end tracking error {extra:.2e} rad"
-            print(f"{name:<10} {step*1e3:>7.0f}ms {cpu*1e3:>15.3f} {1/cpu:>17.0f} {cpu/goals[model]:>8.2f}  {note}")
-    print(f"\nswitching / averaged CPU ratio at 1 ms: {results[(3, 1e-3)] / results[(2, 1e-3)]:.0f}")
-    print(f"averaged, 1 ms / 10 ms communication step: {results[(2, 1e-3)] / results[(2, 1e-2)]:.2f}")
+    print(f"{'case':<34} {'CPU ms/sim s':>12} {'real-time x':>11} {'goal ms':>8} {'cost/goal':>9} {'tracking err':>12}")
+    native = {}
+    for name, parameters, goal in CASES:
+        seconds = args.seconds if "switching" not in name else min(args.seconds, 1.0)
+        cpu, error = run_native("pmsm_drive", PORTS, STEP, seconds, J_EQ, AMPLITUDE, FREQUENCY, parameters)
+        native[name] = cpu
+        print(f"{name:<34} {cpu*1e3:>12.3f} {1/cpu:>11.0f} {goal*1e3:>8.1f} {cpu/goal:>9.2f} {error:>10.2e} rad")
+    averaged = CASES[1]
+    python_cost = python_loop_cost(averaged[1], min(args.seconds, 2.0))
+    print(f"\nratios measured in this run:")
+    print(f"  switching / averaged (defaults):          {native[CASES[3][0]] / native[averaged[0]]:8.1f}")
+    print(f"  Dormand-Prince / RK4 (averaged):          {native[CASES[2][0]] / native[averaged[0]]:8.1f}")
+    print(f"  fmpy Python loop / native loop (averaged): {python_cost / native[averaged[0]]:8.1f}"
+          f"   ({python_cost*1e3:.1f} ms per simulated s through fmpy)")
 
 
 if __name__ == "__main__":
