@@ -134,14 +134,20 @@ static int locate_event(OdeSolver *s, const OdeProblem *p, void *ctx, double t, 
     return k;
 }
 
-/* Lets on_event clear every non-negative event function at (t, x). */
+/* Lets on_event handle the event that was just located (`located`, or -1 for none) and then every
+ * event function that is positive at (t, x). A function left exactly at zero by its handler counts
+ * as cleared (it has to go negative and come back to fire again). */
 static OdeResult handle_events_now(OdeSolver *s, const OdeProblem *p, void *ctx, double t,
-                                   const double *x, double *g) {
+                                   const double *x, double *g, int located) {
+    if (located >= 0) {
+        p->on_event(ctx, t, x, located);
+        s->events += 1;
+    }
     for (int round = 0; round < 2 * ODE_MAX_EVENTS + 2; round++) {
         p->events(ctx, t, x, g);
         int pending = -1;
         for (int k = 0; k < p->n_events && pending < 0; k++)
-            if (g[k] >= 0.0) pending = k;
+            if (g[k] > 0.0) pending = k;
         if (pending < 0) return ODE_OK;
         p->on_event(ctx, t, x, pending);
         s->events += 1;
@@ -162,7 +168,7 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
         (s->method != ODE_RK4 && s->method != ODE_DOPRI5) ||
         (s->method == ODE_DOPRI5 && !(s->rtol > 0.0 && s->atol > 0.0)))
         return ODE_BAD_SETTINGS;
-    if (m > 0 && (result = handle_events_now(s, p, ctx, t, x, g_start)) != ODE_OK) return result;
+    if (m > 0 && (result = handle_events_now(s, p, ctx, t, x, g_start, -1)) != ODE_OK) return result;
 
     const double t_eps = 1e-13 * fmax(1.0, fabs(t1));
     while (t1 - t > t_eps) {
@@ -201,11 +207,11 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
             int k = first_crossing(m, g_start, g_end);
             if (k >= 0) {
                 double h_event;
-                locate_event(s, p, ctx, t, x, g_start, h, x_event, &h_event, k, g_end);
+                k = locate_event(s, p, ctx, t, x, g_start, h, x_event, &h_event, k, g_end);
                 t = (h_event >= h) ? t + h : t + h_event;
                 memcpy(x, x_event, sizeof(double) * (size_t)n);
                 s->steps += 1;
-                if ((result = handle_events_now(s, p, ctx, t, x, g_start)) != ODE_OK) break;
+                if ((result = handle_events_now(s, p, ctx, t, x, g_start, k)) != ODE_OK) break;
                 continue;
             }
             memcpy(g_start, g_end, sizeof(double) * (size_t)m);

@@ -12,7 +12,8 @@
  * goes from g < 0 to g >= 0 inside a step; the solver locates it by the Illinois variant of
  * regula falsi on the step length (every trial is a full step of the method from the start of
  * the step, so the located state is as accurate as any step), stops there, and calls on_event,
- * which must change the model so that this g becomes negative again (a hysteresis switch does).
+ * which must change the model so that this g is no longer positive (a hysteresis switch makes it
+ * negative; a g left at exactly zero counts as cleared and fires again only after going negative).
  *
  * All solver memory that matters for the next step lives in OdeSolver, a plain struct: copying it
  * (as fmi2GetFMUstate does) and restoring it later continues the integration bit for bit.
