@@ -88,7 +88,8 @@ def energy_residual(drive, stop_time: float, step: float = 1e-3) -> tuple[float,
     {"inverter.model": 2},
     {"inverter.model": 2, "motor.inductance_d": 4e-3, "motor.inductance_q": 8e-3, "control.current_d_ref": -5.0},
     {"inverter.model": 3},
-], ids=["ideal", "averaged", "averaged-reluctance", "switching"])
+    {"inverter.model": 3, "inverter.neutral_connected": True},
+], ids=["ideal", "averaged", "averaged-reluctance", "switching", "switching-neutral-tied"])
 def test_power_balance(make_drive, settings):
     """Electrical energy = copper loss + mechanical work + change of magnetic energy. The three
     energies are integrated with the currents by Dormand-Prince at rtol = 1e-6, so each carries a

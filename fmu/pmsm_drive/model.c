@@ -12,8 +12,10 @@
  *                      PI integrators with back-calculation anti-windup (tracking gain Ki / Kp).
  *   inverter           1 ideal u_dq = K_v u;  2 averaged tau_v du_dq/dt = K_v u - u_dq  (Fig 4);
  *                      3 switching: hysteresis comparators on the three phase currents drive a
- *                        two-level inverter fed by V_dc (Fig 3); the motor is integrated in dq,
- *                        which for a star-connected machine with isolated neutral is the abc model.
+ *                        two-level inverter fed by V_dc (Fig 3); the motor is integrated in dq0,
+ *                        which is the abc model: with the star point isolated (Fig 3) the
+ *                        zero-sequence current is zero; tied to the DC-link midpoint it obeys
+ *                        L_0 di_0/dt = u_0 - R i_0 and carries no torque.
  * The dq quantities use the power-invariant transform, in which Eqs 24-26 hold as printed
  * (no factor 3/2) and u_d i_d + u_q i_q is the electrical power.
  */
@@ -22,7 +24,7 @@
 #include <string.h>
 
 enum { I_D, I_Q, V_D, V_Q, INT_POSITION, INT_SPEED, INT_CURRENT_D, INT_CURRENT_Q,
-       E_ELECTRICAL, E_COPPER, E_MECHANICAL };
+       E_ELECTRICAL, E_COPPER, E_MECHANICAL, I_0 };
 
 enum { INVERTER_IDEAL = 1, INVERTER_AVERAGED = 2, INVERTER_SWITCHING = 3 };
 enum { MODE_POSITION = 1, MODE_SPEED = 2, MODE_TORQUE = 3 };
@@ -40,17 +42,19 @@ typedef struct {
     double angle_error, speed_ref_raw, speed_ref, speed_error;
     double current_ref_q_raw, current_ref_q, current_ref_d;
     double command_d_raw, command_d, command_q_raw, command_q; /* current-controller outputs */
-    double voltage_d, voltage_q;                                /* applied to the motor */
+    double voltage_d, voltage_q, voltage_0;                     /* applied to the motor */
     double phase_current[3], phase_current_ref[3];
     double torque;
 } Signals;
 
-/* Power-invariant inverse Park + Clarke: dq at electrical angle theta -> phases a, b, c. */
-static void dq_to_abc(double d, double q, double cos_t, double sin_t, double abc[3]) {
+static const double SQRT_1_3 = 0.577350269189625764509149; /* 1/sqrt(3) */
+
+/* Power-invariant inverse Park + Clarke: dq0 at electrical angle theta -> phases a, b, c. */
+static void dq0_to_abc(double d, double q, double zero, double cos_t, double sin_t, double abc[3]) {
     double alpha = d * cos_t - q * sin_t, beta = d * sin_t + q * cos_t;
-    abc[0] = SQRT_2_3 * alpha;
-    abc[1] = SQRT_2_3 * (-0.5 * alpha + SQRT_3_2 * beta);
-    abc[2] = SQRT_2_3 * (-0.5 * alpha - SQRT_3_2 * beta);
+    abc[0] = SQRT_2_3 * alpha + SQRT_1_3 * zero;
+    abc[1] = SQRT_2_3 * (-0.5 * alpha + SQRT_3_2 * beta) + SQRT_1_3 * zero;
+    abc[2] = SQRT_2_3 * (-0.5 * alpha - SQRT_3_2 * beta) + SQRT_1_3 * zero;
 }
 
 /* Computes the drive's signals at t; the phase quantities only when `with_phases` (outputs,
@@ -93,17 +97,25 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
     const double cos_t = (with_phases || switching) ? cos(s->electrical_angle) : 1.0;
     const double sin_t = (with_phases || switching) ? sin(s->electrical_angle) : 0.0;
     if (switching) {
+        /* Phase-to-star-point voltages: each leg puts its phase at +-V_dc/2 about the DC-link
+         * midpoint; an isolated star point floats to the mean of the three. */
         const int *sw = fmu->s.internal.switch_state;
-        double phase_voltage[3];
-        for (int k = 0; k < 3; k++)
-            phase_voltage[k] = v->inverter_dc_link_voltage / 3.0 * (2 * sw[k] - sw[(k + 1) % 3] - sw[(k + 2) % 3]);
+        double phase_voltage[3], mean = 0.0;
+        for (int k = 0; k < 3; k++) {
+            phase_voltage[k] = v->inverter_dc_link_voltage * (sw[k] - 0.5);
+            mean += phase_voltage[k] / 3.0;
+        }
+        if (!v->inverter_neutral_connected)
+            for (int k = 0; k < 3; k++) phase_voltage[k] -= mean;
         double alpha = SQRT_2_3 * (phase_voltage[0] - 0.5 * phase_voltage[1] - 0.5 * phase_voltage[2]);
         double beta = SQRT_2_3 * SQRT_3_2 * (phase_voltage[1] - phase_voltage[2]);
         s->voltage_d = alpha * cos_t + beta * sin_t;
         s->voltage_q = -alpha * sin_t + beta * cos_t;
+        s->voltage_0 = SQRT_1_3 * (phase_voltage[0] + phase_voltage[1] + phase_voltage[2]);
         s->command_d_raw = s->command_d = s->command_q_raw = s->command_q = 0.0;
     } else {
         const double command_limit = v->limit_voltage / v->inverter_gain;
+        s->voltage_0 = 0.0;
         s->command_d_raw = v->control_current_kp * (s->current_ref_d - x[I_D]) + x[INT_CURRENT_D];
         s->command_q_raw = v->control_current_kp * (s->current_ref_q - x[I_Q]) + x[INT_CURRENT_Q];
         s->command_d = clamp(s->command_d_raw, command_limit);
@@ -117,8 +129,8 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
         }
     }
     if (with_phases) {
-        dq_to_abc(x[I_D], x[I_Q], cos_t, sin_t, s->phase_current);
-        dq_to_abc(s->current_ref_d, s->current_ref_q, cos_t, sin_t, s->phase_current_ref);
+        dq0_to_abc(x[I_D], x[I_Q], x[I_0], cos_t, sin_t, s->phase_current);
+        dq0_to_abc(s->current_ref_d, s->current_ref_q, 0.0, cos_t, sin_t, s->phase_current_ref);
     }
 
     /* Eq 26 */
@@ -140,6 +152,7 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
 
     dxdt[I_D] = (s.voltage_d - R * x[I_D] + w_r * L_q * x[I_Q]) / L_d;          /* Eq 24 */
     dxdt[I_Q] = (s.voltage_q - R * x[I_Q] - w_r * L_d * x[I_D] - w_r * psi_r) / L_q; /* Eq 25 */
+    dxdt[I_0] = (s.voltage_0 - R * x[I_0]) / v->motor_inductance_0;                /* zero sequence */
 
     if (v->inverter_model == INVERTER_AVERAGED) {
         dxdt[V_D] = (v->inverter_gain * s.command_d - x[V_D]) / v->inverter_time_constant;
@@ -167,8 +180,8 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
         dxdt[INT_CURRENT_Q] = pi_integrator_rate(v->control_current_ki, v->control_current_kp,
                                                  s.current_ref_q - x[I_Q], s.command_q, s.command_q_raw);
     }
-    dxdt[E_ELECTRICAL] = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q];
-    dxdt[E_COPPER] = R * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q]);
+    dxdt[E_ELECTRICAL] = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q] + s.voltage_0 * x[I_0];
+    dxdt[E_COPPER] = R * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q] + x[I_0] * x[I_0]);
     dxdt[E_MECHANICAL] = s.torque * s.speed;
 }
 
@@ -223,10 +236,11 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->current_q = x[I_Q];
     v->voltage_d = s.voltage_d;
     v->voltage_q = s.voltage_q;
-    v->power_electrical = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q];
+    v->power_electrical = s.voltage_d * x[I_D] + s.voltage_q * x[I_Q] + s.voltage_0 * x[I_0];
     v->power_mechanical = s.torque * s.speed;
-    v->power_copper_loss = v->motor_resistance * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q]);
-    v->energy_magnetic = 0.5 * (v->motor_inductance_d * x[I_D] * x[I_D] + v->motor_inductance_q * x[I_Q] * x[I_Q]);
+    v->power_copper_loss = v->motor_resistance * (x[I_D] * x[I_D] + x[I_Q] * x[I_Q] + x[I_0] * x[I_0]);
+    v->energy_magnetic = 0.5 * (v->motor_inductance_d * x[I_D] * x[I_D] + v->motor_inductance_q * x[I_Q] * x[I_Q] +
+                                v->motor_inductance_0 * x[I_0] * x[I_0]);
     v->energy_electrical = x[E_ELECTRICAL];
     v->energy_copper_loss = x[E_COPPER];
     v->energy_mechanical = x[E_MECHANICAL];
@@ -259,6 +273,7 @@ fmi2Status model_validate(FmuInstance *fmu) {
     REQUIRE_POSITIVE(motor_torque_constant);
     REQUIRE_POSITIVE(motor_inductance_d);
     REQUIRE_POSITIVE(motor_inductance_q);
+    REQUIRE_POSITIVE(motor_inductance_0);
     REQUIRE_POSITIVE(motor_resistance);
     REQUIRE_POSITIVE(inverter_gain);
     REQUIRE_POSITIVE(inverter_time_constant);

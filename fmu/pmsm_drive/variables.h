@@ -14,7 +14,7 @@
 
 /* Internal ODE state: stator currents, averaged-inverter voltages, controller integrators and
  * energy accounts (index names in model.c). */
-#define MODEL_N_STATES 11
+#define MODEL_N_STATES 12
 
 typedef struct {
     int switch_state[3]; /* switching inverter: upper switch of phase a, b, c closed */
@@ -42,13 +42,13 @@ X(Real, current_q, "current.q", output, continuous, "A", 0.0, -FMU_INF, FMU_INF,
 X(Real, voltage_d, "voltage.d", output, continuous, "V", 0.0, -FMU_INF, FMU_INF, "Stator voltage applied, d axis") \
 X(Real, voltage_q, "voltage.q", output, continuous, "V", 0.0, -FMU_INF, FMU_INF, "Stator voltage applied, q axis") \
 X(Real, power_electrical, "power.electrical", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, \
-  "Electrical power into the stator, u_d i_d + u_q i_q") \
+  "Electrical power into the stator, u_d i_d + u_q i_q + u_0 i_0") \
 X(Real, power_mechanical, "power.mechanical", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, \
   "Mechanical power delivered to the shaft, torque times speed") \
 X(Real, power_copper_loss, "power.copper_loss", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, \
-  "Copper loss R_s (i_d^2 + i_q^2)") \
+  "Copper loss R_s (i_d^2 + i_q^2 + i_0^2)") \
 X(Real, energy_magnetic, "energy.magnetic", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, \
-  "Magnetic energy stored in the winding inductances, (L_d i_d^2 + L_q i_q^2) / 2") \
+  "Magnetic energy stored in the winding inductances, (L_d i_d^2 + L_q i_q^2 + L_0 i_0^2) / 2") \
 X(Real, energy_electrical, "energy.electrical", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, \
   "Electrical energy delivered since the start (integral of power.electrical)") \
 X(Real, energy_copper_loss, "energy.copper_loss", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, \
@@ -90,6 +90,13 @@ X(Real, inverter_dc_link_voltage, "inverter.dc_link_voltage", parameter, fixed, 
   "DC-link voltage of the switching inverter (assumed; see meng2010.toml)") \
 X(Real, inverter_hysteresis_band, "inverter.hysteresis_band", parameter, fixed, "A", 0.5, 0.0, FMU_INF, \
   "Half width of the hysteresis band of each phase-current comparator (assumed)") \
+X(Boolean, inverter_neutral_connected, "inverter.neutral_connected", parameter, fixed, "", 0, 0, 1, \
+  "Switching inverter: false = star point isolated (Fig 3; the three comparators interact and a phase " \
+  "error can reach twice the band), true = star point tied to the DC-link midpoint (phases independent, " \
+  "errors inside the band; zero-sequence current flows through motor.inductance_0)") \
+X(Real, motor_inductance_0, "motor.inductance_0", parameter, fixed, "H", 1.4e-3, 0.0, FMU_INF, \
+  "Zero-sequence inductance, used only with inverter.neutral_connected (assumed: 0.2 L_q, the order " \
+  "of the leakage inductance of a surface-magnet machine)") \
 X(Real, inverter_max_step, "inverter.max_step", parameter, fixed, "s", 5e-6, 1e-9, 1e-3, \
   "Largest internal step with the switching inverter; must be shorter than a current ramp across the band") \
 \
