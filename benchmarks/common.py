@@ -15,10 +15,10 @@ from cosim.fmus import BUILD_DIR, fmu_path
 HERE = Path(__file__).resolve().parent
 
 
-def native_bench() -> Path:
-    """Compiles benchmarks/drive_bench.c (once per change) and returns the executable."""
-    exe = BUILD_DIR / "bench" / "drive_bench"
-    source = HERE / "drive_bench.c"
+def native_bench(name: str = "drive_bench") -> Path:
+    """Compiles benchmarks/<name>.c (once per change) and returns the executable."""
+    exe = BUILD_DIR / "bench" / name
+    source = HERE / f"{name}.c"
     if not exe.exists() or exe.stat().st_mtime < source.stat().st_mtime:
         exe.parent.mkdir(parents=True, exist_ok=True)
         headers = Path(fmpy.__file__).parent / "c-code"
@@ -27,21 +27,39 @@ def native_bench() -> Path:
     return exe
 
 
-def run_native(fmu_name: str, ports: tuple[str, str, str, str], step: float, seconds: float, inertia: float,
-               amplitude: float, frequency: float, parameters: dict[str, float | int]) -> tuple[float, float]:
-    """CPU seconds per simulated second and the final tracking error of one drive instance on a
-    rigid load, stepped from C. `ports` names the reference, position, velocity and effort ports."""
+def fmu_library(fmu_name: str) -> tuple[Path, dict, str]:
+    """The FMU's binary (extracted next to the build), its variables by name, and its GUID."""
     path = fmu_path(fmu_name)
     md = read_model_description(str(path))
-    variables = {v.name: v for v in md.modelVariables}
     lib = BUILD_DIR / "stage" / fmu_name / "binaries" / "linux64" / f"{fmu_name}.so"
     if not lib.exists():
         with zipfile.ZipFile(path) as z:
             z.extractall(BUILD_DIR / "stage" / fmu_name)
-    args = [str(native_bench()), str(lib), md.guid, repr(step), repr(seconds), repr(inertia), repr(amplitude),
-            repr(frequency), *[str(variables[p].valueReference) for p in ports]]
-    for name, value in parameters.items():
-        kind = "i" if variables[name].type in ("Integer", "Enumeration", "Boolean") else "r"
-        args.append(f"{kind}{variables[name].valueReference}={value}")
+    return lib, {v.name: v for v in md.modelVariables}, md.guid
+
+
+def value_arguments(variables: dict, values: dict) -> list[str]:
+    arguments = []
+    for name, value in values.items():
+        kind = {"Integer": "i", "Enumeration": "i", "Boolean": "b"}.get(variables[name].type, "r")
+        arguments.append(f"{kind}{variables[name].valueReference}={int(value) if kind != 'r' else float(value)!r}")
+    return arguments
+
+
+def run_stepping(fmu_name: str, step: float, seconds: float, values: dict) -> float:
+    """CPU seconds per simulated second of one instance stepped from C with constant inputs."""
+    lib, variables, guid = fmu_library(fmu_name)
+    args = [str(native_bench("fmu_step_bench")), str(lib), guid, repr(step), repr(seconds),
+            *value_arguments(variables, values)]
+    return float(subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()[0])
+
+
+def run_native(fmu_name: str, ports: tuple[str, str, str, str], step: float, seconds: float, inertia: float,
+               amplitude: float, frequency: float, parameters: dict[str, float | int]) -> tuple[float, float]:
+    """CPU seconds per simulated second and the final tracking error of one drive instance on a
+    rigid load, stepped from C. `ports` names the reference, position, velocity and effort ports."""
+    lib, variables, guid = fmu_library(fmu_name)
+    args = [str(native_bench()), str(lib), guid, repr(step), repr(seconds), repr(inertia), repr(amplitude),
+            repr(frequency), *[str(variables[p].valueReference) for p in ports], *value_arguments(variables, parameters)]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
     return float(out[0]), float(out[1])

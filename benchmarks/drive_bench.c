@@ -4,7 +4,7 @@
  * the figure is the FMU's own cost and not an interpreter's.
  *
  * usage: drive_bench LIB GUID STEP SECONDS INERTIA AMPLITUDE FREQUENCY
- *                    VR_REF VR_POSITION VR_VELOCITY VR_OUT [r<vr>=<value> | i<vr>=<value>]...
+ *                    VR_REF VR_POSITION VR_VELOCITY VR_OUT [r<vr>=<value> | i<vr>=<value> | b<vr>=<0|1>]...
  * The reference input is AMPLITUDE sin(2 pi FREQUENCY t); VR_OUT is the torque (or force) output.
  * Prints: cpu_seconds_per_simulated_second final_tracking_error
  */
@@ -37,7 +37,7 @@ int main(int argc, char **argv) {
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "%s\n", dlerror()); return 2; }
     LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
-    LOAD(fmi2ExitInitializationMode) LOAD(fmi2SetReal) LOAD(fmi2SetInteger) LOAD(fmi2GetReal)
+    LOAD(fmi2ExitInitializationMode) LOAD(fmi2SetReal) LOAD(fmi2SetInteger) LOAD(fmi2SetBoolean) LOAD(fmi2GetReal)
     LOAD(fmi2DoStep) LOAD(fmi2FreeInstance)
     const double step = atof(argv[3]), seconds = atof(argv[4]), inertia = atof(argv[5]);
     const double amplitude = atof(argv[6]), frequency = atof(argv[7]);
@@ -52,9 +52,10 @@ int main(int argc, char **argv) {
         fmi2ValueReference vr = (fmi2ValueReference)atoi(argv[i] + 1);
         const char *value = strchr(argv[i], '=');
         if (!value) return 2;
-        if (argv[i][0] == 'i') {
-            fmi2Integer v = atoi(value + 1);
-            if (fmi2SetInteger(c, &vr, 1, &v) != fmi2OK) return 1;
+        if (argv[i][0] == 'i' || argv[i][0] == 'b') {
+            fmi2Integer v = atoi(value + 1); /* fmi2Boolean is an int as well */
+            if ((argv[i][0] == 'i' ? fmi2SetInteger(c, &vr, 1, &v) : fmi2SetBoolean(c, &vr, 1, &v)) != fmi2OK)
+                return 1;
         } else {
             fmi2Real v = atof(value + 1);
             if (fmi2SetReal(c, &vr, 1, &v) != fmi2OK) return 1;

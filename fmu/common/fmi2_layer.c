@@ -152,6 +152,8 @@ double fmu_input_at(const FmuInstance *fmu, int vr, double t) {
     return value;
 }
 
+double *fmu_real(FmuInstance *fmu, int vr) { return (double *)value_address(fmu, vr); }
+
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }
 
 fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step) {

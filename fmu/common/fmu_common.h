@@ -65,6 +65,8 @@ void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, co
 /* Value of the real input `vr` at time t: the value set, extrapolated to first order with the
  * derivative given through fmi2SetRealInputDerivatives (if any) from the time it was set. */
 double fmu_input_at(const FmuInstance *fmu, int vr, double t);
+/* The Real variable `vr`, for models that address variables through arrays of references. */
+double *fmu_real(FmuInstance *fmu, int vr);
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr);
 
 /* Runs the internal solver (solver.* parameters) over [time, time + h] on the model's ODE, with

@@ -191,6 +191,33 @@ void platform_leg_jacobian(const LegGeometry legs[PLATFORM_LEGS], double J[36]) 
     }
 }
 
+double platform_jacobian_conditioning(const LegGeometry legs[PLATFORM_LEGS]) {
+    double J[36];
+    platform_leg_jacobian(legs, J);
+    double scale = 1.0;
+    for (int i = 0; i < 6; i++) {
+        double norm = 0.0;
+        for (int j = 0; j < 6; j++) norm += J[6 * i + j] * J[6 * i + j];
+        norm = sqrt(norm);
+        for (int j = 0; j < 6; j++) J[6 * i + j] /= norm;
+    }
+    /* determinant by Gaussian elimination with partial pivoting */
+    for (int k = 0; k < 6; k++) {
+        int pivot = k;
+        for (int i = k + 1; i < 6; i++)
+            if (fabs(J[6 * i + k]) > fabs(J[6 * pivot + k])) pivot = i;
+        if (J[6 * pivot + k] == 0.0) return 0.0;
+        if (pivot != k)
+            for (int j = 0; j < 6; j++) { double t = J[6 * k + j]; J[6 * k + j] = J[6 * pivot + j]; J[6 * pivot + j] = t; }
+        scale *= J[6 * k + k];
+        for (int i = k + 1; i < 6; i++) {
+            double f = J[6 * i + k] / J[6 * k + k];
+            for (int j = k; j < 6; j++) J[6 * i + j] -= f * J[6 * k + j];
+        }
+    }
+    return fabs(scale);
+}
+
 /* ---- dynamics ---------------------------------------------------------------------------- */
 
 /* Assembles the mass matrix M (Eq 23) and the generalized force of everything but the actuators
@@ -281,24 +308,27 @@ static void assemble(const Platform *p, const double *x, const double wrench[6],
             rhs0[3 + k] += r_x_f[k];
         }
 
-        /* M += J_a' M_leg J_a with J_a = [I, -[r]x]: M_leg J_a u = M_leg (v + w x r). */
-        double Ml[9];
+        /* M += J_a' S J_a with J_a = [I, -[r]x] and S = M_leg:
+         * [[S, -S [r]x], [[r]x S, -[r]x S [r]x]]. */
+        double S[9], S_rx[9];
         for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++)
-                Ml[3 * a + b] = mu_axial * n[a] * n[b] + mu_perp * ((a == b) - n[a] * n[b]);
-        double Ja[18]; /* 3 x 6 */
-        const double rx[9] = {0, -r[2], r[1], r[2], 0, -r[0], -r[1], r[0], 0};
+            for (int b = 0; b < 3; b++) S[3 * a + b] = mu_axial * n[a] * n[b] + mu_perp * ((a == b) - n[a] * n[b]);
+        for (int a = 0; a < 3; a++) { /* row a of S [r]x is (row a of S) x r */
+            const double *row = S + 3 * a;
+            S_rx[3 * a + 0] = row[1] * r[2] - row[2] * r[1];
+            S_rx[3 * a + 1] = row[2] * r[0] - row[0] * r[2];
+            S_rx[3 * a + 2] = row[0] * r[1] - row[1] * r[0];
+        }
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++) {
-                Ja[6 * a + b] = (a == b);
-                Ja[6 * a + 3 + b] = -rx[3 * a + b];
-            }
-        for (int a = 0; a < 6; a++)
-            for (int b = 0; b < 6; b++) {
-                double s = 0.0;
-                for (int c = 0; c < 3; c++)
-                    for (int d = 0; d < 3; d++) s += Ja[6 * c + a] * Ml[3 * c + d] * Ja[6 * d + b];
-                M[6 * a + b] += s;
+                /* ([r]x S [r]x)_ab = sum_c [r]x_ac (S [r]x)_cb, with [r]x = [[0,-r2,r1],[r2,0,-r0],[-r1,r0,0]] */
+                const double rx_S_rx = (a == 0)   ? -r[2] * S_rx[3 + b] + r[1] * S_rx[6 + b]
+                                       : (a == 1) ? r[2] * S_rx[b] - r[0] * S_rx[6 + b]
+                                                  : -r[1] * S_rx[b] + r[0] * S_rx[3 + b];
+                M[6 * a + b] += S[3 * a + b];
+                M[6 * a + 3 + b] -= S_rx[3 * a + b];
+                M[6 * (3 + b) + a] -= S_rx[3 * a + b]; /* symmetric block: ([r]x S)' = -S [r]x */
+                M[6 * (3 + a) + 3 + b] -= rx_S_rx;
             }
 
         kinetic += 0.5 * (mu_axial * L_dot * L_dot + mu_perp * vPv);

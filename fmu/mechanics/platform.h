@@ -69,6 +69,9 @@ void platform_legs(const Platform *p, const double *x, LegGeometry legs[PLATFORM
 /* Leg Jacobian J (6x6, row major): L_dot_i = J_i u, row i = [n_i', (r_i x n_i)']. */
 void platform_leg_jacobian(const LegGeometry legs[PLATFORM_LEGS], double J[36]);
 
+/* |det J| over the product of its rows' norms: 1 for orthogonal leg lines, 0 at a singularity. */
+double platform_jacobian_conditioning(const LegGeometry legs[PLATFORM_LEGS]);
+
 typedef struct {
     double mass_matrix[36];     /* M_s (Eq 23) */
     double kinetic, potential;  /* energies [J] */

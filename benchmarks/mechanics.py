@@ -1,0 +1,76 @@
+"""CPU time per simulated second of the mechanics FMU, full and reduced models, at its default
+solver (RK4, 1 ms) and at Dormand-Prince rtol 1e-8, stepped from C at a 1 ms communication step
+(benchmarks/fmu_step_bench.c), so the figure is the FMU's own cost.
+
+Duty: weightless, zero inputs, the platform started from a shifted, tilted pose with a twist, so it
+drifts and turns through the workspace (by about 0.1 m and 0.1 rad in 5 s) while every term of the
+dynamics is evaluated; with gravity and no controller it would fall out of the workspace. In the
+same run, the same dynamics (the C core through ctypes) integrated by scipy's solve_ivp (DOP853,
+rtol 1e-8) stands for a monolithic numpy/scipy solve; the ratio is printed.
+
+    python benchmarks/mechanics.py [--seconds 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "tests"))
+from common import run_stepping  # noqa: E402
+from platform_core import Core, build  # noqa: E402
+
+POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
+TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]
+CASES = [
+    ("full model, RK4 1 ms (default)", {}),
+    ("full model, Dormand-Prince 1e-8", {"solver.method": 2}),
+    ("without motor systems", {"effects.motor_inertia": 0}),
+    ("without actuators and motor systems", {"effects.motor_inertia": 0, "effects.actuator_inertia": 0}),
+    ("without friction", {"effects.friction": 0}),
+]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seconds", type=float, default=5.0)
+    args = parser.parse_args()
+    core = Core(build(Path(tempfile.mkdtemp())))
+    pose = core.neutral_pose + np.array([0.05, -0.03, 0.1, 0.04, -0.03, 0.08])
+    twist = np.array([0.02, -0.01, 0.015, 0.01, 0.02, -0.015])
+    duty = {f"initial.pose.{a}": pose[k] for k, a in enumerate(POSE)}
+    duty["environment.gravity_z"] = 0.0
+    duty.update({f"initial.twist.{n}": twist[k] for k, n in enumerate(TWIST)})
+
+    print(f"{'case':<40} {'CPU ms / sim s':>15} {'real-time x':>12} {'vs goal 5 ms':>13}")
+    results = {}
+    for name, settings in CASES:
+        values = {**duty, **settings}
+        cpu = run_stepping("mechanics", 1e-3, args.seconds, values)
+        results[name] = cpu
+        print(f"{name:<40} {cpu * 1e3:>15.3f} {1 / cpu:>12.0f} {cpu / 5e-3:>13.2f}")
+
+    core.p.gravity[2] = 0.0
+    x0 = core.state(pose)
+    x0[7:] = twist
+    start = time.process_time()
+    seconds = min(args.seconds, 1.0)
+    solve_ivp(lambda t, x: core.derivatives(x)[0], (0, seconds), x0, method="DOP853", rtol=1e-8, atol=1e-10)
+    scipy_cost = (time.process_time() - start) / seconds
+    print(f"\nscipy solve_ivp (DOP853, rtol 1e-8) on the same dynamics: {scipy_cost * 1e3:.1f} ms per simulated s")
+    print(f"ratio FMU (Dormand-Prince 1e-8, 1000 communication steps/s) / scipy (free steps): "
+          f"{results[CASES[1][0]] / scipy_cost:.2f}")
+    print(f"ratio full / without actuators and motor systems (RK4): "
+          f"{results[CASES[0][0]] / results[CASES[3][0]]:.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,282 @@
+/* mechanics: the Stewart platform's multi-body dynamics as an FMU (Meng et al. 2010, Section 2).
+ *
+ * The dynamics live in platform.c (plain C, tested on its own); this file connects them to the
+ * variable table: it builds the Platform from the parameters, reads the inputs, integrates, keeps
+ * the energy accounts, and watches the stroke, the joint angles and the Jacobian.
+ *
+ *   M_s(x) u_dot = sum_i [n_i; r_i x n_i] (K_FT T_i + F_i) + (gravity, velocity terms, friction,
+ *                  external wrench)                                                    (Eq 23)
+ *   d/dt (E_kin + E_pot) = power.drive - power.transmission_loss - power.friction_loss + power.load
+ */
+#include "fmu_common.h"
+
+#include <string.h>
+
+enum { E_DRIVE = PLATFORM_STATES, E_TRANSMISSION, E_FRICTION, E_LOAD };
+
+#define LEG_VRS(field) \
+    {VR_leg1_##field, VR_leg2_##field, VR_leg3_##field, VR_leg4_##field, VR_leg5_##field, VR_leg6_##field}
+static const int VR_TORQUE[] = LEG_VRS(torque), VR_FORCE[] = LEG_VRS(force), VR_LENGTH[] = LEG_VRS(length),
+                 VR_VELOCITY[] = LEG_VRS(velocity), VR_ANGLE[] = LEG_VRS(angle), VR_SPEED[] = LEG_VRS(speed),
+                 VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref);
+static const int VR_POSE_REF[] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z,
+                                  VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw};
+static const int VR_WRENCH[] = {VR_load_force_x, VR_load_force_y, VR_load_force_z,
+                                VR_load_torque_x, VR_load_torque_y, VR_load_torque_z};
+
+static const double PI = 3.14159265358979323846;
+
+/* The Platform of the parameters; returns -1 if the layout is impossible. */
+static int build_platform(const ModelVariables *v, Platform *p) {
+    memset(p, 0, sizeof *p);
+    const double to_deg = 180.0 / PI;
+    const double lower[3] = {v->geometry_lower_pair_centre_1 * to_deg, v->geometry_lower_pair_centre_2 * to_deg,
+                             v->geometry_lower_pair_centre_3 * to_deg};
+    const double upper[3] = {v->geometry_upper_pair_centre_1 * to_deg, v->geometry_upper_pair_centre_2 * to_deg,
+                             v->geometry_upper_pair_centre_3 * to_deg};
+    int status = platform_layout_from_radii(p, v->geometry_upper_joint_radius, v->geometry_lower_joint_radius,
+                                            v->geometry_upper_joint_spacing, v->geometry_lower_joint_spacing,
+                                            v->geometry_middle_leg_length, lower, upper);
+    p->platform_mass = v->platform_mass;
+    p->platform_inertia[0] = v->platform_inertia_xx;
+    p->platform_inertia[1] = v->platform_inertia_yy;
+    p->platform_inertia[2] = v->platform_inertia_zz;
+    p->moving_mass = v->actuator_moving_mass;
+    p->moving_inertia = v->actuator_moving_inertia;
+    p->moving_com = v->actuator_moving_com;
+    p->rotating_mass = v->actuator_rotating_mass;
+    p->rotating_inertia = v->actuator_rotating_inertia;
+    p->rotating_com = v->actuator_rotating_com;
+    p->motor_mass = v->motor_system_mass;
+    p->motor_inertia = v->motor_system_inertia;
+    p->motor_com = v->motor_system_com;
+    p->rotor_inertia = v->motor_system_rotor_inertia;
+    p->screw_ratio = v->transmission_screw_ratio;
+    p->force_torque = v->transmission_force_torque;
+    p->viscous_friction = v->motor_viscous_friction;
+    p->gravity[0] = v->environment_gravity_x;
+    p->gravity[1] = v->environment_gravity_y;
+    p->gravity[2] = v->environment_gravity_z;
+    p->actuator_inertia_on = v->effects_actuator_inertia;
+    p->motor_inertia_on = v->effects_motor_inertia;
+    p->friction_on = v->effects_friction;
+    return status;
+}
+
+static void initial_state(const ModelVariables *v, double *x) {
+    const double pose[6] = {v->initial_pose_x, v->initial_pose_y, v->initial_pose_z,
+                            v->initial_pose_roll, v->initial_pose_pitch, v->initial_pose_yaw};
+    const double zero[6] = {0, 0, 0, 0, 0, 0};
+    platform_state_from_pose(pose, zero, x);
+    x[7] = v->initial_twist_vx; x[8] = v->initial_twist_vy; x[9] = v->initial_twist_vz;
+    x[10] = v->initial_twist_wx; x[11] = v->initial_twist_wy; x[12] = v->initial_twist_wz;
+}
+
+static void inputs_at(const FmuInstance *fmu, double t, double torque[6], double force[6], double wrench[6]) {
+    for (int i = 0; i < 6; i++) {
+        torque[i] = fmu_input_at(fmu, VR_TORQUE[i], t);
+        force[i] = fmu_input_at(fmu, VR_FORCE[i], t);
+        wrench[i] = fmu_input_at(fmu, VR_WRENCH[i], t);
+    }
+}
+
+static void rhs(void *ctx, double t, const double *x, double *dxdt) {
+    const FmuInstance *fmu = (const FmuInstance *)ctx;
+    double torque[6], force[6], wrench[6];
+    PlatformDiagnostics d;
+    inputs_at(fmu, t, torque, force, wrench);
+    if (platform_derivatives(&fmu->s.internal.platform, x, torque, force, wrench, dxdt, &d) != 0) {
+        for (int k = 0; k < MODEL_N_STATES; k++) dxdt[k] = NAN; /* the solver reports it */
+        return;
+    }
+    dxdt[E_DRIVE] = d.drive_power;
+    dxdt[E_TRANSMISSION] = d.transmission_loss;
+    dxdt[E_FRICTION] = d.friction_loss;
+    dxdt[E_LOAD] = d.load_power;
+}
+
+/* Largest tilt of leg i from its neutral direction, at the lower joint (base frame) and at the upper
+ * joint (platform frame). */
+static double joint_angle(const double *x, const LegGeometry *leg, const double n0[3]) {
+    double R[9], q[4], norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6]);
+    for (int k = 0; k < 4; k++) q[k] = x[3 + k] / norm;
+    platform_rotation_from_quaternion(q, R);
+    const double *n = leg->axis;
+    double lower = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2], upper = 0.0;
+    for (int k = 0; k < 3; k++) upper += (R[k] * n[0] + R[3 + k] * n[1] + R[6 + k] * n[2]) * n0[k]; /* (R'n).n0 */
+    return acos(fmin(1.0, fmin(lower, upper)));
+}
+
+/* Stroke, joint limits and singularity of the platform `in` at state x and time t. Returns
+ * fmi2Error for what must stop the run; logs warnings once per excursion otherwise. */
+static fmi2Status check_limits(const FmuInstance *fmu, ModelInternal *in, const double *x, double t) {
+    const ModelVariables *v = &fmu->s.v;
+    LegGeometry legs[PLATFORM_LEGS];
+    platform_legs(&in->platform, x, legs);
+    const fmi2Status severity = v->limit_hard_stop ? fmi2Error : fmi2Warning;
+    const char *category = v->limit_hard_stop ? "logStatusError" : "logStatusWarning";
+    fmi2Status status = fmi2OK;
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        const double L = legs[i].length;
+        if (!(legs[i].axis[2] > 0.0) || !(L > 1e-6)) {
+            fmu_log(fmu, fmi2Error, "logStatusError",
+                    "t = %.6f s: leg %d reached its lower joint or passed below it (length %.6g m, axis z %.3g): "
+                    "the joints cross", t, i + 1, L, legs[i].axis[2]);
+            return fmi2Error;
+        }
+        const int outside = L < v->limit_leg_length_min || L > v->limit_leg_length_max;
+        if (outside && (!in->out_of_stroke[i] || v->limit_hard_stop)) {
+            fmu_log(fmu, severity, category, "t = %.6f s: leg %d length %.6f m is outside the stroke [%.4g, %.4g] m",
+                    t, i + 1, L, v->limit_leg_length_min, v->limit_leg_length_max);
+            if (v->limit_hard_stop) status = fmi2Error;
+        } else if (!outside && in->out_of_stroke[i]) {
+            fmu_log(fmu, fmi2OK, "logEvents", "t = %.6f s: leg %d is back inside the stroke", t, i + 1);
+        }
+        in->out_of_stroke[i] = outside;
+        const double angle = joint_angle(x, &legs[i], in->neutral_axis[i]);
+        const int past = angle > v->limit_joint_angle;
+        if (past && (!in->past_joint_limit[i] || v->limit_hard_stop)) {
+            fmu_log(fmu, severity, category, "t = %.6f s: leg %d joint angle %.2f deg exceeds the limit %.2f deg", t,
+                    i + 1, angle * 180.0 / PI, v->limit_joint_angle * 180.0 / PI);
+            if (v->limit_hard_stop) status = fmi2Error;
+        }
+        in->past_joint_limit[i] = past;
+    }
+    const double conditioning = platform_jacobian_conditioning(legs);
+    if (conditioning < 1e-6) {
+        fmu_log(fmu, fmi2Error, "logStatusError",
+                "t = %.6f s: the leg Jacobian is near-singular (normalised |det J| = %.3g < 1e-6)", t, conditioning);
+        return fmi2Error;
+    }
+    return status;
+}
+
+fmi2Status model_do_step(FmuInstance *fmu, double h) {
+    const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL};
+    if (fmu_integrate(fmu, &problem, fmu, h, 0.0) != fmi2OK) return fmi2Error;
+    double *q = fmu->s.x + 3, norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; k++) q[k] /= norm; /* keep the quaternion on the unit sphere */
+    return check_limits(fmu, &fmu->s.internal, fmu->s.x, fmu->s.time + h);
+}
+
+/* The platform of the parameters with its neutral leg axes; -1 if the layout is impossible. */
+static int build_internal(const ModelVariables *v, ModelInternal *in) {
+    memset(in, 0, sizeof *in);
+    if (build_platform(v, &in->platform) != 0) return -1;
+    LegGeometry legs[PLATFORM_LEGS];
+    double x0[PLATFORM_STATES];
+    const double zero[6] = {0, 0, 0, 0, 0, 0};
+    platform_state_from_pose(in->platform.neutral_pose, zero, x0);
+    platform_legs(&in->platform, x0, legs);
+    for (int i = 0; i < PLATFORM_LEGS; i++) memcpy(in->neutral_axis[i], legs[i].axis, sizeof legs[i].axis);
+    return 0;
+}
+
+void model_initialize(FmuInstance *fmu) {
+    build_internal(&fmu->s.v, &fmu->s.internal);
+    memset(fmu->s.x, 0, sizeof fmu->s.x);
+    initial_state(&fmu->s.v, fmu->s.x);
+    memset(&fmu->s.solver, 0, sizeof fmu->s.solver);
+}
+
+void model_compute_outputs(FmuInstance *fmu) {
+    ModelVariables *v = &fmu->s.v;
+    const Platform *p = &fmu->s.internal.platform;
+    const double *x = fmu->s.x, t = fmu->s.time;
+    LegGeometry legs[PLATFORM_LEGS];
+    double torque[6], force[6], wrench[6], dxdt[MODEL_N_STATES], pose_ref[6], length_ref[6], R[9], euler[3];
+    PlatformDiagnostics d;
+    platform_legs(p, x, legs);
+    for (int i = 0; i < 6; i++) pose_ref[i] = fmu_input_at(fmu, VR_POSE_REF[i], t);
+    platform_leg_lengths(p, pose_ref, length_ref);
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        *fmu_real(fmu, VR_LENGTH[i]) = legs[i].length;
+        *fmu_real(fmu, VR_VELOCITY[i]) = legs[i].velocity;
+        *fmu_real(fmu, VR_ANGLE[i]) = p->screw_ratio * (legs[i].length - p->neutral_length[i]);
+        *fmu_real(fmu, VR_SPEED[i]) = p->screw_ratio * legs[i].velocity; /* Eq 4 */
+        *fmu_real(fmu, VR_LENGTH_REF[i]) = length_ref[i];
+        *fmu_real(fmu, VR_ANGLE_REF[i]) = p->screw_ratio * (length_ref[i] - p->neutral_length[i]);
+    }
+    platform_rotation_from_quaternion(x + 3, R);
+    platform_euler_from_rotation(R, euler);
+    v->pose_x = x[0]; v->pose_y = x[1]; v->pose_z = x[2];
+    v->pose_roll = euler[0]; v->pose_pitch = euler[1]; v->pose_yaw = euler[2];
+    v->twist_vx = x[7]; v->twist_vy = x[8]; v->twist_vz = x[9];
+    v->twist_wx = x[10]; v->twist_wy = x[11]; v->twist_wz = x[12];
+    inputs_at(fmu, t, torque, force, wrench);
+    if (platform_derivatives(p, x, torque, force, wrench, dxdt, &d) != 0) d.drive_power = NAN;
+    v->energy_kinetic = d.kinetic;
+    v->energy_potential = d.potential;
+    v->power_drive = d.drive_power;
+    v->power_transmission_loss = d.transmission_loss;
+    v->power_friction_loss = d.friction_loss;
+    v->power_load = d.load_power;
+    v->energy_drive = x[E_DRIVE];
+    v->energy_transmission_loss = x[E_TRANSMISSION];
+    v->energy_friction_loss = x[E_FRICTION];
+    v->energy_load = x[E_LOAD];
+}
+
+static int reject(const FmuInstance *fmu, int vr, const char *rule) {
+    const FmuVariable *var = &fmu_variables[vr];
+    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name,
+            *(const double *)((const char *)&fmu->s.v + var->offset), var->unit, rule);
+    return 1;
+}
+
+#define REQUIRE_POSITIVE(field) \
+    if (!(v->field > 0.0)) errors += reject(fmu, VR_##field, "must be > 0")
+
+fmi2Status model_validate(FmuInstance *fmu) {
+    const ModelVariables *v = &fmu->s.v;
+    int errors = 0;
+    REQUIRE_POSITIVE(geometry_upper_joint_radius);
+    REQUIRE_POSITIVE(geometry_lower_joint_radius);
+    REQUIRE_POSITIVE(geometry_middle_leg_length);
+    REQUIRE_POSITIVE(platform_mass);
+    REQUIRE_POSITIVE(platform_inertia_xx);
+    REQUIRE_POSITIVE(platform_inertia_yy);
+    REQUIRE_POSITIVE(platform_inertia_zz);
+    REQUIRE_POSITIVE(transmission_screw_ratio);
+    REQUIRE_POSITIVE(transmission_force_torque);
+    if (errors) return fmi2Error;
+    if (v->transmission_force_torque > v->transmission_screw_ratio)
+        errors += reject(fmu, VR_transmission_force_torque,
+                         "exceeds transmission.screw_ratio: the transfer efficiency K_FT / i_theta would pass 1");
+    if (!(v->limit_leg_length_min < v->limit_leg_length_max))
+        errors += reject(fmu, VR_limit_leg_length_min, "must be below limit.leg_length_max");
+
+    ModelInternal in;
+    if (build_internal(v, &in) != 0) {
+        fmu_log(fmu, fmi2Error, "logStatusError",
+                "geometry: no layout with r_a = %g m, r_b = %g m, d_a = %g m, d_b = %g m, l_0 = %g m (a spacing "
+                "reaches the circle's diameter, or l_0 is shorter than the legs' horizontal reach)",
+                v->geometry_upper_joint_radius, v->geometry_lower_joint_radius, v->geometry_upper_joint_spacing,
+                v->geometry_lower_joint_spacing, v->geometry_middle_leg_length);
+        return fmi2Error;
+    }
+    const Platform *p = &in.platform;
+    for (int i = 0; i < PLATFORM_LEGS; i++)
+        for (int j = i + 1; j < PLATFORM_LEGS; j++) {
+            double du = 0.0, dl = 0.0;
+            for (int k = 0; k < 3; k++) {
+                du += pow(p->upper_joint[i][k] - p->upper_joint[j][k], 2);
+                dl += pow(p->lower_joint[i][k] - p->lower_joint[j][k], 2);
+            }
+            if (du < 1e-12 || dl < 1e-12) {
+                fmu_log(fmu, fmi2Error, "logStatusError", "geometry: the %s joints of legs %d and %d coincide",
+                        du < 1e-12 ? "upper" : "lower", i + 1, j + 1);
+                errors++;
+            }
+        }
+    if (errors) return fmi2Error;
+
+    /* The start pose must be reachable: every leg longer than zero, above its lower joint, and the
+     * legs not singular; out-of-stroke is judged as at any other time. */
+    double x[MODEL_N_STATES];
+    memset(x, 0, sizeof x);
+    initial_state(v, x);
+    fmi2Status status = check_limits(fmu, &in, x, fmu->s.time);
+    if (status == fmi2Error) fmu_log(fmu, fmi2Error, "logStatusError", "initial.pose: the start pose is not admissible");
+    return status == fmi2Error ? fmi2Error : fmi2OK;
+}

@@ -1,0 +1,135 @@
+/* mechanics: the variable table (the one source of truth for model.c, modelDescription.xml and the
+ * documentation). Defaults equal ../shared/params/meng2010.toml. */
+#ifndef MECHANICS_VARIABLES_H
+#define MECHANICS_VARIABLES_H
+
+#include "platform.h"
+
+#define MODEL_IDENTIFIER mechanics
+#define MODEL_VERSION "0.1.0"
+#define MODEL_DESCRIPTION                                                                          \
+    "Stewart platform multi-body dynamics (Meng et al. 2010, Section 2, Kane's method): moving "   \
+    "platform, the two parts of each actuator and the motor systems carried by the legs"
+#define MODEL_STOP_TIME 1.0
+#define MODEL_COMMUNICATION_STEP 1e-3
+
+/* pose and twist (13, see platform.h) and the energy accounts: drive, transmission loss,
+ * friction loss, load (4) */
+#define MODEL_N_STATES 17
+
+typedef struct {
+    Platform platform;                 /* geometry and mass properties, set at initialization */
+    int out_of_stroke[PLATFORM_LEGS];  /* reported, so a warning is logged once per excursion */
+    int past_joint_limit[PLATFORM_LEGS];
+    double neutral_axis[PLATFORM_LEGS][3]; /* leg axes at the neutral pose, for joint angles */
+} ModelInternal;
+
+/* One leg's ports; i is the leg number 1..6. */
+#define LEG_VARIABLES(X, i) \
+X(Real, leg##i##_torque, "leg[" #i "].torque", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, \
+  "Motor electromagnetic torque on the screw of leg " #i " (PMSM drive)") \
+X(Real, leg##i##_force, "leg[" #i "].force", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
+  "Axial force of a direct drive on leg " #i " (linear motor); added to the screw's force") \
+X(Real, leg##i##_length, "leg[" #i "].length", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, \
+  "Length of leg " #i ", lower to upper joint (Eq 2)") \
+X(Real, leg##i##_velocity, "leg[" #i "].velocity", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, \
+  "Extension rate of leg " #i) \
+X(Real, leg##i##_angle, "leg[" #i "].angle", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
+  "Motor angle of leg " #i ": screw ratio times (length - neutral length)") \
+X(Real, leg##i##_speed, "leg[" #i "].speed", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "Motor speed of leg " #i ": screw ratio times the extension rate (Eq 4)") \
+X(Real, leg##i##_length_ref, "leg[" #i "].length_ref", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, \
+  "Length of leg " #i " at pose_ref (inverse kinematics)") \
+X(Real, leg##i##_angle_ref, "leg[" #i "].angle_ref", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
+  "Motor angle of leg " #i " at pose_ref")
+
+#define POSE_VARIABLES(X, prefix, field_prefix, causality, variability, what) \
+X(Real, field_prefix##x, prefix ".x", causality, variability, "m", 0.0, -FMU_INF, FMU_INF, what ", x (surge)") \
+X(Real, field_prefix##y, prefix ".y", causality, variability, "m", 0.0, -FMU_INF, FMU_INF, what ", y (sway)") \
+X(Real, field_prefix##z, prefix ".z", causality, variability, "m", NEUTRAL_HEIGHT, -FMU_INF, FMU_INF, what ", z (heave)") \
+X(Real, field_prefix##roll, prefix ".roll", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", roll") \
+X(Real, field_prefix##pitch, prefix ".pitch", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", pitch") \
+X(Real, field_prefix##yaw, prefix ".yaw", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", yaw")
+
+/* Neutral height of the default layout (params/meng2010.toml: z0 = 1.68953 m, every leg l_0 long). */
+#define NEUTRAL_HEIGHT 1.689527733348906
+
+/* clang-format off */
+#define MODEL_VARIABLES(X) \
+LEG_VARIABLES(X, 1) LEG_VARIABLES(X, 2) LEG_VARIABLES(X, 3) \
+LEG_VARIABLES(X, 4) LEG_VARIABLES(X, 5) LEG_VARIABLES(X, 6) \
+POSE_VARIABLES(X, "pose_ref", pose_ref_, input, continuous, "Desired pose (base frame), used only for the inverse kinematics outputs") \
+X(Real, load_force_x, "load.force.x", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force on the platform at its origin, base frame, x") \
+X(Real, load_force_y, "load.force.y", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force, y") \
+X(Real, load_force_z, "load.force.z", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force, z") \
+X(Real, load_torque_x, "load.torque.x", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque about the platform origin, base frame, x") \
+X(Real, load_torque_y, "load.torque.y", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, y") \
+X(Real, load_torque_z, "load.torque.z", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, z") \
+\
+POSE_VARIABLES(X, "pose", pose_, output, continuous, "Platform pose (base frame; R = Rz(yaw) Ry(pitch) Rx(roll))") \
+X(Real, twist_vx, "twist.vx", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Platform origin velocity, base frame, x") \
+X(Real, twist_vy, "twist.vy", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Platform origin velocity, y") \
+X(Real, twist_vz, "twist.vz", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Platform origin velocity, z") \
+X(Real, twist_wx, "twist.wx", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Platform angular velocity, base frame, x") \
+X(Real, twist_wy, "twist.wy", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Platform angular velocity, y") \
+X(Real, twist_wz, "twist.wz", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Platform angular velocity, z") \
+X(Real, energy_kinetic, "energy.kinetic", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Kinetic energy of platform, actuators and motor systems") \
+X(Real, energy_potential, "energy.potential", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Potential energy in gravity (zero at the base plane)") \
+X(Real, power_drive, "power.drive", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, "Power all drive inputs deliver: sum of torque x motor speed + force x extension rate") \
+X(Real, power_transmission_loss, "power.transmission_loss", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, "Screw and belt loss (1 - eta) torque x motor speed, eta = K_FT / i_theta") \
+X(Real, power_friction_loss, "power.friction_loss", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, "Viscous friction loss of the motors, B_m speed^2") \
+X(Real, power_load, "power.load", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, "Power of the external wrench on the platform") \
+X(Real, energy_drive, "energy.drive", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Integral of power.drive since the start") \
+X(Real, energy_transmission_loss, "energy.transmission_loss", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Integral of power.transmission_loss") \
+X(Real, energy_friction_loss, "energy.friction_loss", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Integral of power.friction_loss") \
+X(Real, energy_load, "energy.load", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Integral of power.load") \
+\
+POSE_VARIABLES(X, "initial.pose", initial_pose_, parameter, fixed, "Start pose (default: the neutral pose of the default layout)") \
+X(Real, initial_twist_vx, "initial.twist.vx", parameter, fixed, "m/s", 0.0, -FMU_INF, FMU_INF, "Start velocity, x") \
+X(Real, initial_twist_vy, "initial.twist.vy", parameter, fixed, "m/s", 0.0, -FMU_INF, FMU_INF, "Start velocity, y") \
+X(Real, initial_twist_vz, "initial.twist.vz", parameter, fixed, "m/s", 0.0, -FMU_INF, FMU_INF, "Start velocity, z") \
+X(Real, initial_twist_wx, "initial.twist.wx", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, x") \
+X(Real, initial_twist_wy, "initial.twist.wy", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, y") \
+X(Real, initial_twist_wz, "initial.twist.wz", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, z") \
+X(Real, geometry_upper_joint_radius, "geometry.upper_joint_radius", parameter, fixed, "m", 0.8, 0.0, FMU_INF, "r_a (Table 1)") \
+X(Real, geometry_lower_joint_radius, "geometry.lower_joint_radius", parameter, fixed, "m", 1.1, 0.0, FMU_INF, "r_b (Table 1)") \
+X(Real, geometry_upper_joint_spacing, "geometry.upper_joint_spacing", parameter, fixed, "m", 0.2, 0.0, FMU_INF, "d_a, chord between the two joints of an upper pair (Table 1)") \
+X(Real, geometry_lower_joint_spacing, "geometry.lower_joint_spacing", parameter, fixed, "m", 0.3, 0.0, FMU_INF, "d_b, chord between the two joints of a lower pair (Table 1)") \
+X(Real, geometry_middle_leg_length, "geometry.middle_leg_length", parameter, fixed, "m", 1.86, 0.0, FMU_INF, "l_0, leg length at the neutral pose (Table 1); defines the neutral height") \
+X(Real, geometry_lower_pair_centre_1, "geometry.lower_pair_centre_1", parameter, fixed, "rad", 0.0, -FMU_INF, FMU_INF, "Angle of the first lower joint pair's centre (legs 1, 2)") \
+X(Real, geometry_lower_pair_centre_2, "geometry.lower_pair_centre_2", parameter, fixed, "rad", 2.0943951023931957, -FMU_INF, FMU_INF, "Second lower pair (legs 3, 4): 120 deg") \
+X(Real, geometry_lower_pair_centre_3, "geometry.lower_pair_centre_3", parameter, fixed, "rad", 4.1887902047863914, -FMU_INF, FMU_INF, "Third lower pair (legs 5, 6): 240 deg") \
+X(Real, geometry_upper_pair_centre_1, "geometry.upper_pair_centre_1", parameter, fixed, "rad", 1.0471975511965979, -FMU_INF, FMU_INF, "First upper pair (legs 2, 3): 60 deg") \
+X(Real, geometry_upper_pair_centre_2, "geometry.upper_pair_centre_2", parameter, fixed, "rad", 3.1415926535897931, -FMU_INF, FMU_INF, "Second upper pair (legs 4, 5): 180 deg") \
+X(Real, geometry_upper_pair_centre_3, "geometry.upper_pair_centre_3", parameter, fixed, "rad", 5.2359877559829888, -FMU_INF, FMU_INF, "Third upper pair (legs 6, 1): 300 deg") \
+X(Real, platform_mass, "platform.mass", parameter, fixed, "kg", 950.0, 0.0, FMU_INF, "m_p (Table 3)") \
+X(Real, platform_inertia_xx, "platform.inertia_xx", parameter, fixed, "kg.m2", 216.0, 0.0, FMU_INF, "I_p^p about the centre of mass (the origin), xx (assumed: disc r = 0.95 m, h = 0.15 m)") \
+X(Real, platform_inertia_yy, "platform.inertia_yy", parameter, fixed, "kg.m2", 216.0, 0.0, FMU_INF, "I_p^p, yy (assumed)") \
+X(Real, platform_inertia_zz, "platform.inertia_zz", parameter, fixed, "kg.m2", 429.0, 0.0, FMU_INF, "I_p^p, zz (assumed)") \
+X(Real, actuator_moving_mass, "actuator.moving_mass", parameter, fixed, "kg", 30.0, 0.0, FMU_INF, "m_a, piston rod and nut (Table 3)") \
+X(Real, actuator_moving_inertia, "actuator.moving_inertia", parameter, fixed, "kg.m2", 2.5, 0.0, FMU_INF, "i_a, transverse, about its centre of mass (assumed: slender 1.0 m rod)") \
+X(Real, actuator_moving_com, "actuator.moving_com", parameter, fixed, "m", 0.5, 0.0, FMU_INF, "r_ac, centre of mass from the upper joint (assumed)") \
+X(Real, actuator_rotating_mass, "actuator.rotating_mass", parameter, fixed, "kg", 50.0, 0.0, FMU_INF, "m_b, cylinder housing (Table 3)") \
+X(Real, actuator_rotating_inertia, "actuator.rotating_inertia", parameter, fixed, "kg.m2", 7.04, 0.0, FMU_INF, "i_b, transverse, about its centre of mass (assumed: slender 1.3 m tube)") \
+X(Real, actuator_rotating_com, "actuator.rotating_com", parameter, fixed, "m", 0.6, 0.0, FMU_INF, "r_bc, centre of mass from the lower joint (assumed)") \
+X(Real, motor_system_mass, "motor_system.mass", parameter, fixed, "kg", 27.6, 0.0, FMU_INF, "m_s, rotor, screw and motor carried by the leg (Table 3)") \
+X(Real, motor_system_inertia, "motor_system.inertia", parameter, fixed, "kg.m2", 1.5, 0.0, FMU_INF, "i_s, transverse inertia of the motor system about its centre of mass (assumed)") \
+X(Real, motor_system_com, "motor_system.com", parameter, fixed, "m", 0.6, 0.0, FMU_INF, "r_sc, its centre of mass from the lower joint (assumed, as Eq 18 uses J_bc)") \
+X(Real, motor_system_rotor_inertia, "motor_system.rotor_inertia", parameter, fixed, "kg.m2", 6.66e-3, 0.0, FMU_INF, "i_R, rotor and screw spin inertia (Table 3)") \
+X(Real, transmission_screw_ratio, "transmission.screw_ratio", parameter, fixed, "rad/m", 277.777777777778, 0.0, FMU_INF, "i_theta, motor angle per metre of leg (assumed: eta = K_FT / i_theta = 0.9)") \
+X(Real, transmission_force_torque, "transmission.force_torque", parameter, fixed, "1/m", 250.0, 0.0, FMU_INF, "K_FT, leg force per motor torque (Table 3)") \
+X(Real, motor_viscous_friction, "motor.viscous_friction", parameter, fixed, "N.m.s/rad", 0.00792, 0.0, FMU_INF, "B_m on the motor shaft (Table 2)") \
+X(Real, environment_gravity_x, "environment.gravity_x", parameter, fixed, "m/s2", 0.0, -FMU_INF, FMU_INF, "Gravity, base frame, x") \
+X(Real, environment_gravity_y, "environment.gravity_y", parameter, fixed, "m/s2", 0.0, -FMU_INF, FMU_INF, "Gravity, y") \
+X(Real, environment_gravity_z, "environment.gravity_z", parameter, fixed, "m/s2", -9.81, -FMU_INF, FMU_INF, "Gravity, z") \
+X(Boolean, effects_actuator_inertia, "effects.actuator_inertia", parameter, fixed, "", 1, 0, 1, "Include the actuators' moving and rotating parts (m_a, i_a, m_b, i_b)") \
+X(Boolean, effects_motor_inertia, "effects.motor_inertia", parameter, fixed, "", 1, 0, 1, "Include the motor systems: rotor and screw spin i_R, motor carried by the leg (m_s, i_s)") \
+X(Boolean, effects_friction, "effects.friction", parameter, fixed, "", 1, 0, 1, "Include the motors' viscous friction B_m") \
+X(Real, limit_leg_length_min, "limit.leg_length_min", parameter, fixed, "m", 1.535, 0.0, FMU_INF, "Shortest leg of the stroke (Table 4)") \
+X(Real, limit_leg_length_max, "limit.leg_length_max", parameter, fixed, "m", 2.2, 0.0, FMU_INF, "Longest leg of the stroke (Table 4)") \
+X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, "Largest tilt of a leg from its neutral direction at either joint (20 deg, Halder et al.)") \
+X(Boolean, limit_hard_stop, "limit.hard_stop", parameter, fixed, "", 0, 0, 1, "false: leaving the stroke or a joint limit is a logged warning; true: an error that stops the run") \
+FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10)
+/* clang-format on */
+
+#endif
