@@ -45,6 +45,8 @@ def build(directory: Path) -> ctypes.CDLL:
     P = ctypes.POINTER
     dll.platform_layout_from_radii.argtypes = [P(Platform), D, D, D, D, D, P(D), P(D)]
     dll.platform_layout_from_radii.restype = ctypes.c_int
+    dll.platform_layout_from_joints.argtypes = [P(Platform), P(D), P(D), P(D)]
+    dll.platform_layout_from_joints.restype = ctypes.c_int
     dll.platform_leg_lengths.argtypes = [P(Platform), P(D), P(D)]
     dll.platform_legs.argtypes = [P(Platform), P(D), P(LegGeometry)]
     dll.platform_derivatives.argtypes = [P(Platform), P(D), P(D), P(D), P(D), P(D), P(Diagnostics)]
@@ -88,6 +90,27 @@ class Core:
         p.actuator_inertia_on, p.motor_inertia_on, p.friction_on = int(actuators), int(motors), int(friction)
         self.p, self.params = p, c
 
+    def use_start_values(self, values: dict) -> "Core":
+        """Overrides the platform with mechanics-FMU start values (explicit joints, masses, switches)."""
+        p = self.p
+        if values.get("geometry.layout") == 2:
+            upper = [[values[f"geometry.platform_joint[{i}].{a}"] for a in "xyz"] for i in range(1, 7)]
+            lower = [[values[f"geometry.base_joint[{i}].{a}"] for a in "xyz"] for i in range(1, 7)]
+            neutral = [values[f"geometry.neutral.{a}"] for a in ("x", "y", "z", "roll", "pitch", "yaw")]
+            assert self.dll.platform_layout_from_joints(ctypes.byref(p), arr(upper), arr(lower), arr(neutral)) == 0
+        fields = {"platform.mass": "platform_mass", "actuator.moving_mass": "moving_mass",
+                  "actuator.moving_inertia": "moving_inertia", "actuator.moving_com": "moving_com",
+                  "actuator.rotating_mass": "rotating_mass", "actuator.rotating_inertia": "rotating_inertia",
+                  "actuator.rotating_com": "rotating_com", "effects.motor_inertia": "motor_inertia_on",
+                  "effects.friction": "friction_on", "effects.actuator_inertia": "actuator_inertia_on"}
+        for name, field in fields.items():
+            if name in values:
+                setattr(p, field, type(getattr(p, field))(values[name]))
+        for k, axis in enumerate(("xx", "yy", "zz")):
+            if f"platform.inertia_{axis}" in values:
+                p.platform_inertia[k] = values[f"platform.inertia_{axis}"]
+        return self
+
     @property
     def neutral_pose(self) -> np.ndarray:
         return np.array(self.p.neutral_pose[:])
@@ -101,6 +124,12 @@ class Core:
         legs = (LegGeometry * LEGS)()
         self.dll.platform_legs(ctypes.byref(self.p), arr(x), legs)
         return np.array([leg.velocity for leg in legs])
+
+    def upper_joints(self, x) -> np.ndarray:
+        """Upper joint positions t + R a_i (6 x 3) at state x."""
+        legs = (LegGeometry * LEGS)()
+        self.dll.platform_legs(ctypes.byref(self.p), arr(x), legs)
+        return np.array([np.array(x[:3]) + np.array(leg.arm[:]) for leg in legs])
 
     def state(self, pose, rate=np.zeros(6)) -> np.ndarray:
         out = (D * 13)()

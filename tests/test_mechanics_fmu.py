@@ -12,7 +12,9 @@ from fmpy.validation import validate_fmu
 
 from cosim.fmu_instance import FmuError, FmuInstance
 from cosim.fmus import ROOT, fmu_path
+from cosim.parameter_sets import mechanics_start_values
 from platform_core import Core, build
+from scipy.spatial.transform import Rotation
 
 POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
 
@@ -73,39 +75,35 @@ def test_fmpy_validation_and_contract(mechanics_fmu):
 
 
 def test_defaults_equal_the_parameter_set(mechanics_fmu):
-    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
-        c = tomllib.load(f)
-    start = {v.name: float(v.start) for v in read_model_description(str(mechanics_fmu)).modelVariables
-             if v.start is not None and v.type == "Real"}
-    g = c["geometry"]
-    expected = {
-        "geometry.upper_joint_radius": g["upper_joint_radius"], "geometry.lower_joint_radius": g["lower_joint_radius"],
-        "geometry.upper_joint_spacing": g["upper_joint_spacing"], "geometry.lower_joint_spacing": g["lower_joint_spacing"],
-        "geometry.middle_leg_length": g["middle_leg_length"],
-        "limit.leg_length_min": g["leg_length_min"], "limit.leg_length_max": g["leg_length_max"],
-        "platform.mass": c["platform"]["mass"], "platform.inertia_xx": c["platform"]["inertia_diag"][0],
-        "platform.inertia_yy": c["platform"]["inertia_diag"][1], "platform.inertia_zz": c["platform"]["inertia_diag"][2],
-        "actuator.moving_mass": c["actuator"]["moving_part_mass"],
-        "actuator.moving_inertia": c["actuator"]["moving_part_inertia"],
-        "actuator.moving_com": c["actuator"]["moving_part_com_from_upper_joint"],
-        "actuator.rotating_mass": c["actuator"]["rotating_part_mass"],
-        "actuator.rotating_inertia": c["actuator"]["rotating_part_inertia"],
-        "actuator.rotating_com": c["actuator"]["rotating_part_com_from_lower_joint"],
-        "motor_system.mass": c["motor_system"]["mass"], "motor_system.inertia": c["motor_system"]["transverse_inertia"],
-        "motor_system.com": c["motor_system"]["com_from_lower_joint"],
-        "motor_system.rotor_inertia": c["motor_system"]["rotor_screw_inertia"],
-        "transmission.screw_ratio": c["transmission"]["screw_ratio"],
-        "transmission.force_torque": c["transmission"]["force_torque_coefficient"],
-        "motor.viscous_friction": c["motor"]["viscous_friction"],
-        "environment.gravity_z": c["environment"]["gravity"][2],
-    }
-    for k, centre in enumerate(g["lower_pair_centres_deg"]):
-        expected[f"geometry.lower_pair_centre_{k + 1}"] = np.radians(centre)
-    for k, centre in enumerate(g["upper_pair_centres_deg"]):
-        expected[f"geometry.upper_pair_centre_{k + 1}"] = np.radians(centre)
-    for name, value in expected.items():
-        assert start[name] == pytest.approx(value, rel=1e-12, abs=1e-15), name
-    assert start["initial.pose.z"] == pytest.approx(1.68953, abs=1e-5)  # the neutral height
+    """The FMU's defaults are the Meng set: its mapping to FMU names changes none of them."""
+    start = {v.name: v.start for v in read_model_description(str(mechanics_fmu)).modelVariables}
+    for name, value in mechanics_start_values("meng2010").items():
+        assert float(start[name]) == pytest.approx(value, rel=1e-12, abs=1e-15), name
+    assert float(start["initial.pose.z"]) == pytest.approx(1.68953, abs=1e-5)  # the neutral height
+
+
+def test_sumnu_platform_loads_as_a_second_set(make_mechanics, dll):
+    """The Sumnu platform (explicit joints, heavy mass set) initializes at its home pose with every
+    leg at the length an independent computation gives and motor angles zero; the forces of the
+    inverse model hold it there for 1 s."""
+    values = mechanics_start_values("sumnu2015")
+    with open(ROOT / "params" / "sumnu2015.toml", "rb") as f:
+        geometry = tomllib.load(f)["geometry"]
+    home = np.array(geometry["home_pose"])
+    R = Rotation.from_euler("xyz", home[3:]).as_matrix()
+    expected = np.linalg.norm(home[:3] + np.array(geometry["platform_joints"]) @ R.T - np.array(geometry["base_joints"]),
+                              axis=1)
+    core = Core(dll).use_start_values(values)
+    forces = 250.0 * core.inverse_dynamics(home, np.zeros(6), np.zeros(6))  # K_FT T = axial force
+    assert np.all(forces > 0) and forces.sum() > 8.0 * 9.81  # the legs carry the platform and themselves
+    mech = make_mechanics({**values, **{f"leg[{i + 1}].force": forces[i] for i in range(6)}})
+    for i in range(6):
+        assert mech.get(f"leg[{i + 1}].length") == pytest.approx(expected[i], rel=1e-12)
+        assert abs(mech.get(f"leg[{i + 1}].angle")) < 1e-9
+    for _ in range(1000):
+        mech.do_step(1e-3)
+    np.testing.assert_allclose([mech.get(f"pose.{a}") for a in POSE], home, atol=1e-9)
+    assert not [m for m in mech.messages if m.status == "warning"]
 
 
 def hold_torques(dll, pose, wrench=np.zeros(6), **switches):

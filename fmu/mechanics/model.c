@@ -26,6 +26,9 @@ static const int VR_WRENCH[] = {VR_load_force_x, VR_load_force_y, VR_load_force_
 
 static const double PI = 3.14159265358979323846;
 
+#define JOINT(kind, i) {v->geometry_##kind##_joint_##i##_x, v->geometry_##kind##_joint_##i##_y, v->geometry_##kind##_joint_##i##_z}
+#define JOINT_ARRAY(kind) {JOINT(kind, 1), JOINT(kind, 2), JOINT(kind, 3), JOINT(kind, 4), JOINT(kind, 5), JOINT(kind, 6)}
+
 /* The Platform of the parameters; returns -1 if the layout is impossible. */
 static int build_platform(const ModelVariables *v, Platform *p) {
     memset(p, 0, sizeof *p);
@@ -34,9 +37,17 @@ static int build_platform(const ModelVariables *v, Platform *p) {
                              v->geometry_lower_pair_centre_3 * to_deg};
     const double upper[3] = {v->geometry_upper_pair_centre_1 * to_deg, v->geometry_upper_pair_centre_2 * to_deg,
                              v->geometry_upper_pair_centre_3 * to_deg};
-    int status = platform_layout_from_radii(p, v->geometry_upper_joint_radius, v->geometry_lower_joint_radius,
+    int status;
+    if (v->geometry_layout == 2) {
+        const double base[6][3] = JOINT_ARRAY(base), top[6][3] = JOINT_ARRAY(platform);
+        const double neutral[6] = {v->geometry_neutral_x, v->geometry_neutral_y, v->geometry_neutral_z,
+                                   v->geometry_neutral_roll, v->geometry_neutral_pitch, v->geometry_neutral_yaw};
+        status = platform_layout_from_joints(p, top, base, neutral);
+    } else {
+        status = platform_layout_from_radii(p, v->geometry_upper_joint_radius, v->geometry_lower_joint_radius,
                                             v->geometry_upper_joint_spacing, v->geometry_lower_joint_spacing,
                                             v->geometry_middle_leg_length, lower, upper);
+    }
     p->platform_mass = v->platform_mass;
     p->platform_inertia[0] = v->platform_inertia_xx;
     p->platform_inertia[1] = v->platform_inertia_yy;
@@ -248,11 +259,15 @@ fmi2Status model_validate(FmuInstance *fmu) {
 
     ModelInternal in;
     if (build_internal(v, &in) != 0) {
-        fmu_log(fmu, fmi2Error, "logStatusError",
-                "geometry: no layout with r_a = %g m, r_b = %g m, d_a = %g m, d_b = %g m, l_0 = %g m (a spacing "
-                "reaches the circle's diameter, or l_0 is shorter than the legs' horizontal reach)",
-                v->geometry_upper_joint_radius, v->geometry_lower_joint_radius, v->geometry_upper_joint_spacing,
-                v->geometry_lower_joint_spacing, v->geometry_middle_leg_length);
+        if (v->geometry_layout == 2)
+            fmu_log(fmu, fmi2Error, "logStatusError",
+                    "geometry: no layout: with the explicit joints a leg has zero length at geometry.neutral");
+        else
+            fmu_log(fmu, fmi2Error, "logStatusError",
+                    "geometry: no layout with r_a = %g m, r_b = %g m, d_a = %g m, d_b = %g m, l_0 = %g m (a spacing "
+                    "reaches the circle's diameter, or l_0 is shorter than the legs' horizontal reach)",
+                    v->geometry_upper_joint_radius, v->geometry_lower_joint_radius, v->geometry_upper_joint_spacing,
+                    v->geometry_lower_joint_spacing, v->geometry_middle_leg_length);
         return fmi2Error;
     }
     const Platform *p = &in.platform;

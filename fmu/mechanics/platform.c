@@ -151,6 +151,17 @@ int platform_layout_from_radii(Platform *p, double upper_radius, double lower_ra
     return 0;
 }
 
+int platform_layout_from_joints(Platform *p, const double upper[PLATFORM_LEGS][3],
+                                const double lower[PLATFORM_LEGS][3], const double neutral_pose[6]) {
+    memcpy(p->upper_joint, upper, sizeof p->upper_joint);
+    memcpy(p->lower_joint, lower, sizeof p->lower_joint);
+    memcpy(p->neutral_pose, neutral_pose, sizeof p->neutral_pose);
+    platform_leg_lengths(p, p->neutral_pose, p->neutral_length);
+    for (int i = 0; i < PLATFORM_LEGS; i++)
+        if (!(p->neutral_length[i] > 0.0)) return -1;
+    return 0;
+}
+
 void platform_leg_lengths(const Platform *p, const double pose[6], double length[PLATFORM_LEGS]) {
     double R[9];
     platform_rotation_from_euler(pose[3], pose[4], pose[5], R);

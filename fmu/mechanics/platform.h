@@ -56,6 +56,12 @@ int platform_layout_from_radii(Platform *p, double upper_radius, double lower_ra
                                double lower_spacing, double middle_length, const double lower_centres_deg[3],
                                const double upper_centres_deg[3]);
 
+/* Explicit joint coordinates (e.g. the Sumnu thesis): a_i^p in the platform frame, b_i in the base
+ * frame, and the neutral pose at which every motor angle is zero. Returns -1 if a leg would have
+ * zero length there. */
+int platform_layout_from_joints(Platform *p, const double upper[PLATFORM_LEGS][3],
+                                const double lower[PLATFORM_LEGS][3], const double neutral_pose[6]);
+
 /* Rotation matrix (row major) of R = Rz(yaw) Ry(pitch) Rx(roll), and of a unit quaternion. */
 void platform_rotation_from_euler(double roll, double pitch, double yaw, double R[9]);
 void platform_rotation_from_quaternion(const double q[4], double R[9]);

@@ -51,6 +51,15 @@ X(Real, field_prefix##roll, prefix ".roll", causality, variability, "rad", 0.0, 
 X(Real, field_prefix##pitch, prefix ".pitch", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", pitch") \
 X(Real, field_prefix##yaw, prefix ".yaw", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", yaw")
 
+/* Explicit joint coordinates of leg i, used with geometry.layout = 2. */
+#define JOINT_VARIABLES(X, i) \
+X(Real, geometry_base_joint_##i##_x, "geometry.base_joint[" #i "].x", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Lower joint b_" #i ", base frame, x (layout 2)") \
+X(Real, geometry_base_joint_##i##_y, "geometry.base_joint[" #i "].y", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Lower joint b_" #i ", y (layout 2)") \
+X(Real, geometry_base_joint_##i##_z, "geometry.base_joint[" #i "].z", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Lower joint b_" #i ", z (layout 2)") \
+X(Real, geometry_platform_joint_##i##_x, "geometry.platform_joint[" #i "].x", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Upper joint a_" #i ", platform frame, x (layout 2)") \
+X(Real, geometry_platform_joint_##i##_y, "geometry.platform_joint[" #i "].y", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Upper joint a_" #i ", y (layout 2)") \
+X(Real, geometry_platform_joint_##i##_z, "geometry.platform_joint[" #i "].z", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Upper joint a_" #i ", z (layout 2)")
+
 /* Neutral height of the default layout (params/meng2010.toml: z0 = 1.68953 m, every leg l_0 long). */
 #define NEUTRAL_HEIGHT 1.689527733348906
 
@@ -91,6 +100,10 @@ X(Real, initial_twist_vz, "initial.twist.vz", parameter, fixed, "m/s", 0.0, -FMU
 X(Real, initial_twist_wx, "initial.twist.wx", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, x") \
 X(Real, initial_twist_wy, "initial.twist.wy", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, y") \
 X(Real, initial_twist_wz, "initial.twist.wz", parameter, fixed, "rad/s", 0.0, -FMU_INF, FMU_INF, "Start angular velocity, z") \
+X(Integer, geometry_layout, "geometry.layout", parameter, fixed, "", 1, 1, 2, "Joint layout: 1 = from radii, spacings and l_0 (Meng, Table 1); 2 = explicit joint coordinates geometry.base_joint[i], geometry.platform_joint[i] with the neutral pose geometry.neutral (Sumnu)") \
+JOINT_VARIABLES(X, 1) JOINT_VARIABLES(X, 2) JOINT_VARIABLES(X, 3) \
+JOINT_VARIABLES(X, 4) JOINT_VARIABLES(X, 5) JOINT_VARIABLES(X, 6) \
+POSE_VARIABLES(X, "geometry.neutral", geometry_neutral_, parameter, fixed, "Layout 2: the pose at which every motor angle is zero") \
 X(Real, geometry_upper_joint_radius, "geometry.upper_joint_radius", parameter, fixed, "m", 0.8, 0.0, FMU_INF, "r_a (Table 1)") \
 X(Real, geometry_lower_joint_radius, "geometry.lower_joint_radius", parameter, fixed, "m", 1.1, 0.0, FMU_INF, "r_b (Table 1)") \
 X(Real, geometry_upper_joint_spacing, "geometry.upper_joint_spacing", parameter, fixed, "m", 0.2, 0.0, FMU_INF, "d_a, chord between the two joints of an upper pair (Table 1)") \
