@@ -16,13 +16,21 @@ from .loads import RigidInertia
 References = Callable[[float], Mapping[str, float]]
 
 
+ROTARY = ("angle", "speed", "torque")   # pmsm_drive
+LINEAR = ("position", "velocity", "force")  # linear_motor
+
+
 def run_on_inertia(drive: FmuInstance, load: RigidInertia, stop_time: float, step: float,
-                   references: References, record: Sequence[str] = ("torque",)) -> np.ndarray:
+                   references: References, record: Sequence[str] = (),
+                   ports: tuple[str, str, str] = ROTARY) -> np.ndarray:
     """Runs from drive.time to stop_time; returns a structured array with `time`, the recorded
-    drive outputs and the load's `load.angle` and `load.speed`, one row per communication point."""
+    drive outputs and the load's `load.angle` and `load.speed` (position and velocity for a linear
+    drive), one row per communication point. `ports` names the drive's position and velocity
+    inputs and its effort output."""
+    position, velocity, effort = ports
     reference_names = list(references(drive.time).keys())
-    inputs = drive.real_group(["angle", "speed", *reference_names])
-    outputs = drive.real_group(["torque", *[name for name in record if name != "torque"]])
+    inputs = drive.real_group([position, velocity, *reference_names])
+    outputs = drive.real_group([effort, *[name for name in record if name != effort]])
     n_steps = int(round((stop_time - drive.time) / step))
     columns = ["time", *outputs.names, "load.angle", "load.speed"]
     result = np.zeros(n_steps + 1, dtype=[(name, float) for name in columns])

@@ -66,7 +66,9 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
     s->damping = v->motor_damping * s->velocity;
     s->friction = 0.0;
     if (v->effects_friction) {
-        const double stribeck = exp(-pow(fabs(s->velocity / v->friction_stribeck_velocity), v->friction_stribeck_exponent));
+        const double ratio = s->velocity / v->friction_stribeck_velocity; /* delta = 2 (Gaussian) is the usual case */
+        const double stribeck = exp(-(v->friction_stribeck_exponent == 2.0 ? ratio * ratio
+                                                                           : pow(fabs(ratio), v->friction_stribeck_exponent)));
         s->friction = (v->friction_coulomb + (v->friction_static - v->friction_coulomb) * stribeck) *
                           tanh(s->velocity / v->friction_smoothing_velocity) +
                       v->friction_viscous * s->velocity;
