@@ -1,5 +1,6 @@
-"""The pmsm_drive FMU as a file: FMI validity, the interface contract, defaults equal to the
-canonical parameter set, documentation, a second FMI tool, and a rebuild from its sources/."""
+"""The FMUs as files: FMI validity, the interface contract and defaults of pmsm_drive, parameter
+copies equal to the canonical sets, documentation, a second FMI tool (libcosim), and a rebuild of
+every FMU from its sources/."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from cosim.fmus import ROOT
+from cosim.fmus import ROOT, fmu_path
 
 SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
 
@@ -37,10 +38,6 @@ DEFAULTS_FROM_PARAMS = {
     "control.position_kp": ("control", "position_kp"),
     "control.position_ki": ("control", "position_ki"),
 }
-
-
-def test_fmpy_validation_finds_no_problem(pmsm_fmu):
-    assert validate_fmu(str(pmsm_fmu)) == []
 
 
 def test_interface_contract(pmsm_fmu):
@@ -77,23 +74,40 @@ def test_defaults_equal_the_parameter_set(pmsm_fmu):
 
 
 @pytest.mark.skipif(not SHARED_PARAMS.exists(), reason="../shared/params is not beside this checkout")
-def test_project_parameter_copy_equals_the_canonical_set():
-    with open(SHARED_PARAMS, "rb") as f:
+@pytest.mark.parametrize("name", ["meng2010", "sumnu2015"])
+def test_project_parameter_copies_equal_the_canonical_sets(name):
+    with open(SHARED_PARAMS.parent / f"{name}.toml", "rb") as f:
         canonical = tomllib.load(f)
-    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
+    with open(ROOT / "params" / f"{name}.toml", "rb") as f:
         ours = tomllib.load(f)
     assert ours == canonical
 
 
-def test_fmu_layout_and_documentation(pmsm_fmu):
-    with zipfile.ZipFile(pmsm_fmu) as z:
+FMUS = ["pmsm_drive", "mechanics", "linear_motor"]
+
+
+@pytest.mark.parametrize("name", FMUS)
+def test_every_fmu_validates_and_is_documented(name):
+    path = fmu_path(name)
+    assert validate_fmu(str(path)) == []
+    with zipfile.ZipFile(path) as z:
         names = set(z.namelist())
-        assert {"modelDescription.xml", "binaries/linux64/pmsm_drive.so", "documentation/index.html",
-                "sources/model.c", "sources/fmi2_layer.c", "sources/ode.c", "sources/variables.h"} <= names
+        assert {"modelDescription.xml", f"binaries/linux64/{name}.so", "documentation/index.html",
+                "sources/model.c", "sources/fmi2_layer.c", "sources/ode.c", "sources/variables.h",
+                "sources/model_guid.h"} <= names
         doc = z.read("documentation/index.html").decode()
-    md = read_model_description(str(pmsm_fmu))
+    md = read_model_description(str(path))
     for v in md.modelVariables:  # every port and parameter, with its unit, is documented
         assert f"<code>{v.name}</code>" in doc, v.name
+    assert "<h2>Equations</h2>" in doc or "Eqs 24-26" in doc
+    cs = md.coSimulation
+    assert cs.canHandleVariableCommunicationStepSize and cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+    assert md.defaultExperiment is not None and all(v.description for v in md.modelVariables)
+
+
+def test_pmsm_documentation_names_its_equations(pmsm_fmu):
+    with zipfile.ZipFile(pmsm_fmu) as z:
+        doc = z.read("documentation/index.html").decode()
     for equation in ("Eqs 24-26", "modulus", "hysteresis"):
         assert equation in doc
 
@@ -119,20 +133,62 @@ def test_runs_in_libcosim(pmsm_fmu):
     assert current_q == pytest.approx(10.0, rel=1e-4)
 
 
-def test_rebuilds_from_its_sources(pmsm_fmu, tmp_path):
+def test_platform_runs_in_libcosim():
+    """libcosim runs the mechanics with six linear motors wired as INTERFACES.md says, at 1 ms: the
+    Sumnu platform, started at its home pose with zero leg references offset, stays up (the PID
+    carries its weight) and ends within 1 mm of home."""
+    from libcosimpy import CosimConstants
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    from cosim.parameter_sets import mechanics_start_values
+
+    mech_path, motor_path = fmu_path("mechanics"), fmu_path("linear_motor")
+    mech_vr = {v.name: v for v in read_model_description(str(mech_path)).modelVariables}
+    motor_vr = {v.name: v.valueReference for v in read_model_description(str(motor_path)).modelVariables}
+    execution = CosimExecution.from_step_size(step_size=int(1e6))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    mech = execution.add_local_slave(CosimLocalSlave(fmu_path=str(mech_path), instance_name="mechanics"))
+    for name, value in mechanics_start_values("sumnu2015").items():
+        v = mech_vr[name]
+        if v.type == "Real":
+            assert execution.real_initial_value(mech, v.valueReference, float(value))
+        elif v.type == "Boolean":
+            assert execution.boolean_initial_value(mech, v.valueReference, bool(value))
+        else:
+            assert execution.integer_initial_value(mech, v.valueReference, int(value))
+    for i in range(1, 7):
+        motor = execution.add_local_slave(CosimLocalSlave(fmu_path=str(motor_path), instance_name=f"motor{i}"))
+        for out, inp in (("length_ref", "position_ref"), ("length", "position"), ("velocity", "velocity")):
+            assert execution.connect_real_variables(mech, mech_vr[f"leg[{i}].{out}"].valueReference, motor,
+                                                    motor_vr[inp]) == CosimConstants.success
+        assert execution.connect_real_variables(motor, motor_vr["force"], mech,
+                                                mech_vr[f"leg[{i}].force"].valueReference) == CosimConstants.success
+    assert execution.simulate_until(target_time=int(2e9))
+    pose = observer.last_real_values(mech, [mech_vr[f"pose.{a}"].valueReference for a in ("x", "y", "z")])
+    np.testing.assert_allclose(pose, [-1.5, 0.0, 1.0], atol=1e-3)
+
+
+@pytest.mark.parametrize("name", FMUS)
+def test_rebuilds_from_its_sources(name, tmp_path):
     """sources/ alone rebuilds a binary (fmpy's CMake build) that gives the same results."""
     from fmpy.build import build_platform_binary
 
+    path = fmu_path(name)
     rebuilt = tmp_path / "unzipped"
-    with zipfile.ZipFile(pmsm_fmu) as z:
+    with zipfile.ZipFile(path) as z:
         z.extractall(rebuilt)
     shutil.rmtree(rebuilt / "binaries")
     (tmp_path / "build").mkdir()
     build_platform_binary(rebuilt, build_dir=tmp_path / "build")
-    assert (rebuilt / "binaries" / "linux64" / "pmsm_drive.so").exists()
+    assert (rebuilt / "binaries" / "linux64" / f"{name}.so").exists()
 
-    settings = dict(stop_time=0.02, output_interval=1e-3, output=["torque", "current.q"],
-                    start_values={"control.mode": 3, "torque_ff": 12.0})
-    original = simulate_fmu(str(pmsm_fmu), **settings)
+    outputs = [v.name for v in read_model_description(str(path)).modelVariables if v.causality == "output"
+               and v.type == "Real"][:6]
+    settings = dict(stop_time=0.02, output_interval=1e-3, output=outputs)
+    original = simulate_fmu(str(path), **settings)
     from_sources = simulate_fmu(str(rebuilt), **settings)
-    np.testing.assert_allclose(from_sources["torque"], original["torque"], rtol=1e-9, atol=1e-12)
+    for output in outputs:
+        np.testing.assert_allclose(from_sources[output], original[output], rtol=1e-9, atol=1e-12)
