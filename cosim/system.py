@@ -43,6 +43,8 @@ DRIVES = {
 }
 
 PoseReference = Callable[[float], np.ndarray]
+Wrench = Callable[[float], np.ndarray]  # [F (3), M (3)] on the platform, base frame
+WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
 
 
 class PlatformSystem:
@@ -70,18 +72,39 @@ class PlatformSystem:
                               for d in self.drives]
         self._drive_efforts = [d.real_group([wiring.effort[0]]) for d in self.drives]
         self.pose = self.mechanics.real_group([f"pose.{a}" for a in POSE])
+        self._wrench = self.mechanics.real_group(list(WRENCH))
+        self.record_names: list[str] = []
+        self._record_mechanics = None
+        self._record_drives: list = []
+
+    def record(self, mechanics_outputs: list[str], drive_outputs: list[str]) -> None:
+        """Also record these mechanics outputs and, for each drive, these outputs (columns
+        `<name>` and `<drive output>[i]`)."""
+        self._record_mechanics = self.mechanics.real_group(mechanics_outputs) if mechanics_outputs else None
+        self._record_drives = [d.real_group(drive_outputs) for d in self.drives] if drive_outputs else []
+        self.record_names = [*mechanics_outputs, *[f"{n}[{i}]" for n in drive_outputs for i in range(1, 7)]]
+
+    def _recorded(self) -> np.ndarray:
+        parts = [self._record_mechanics.read()] if self._record_mechanics else []
+        if self._record_drives:
+            per_drive = np.array([g.read() for g in self._record_drives])  # 6 x outputs
+            parts.append(per_drive.T.ravel())
+        return np.concatenate(parts) if parts else np.zeros(0)
 
     @property
     def time(self) -> float:
         return self.mechanics.time
 
-    def run(self, stop_time: float, step: float, pose_ref: PoseReference) -> np.ndarray:
-        """Steps to stop_time; returns time, pose_ref (6) and pose (6) at every communication point."""
+    def run(self, stop_time: float, step: float, pose_ref: PoseReference, wrench: Wrench | None = None) -> np.ndarray:
+        """Steps to stop_time; returns rows of time, pose_ref (6), pose (6) and the recorded
+        outputs at every communication point."""
         n = int(round((stop_time - self.time) / step))
-        out = np.zeros((n + 1, 13))
+        out = np.zeros((n + 1, 13 + len(self.record_names)))
         efforts = np.array([g.read()[0] for g in self._drive_efforts])
         self._pose_ref.write(pose_ref(self.time))
-        out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read()]
+        if wrench:
+            self._wrench.write(wrench(self.time))
+        out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
         previous_refs = self._leg_outputs.read().reshape(6, 3)[:, 0].copy()
         reference_input = [self.wiring.reference[1]]
         for row in range(1, n + 1):
@@ -100,7 +123,9 @@ class PlatformSystem:
             efforts = new_efforts
             self._efforts_in.write(efforts)
             self._pose_ref.write(pose_ref(self.time))
-            out[row] = np.r_[self.time, self._pose_ref.values, self.pose.read()]
+            if wrench:
+                self._wrench.write(wrench(self.time))
+            out[row] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
         return out
 
     def free(self) -> None:

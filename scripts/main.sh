@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Sets up (scripts/setup.sh) and runs the main job; results and plots go to out/.
+# Sets up (scripts/setup.sh) and runs the main job: the paper's scene (Meng 2010, Eqs 35-36, PMSM
+# drives) with plots like Figs 7-8, then one leg's drive on its test bench. Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-.venv/bin/python -m cosim.drive_demo --out out "$@"
+.venv/bin/python -m cosim.meng_scene --out out "$@"
+.venv/bin/python -m cosim.drive_demo --out out
