@@ -15,11 +15,21 @@ elseif(WIN32)
   set(FMU_PLATFORM win64)
 endif()
 
+# add_fmu(<name> [SOURCE_DIR <dir>] [OUTPUT_DIR <dir>]): the model folder defaults to fmu/<name>,
+# the output folder to build/fmus (the shipped FMUs); test FMUs live elsewhere.
 function(add_fmu name)
+  cmake_parse_arguments(ARG "" "SOURCE_DIR;OUTPUT_DIR" "" ${ARGN})
   set(model_dir "${CMAKE_SOURCE_DIR}/fmu/${name}")
+  if(ARG_SOURCE_DIR)
+    set(model_dir "${ARG_SOURCE_DIR}")
+  endif()
+  set(output_dir "${CMAKE_BINARY_DIR}/fmus")
+  if(ARG_OUTPUT_DIR)
+    set(output_dir "${ARG_OUTPUT_DIR}")
+  endif()
   set(generated_dir "${CMAKE_BINARY_DIR}/generated/${name}")
   set(stage "${CMAKE_BINARY_DIR}/stage/${name}")
-  set(fmu_file "${CMAKE_BINARY_DIR}/fmus/${name}.fmu")
+  set(fmu_file "${output_dir}/${name}.fmu")
 
   # The GUID is a hash of the variable table: it changes exactly when the interface may have.
   file(MD5 "${model_dir}/variables.h" hash)
@@ -58,7 +68,7 @@ function(add_fmu name)
     OUTPUT "${fmu_file}"
     COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage}"
     COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/${FMU_PLATFORM}" "${stage}/sources"
-            "${stage}/documentation" "${CMAKE_BINARY_DIR}/fmus"
+            "${stage}/documentation" "${output_dir}"
     COMMAND $<TARGET_FILE:${name}_model_description> "${stage}" "${model_dir}/doc.html" ${shipped_sources}
     COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage}/binaries/${FMU_PLATFORM}/"
     COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage}/sources/"

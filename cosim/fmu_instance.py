@@ -137,9 +137,9 @@ class FmuInstance:
         self._call("fmi2DoStep", self.fmu.doStep, self.time, step)
         self.time += step
 
-    def set_input_derivatives(self, names: Sequence[str], derivatives: Sequence[float]) -> None:
+    def set_input_derivatives(self, names: Sequence[str], derivatives: Sequence[float], order: int = 1) -> None:
         self._call("fmi2SetRealInputDerivatives", self.fmu.setRealInputDerivatives,
-                   [self.vr(n) for n in names], [1] * len(names), [float(d) for d in derivatives])
+                   [self.vr(n) for n in names], [order] * len(names), [float(d) for d in derivatives])
 
     def get_state(self):
         return self._call("fmi2GetFMUstate", self.fmu.getFMUstate), self.time

@@ -13,8 +13,12 @@ BUILD_DIR = ROOT / "build"
 FMU_DIR = BUILD_DIR / "fmus"
 
 
+TEST_FMU_DIR = BUILD_DIR / "test_fmus"
+
+
 def _newest_source_time() -> float:
-    paths = [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*")]
+    paths = [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*"),
+             *(ROOT / "tests" / "fmus").rglob("*")]
     return max(p.stat().st_mtime for p in paths if p.is_file())
 
 
@@ -36,9 +40,10 @@ def build_fmus() -> None:
             raise RuntimeError(f"FMU build failed: {' '.join(command)}\n{result.stdout}\n{result.stderr}")
 
 
-def fmu_path(name: str, rebuild_if_stale: bool = True) -> Path:
-    """Path of build/fmus/<name>.fmu, built first if it is missing or older than the C sources."""
-    path = FMU_DIR / f"{name}.fmu"
+def fmu_path(name: str, rebuild_if_stale: bool = True, test: bool = False) -> Path:
+    """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test FMU), built first if it is missing
+    or older than the C sources."""
+    path = (TEST_FMU_DIR if test else FMU_DIR) / f"{name}.fmu"
     if rebuild_if_stale and (not path.exists() or path.stat().st_mtime < _newest_source_time()):
         build_fmus()
     if not path.exists():

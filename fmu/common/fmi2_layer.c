@@ -148,8 +148,17 @@ static void refresh_outputs(FmuInstance *fmu) {
 
 double fmu_input_at(const FmuInstance *fmu, int vr, double t) {
     double value = *(const double *)((const char *)&fmu->s.v + fmu_variables[vr].offset);
-    if (fmu->s.input_derivative_given[vr]) value += fmu->s.input_derivative[vr] * (t - fmu->s.input_time);
+    const double dt = t - fmu->s.input_time;
+    if (fmu->s.input_derivative_given[vr] >= 1) value += fmu->s.input_derivative[vr][0] * dt;
+    if (fmu->s.input_derivative_given[vr] >= 2) value += 0.5 * fmu->s.input_derivative[vr][1] * dt * dt;
     return value;
+}
+
+double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t) {
+    double rate = 0.0;
+    if (fmu->s.input_derivative_given[vr] >= 1) rate += fmu->s.input_derivative[vr][0];
+    if (fmu->s.input_derivative_given[vr] >= 2) rate += fmu->s.input_derivative[vr][1] * (t - fmu->s.input_time);
+    return rate;
 }
 
 double *fmu_real(FmuInstance *fmu, int vr) { return (double *)value_address(fmu, vr); }
@@ -514,8 +523,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
             LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: '%s' is not an input", fmu_variables[vr[i]].name);
             return fmi2Error;
         }
-        if (order[i] != 1) {
-            LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: '%s': derivative order %d not supported (only 1)",
+        if (order[i] != 1 && order[i] != 2) {
+            LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: '%s': derivative order %d not supported (1 and 2 are)",
                       fmu_variables[vr[i]].name, (int)order[i]);
             return fmi2Error;
         }
@@ -526,8 +535,10 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
         }
     }
     for (size_t i = 0; i < nvr; i++) {
-        fmu->s.input_derivative[vr[i]] = value[i];
-        fmu->s.input_derivative_given[vr[i]] = 1;
+        double *derivative = fmu->s.input_derivative[vr[i]];
+        if (fmu->s.input_derivative_given[vr[i]] == 0) derivative[0] = derivative[1] = 0.0; /* fresh since the step */
+        derivative[order[i] - 1] = value[i];
+        if (order[i] > fmu->s.input_derivative_given[vr[i]]) fmu->s.input_derivative_given[vr[i]] = order[i];
     }
     fmu->s.input_time = fmu->s.time;
     fmu->outputs_stale = 1;

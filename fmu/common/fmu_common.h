@@ -26,8 +26,8 @@ typedef struct {
     double time;                           /* communication point reached */
     double input_time;                     /* time at which the inputs were last set */
     ModelVariables v;                      /* every variable of the table */
-    double input_derivative[VR_COUNT];     /* fmi2SetRealInputDerivatives, order 1 */
-    int input_derivative_given[VR_COUNT];  /* cleared after each step */
+    double input_derivative[VR_COUNT][2];  /* fmi2SetRealInputDerivatives, orders 1 and 2 */
+    int input_derivative_given[VR_COUNT];  /* highest order given (0: none); cleared after each step */
     double x[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1]; /* internal ODE state */
     OdeSolver solver;
     ModelInternal internal;                /* the model's own discrete state */
@@ -62,9 +62,11 @@ void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, co
 #endif
     ;
 
-/* Value of the real input `vr` at time t: the value set, extrapolated to first order with the
- * derivative given through fmi2SetRealInputDerivatives (if any) from the time it was set. */
+/* Value of the real input `vr` at time t: the value set, extrapolated with the derivatives given
+ * through fmi2SetRealInputDerivatives (orders 1 and 2, if any) from the time it was set. */
 double fmu_input_at(const FmuInstance *fmu, int vr, double t);
+/* Its rate of change at t from those derivatives (0 if none were given). */
+double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t);
 /* The Real variable `vr`, for models that address variables through arrays of references. */
 double *fmu_real(FmuInstance *fmu, int vr);
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr);

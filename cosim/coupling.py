@@ -1,0 +1,202 @@
+"""Coupling algorithms for co-simulation: Jacobi and Gauss-Seidel, with input extrapolation of order
+0, 1 and 2 passed to the FMUs through fmi2SetRealInputDerivatives.
+
+An algorithm only advances a `Coupling` (the instances and their connections) from t to t + h; it
+never knows how results are stored (libcosim's split between algorithm and observers).
+
+Inputs over a macro step are polynomials in time fitted to the samples of the source outputs:
+- Jacobi: every instance steps from t with inputs extrapolated from the outputs at t, t - h, ...
+  (order k uses the last k + 1 samples), so the global error is O(h^(k+1)).
+- Gauss-Seidel: instances step in sequence; an input whose source has already stepped is
+  interpolated through that source's new sample at t + h and its last k samples, the others are
+  extrapolated as in Jacobi.
+At the start the outputs are made consistent with the connected inputs. The first macro step has no
+history; it is iterated to a fixed point (waveform relaxation over one
+step, FMU states restored between sweeps) with inputs interpolated between t and t + h, so the
+start-up does not spoil the order.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections import deque
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .fmu_instance import FmuInstance
+
+
+@dataclass(frozen=True)
+class Connection:
+    source: tuple[str, str]  # (instance, output variable)
+    target: tuple[str, str]  # (instance, input variable)
+
+
+class Coupling:
+    """Instances and their connections, resolved into one output group and one input group per
+    instance, so that each macro step makes one get and one set call per instance."""
+
+    def __init__(self, instances: Mapping[str, FmuInstance], connections: Sequence[Connection]):
+        self.instances = dict(instances)
+        self.names = list(self.instances)
+        for c in connections:
+            for name, variable in (c.source, c.target):
+                if name not in self.instances:
+                    raise KeyError(f"connection {c.source} -> {c.target}: no instance '{name}'")
+                self.instances[name].vr(variable)  # raises with the instance and variable named
+        self.sources = {n: sorted({c.source[1] for c in connections if c.source[0] == n}) for n in self.names}
+        self.outputs = {n: self.instances[n].real_group(v) for n, v in self.sources.items() if v}
+        targets = {n: [c for c in connections if c.target[0] == n] for n in self.names}
+        self.inputs = {n: self.instances[n].real_group([c.target[1] for c in cs]) for n, cs in targets.items() if cs}
+        self.input_names = {n: [c.target[1] for c in cs] for n, cs in targets.items() if cs}
+        # for each target instance: (source instance, index in the source's output group) per input
+        self.feeds = {n: [(c.source[0], self.sources[c.source[0]].index(c.source[1])) for c in cs]
+                      for n, cs in targets.items() if cs}
+
+    def read(self) -> dict[str, np.ndarray]:
+        return {n: group.read().copy() for n, group in self.outputs.items()}
+
+
+def polynomial_at(times: Sequence[float], values: Sequence[np.ndarray], t: float, order: int):
+    """Value and first two derivatives at t of the polynomial of degree len(times) - 1 through the
+    samples (Newton divided differences), for up to three samples."""
+    times = list(times)
+    y = [np.asarray(v, dtype=float) for v in values]
+    zero = np.zeros_like(y[0])
+    if len(times) == 1 or order == 0:
+        return y[-1], zero, zero
+    d1 = [(y[i + 1] - y[i]) / (times[i + 1] - times[i]) for i in range(len(y) - 1)]
+    if len(times) == 2 or order == 1:
+        slope = d1[-1]
+        return y[-1] + slope * (t - times[-1]), slope, zero
+    d2 = (d1[1] - d1[0]) / (times[2] - times[0])
+    # p(s) = y0 + d1_0 (s - t0) + d2 (s - t0)(s - t1)
+    value = y[0] + d1[0] * (t - times[0]) + d2 * (t - times[0]) * (t - times[1])
+    rate = d1[0] + d2 * ((t - times[0]) + (t - times[1]))
+    return value, rate, 2.0 * d2
+
+
+class History:
+    """The last few output samples of every source instance."""
+
+    def __init__(self, keep: int):
+        self.samples: deque[tuple[float, dict[str, np.ndarray]]] = deque(maxlen=keep)
+
+    def push(self, t: float, outputs: dict[str, np.ndarray]) -> None:
+        self.samples.append((t, outputs))
+
+    def source_samples(self, name: str, extra: tuple[float, np.ndarray] | None = None, count: int = 3):
+        times = [t for t, _ in self.samples][-count:]
+        values = [o[name] for _, o in self.samples][-count:]
+        if extra is not None:
+            times = (times + [extra[0]])[-count:]
+            values = (values + [extra[1]])[-count:]
+        return times, values
+
+
+class CouplingAlgorithm(ABC):
+    """Base of the algorithms: `step` advances every instance from t to t + h."""
+
+    def __init__(self, order: int = 0):
+        if order not in (0, 1, 2):
+            raise ValueError(f"extrapolation order {order}: 0, 1 and 2 are supported")
+        self.order = order
+        self.history = History(keep=order + 1)
+
+    def initialize(self, coupling: Coupling, t: float, sweeps: int = 20) -> None:
+        """Makes the outputs at t consistent with the connected inputs (outputs that feed through
+        from inputs, such as a spring force from a position, depend on them) and starts the history."""
+        outputs = coupling.read()
+        for _ in range(sweeps):
+            for name, feeds in coupling.feeds.items():
+                coupling.inputs[name].write([outputs[source][index] for source, index in feeds])
+            new = coupling.read()
+            settled = all(np.array_equal(new[n], outputs[n]) for n in new)
+            outputs = new
+            if settled:
+                break
+        self.history = History(keep=self.order + 1)
+        self.history.push(t, outputs)
+
+    def _set_inputs(self, coupling: Coupling, name: str, t: float, new: dict[str, np.ndarray], t_new: float,
+                    order: int) -> None:
+        """Inputs of `name` over [t, t + h]: from the polynomial through its sources' samples (with
+        the new sample at t + h where a source has one), evaluated at t."""
+        values, rates, curvatures = [], [], []
+        for source, index in coupling.feeds[name]:
+            extra = (t_new, new[source]) if source in new else None
+            times, samples = self.history.source_samples(source, extra, count=order + 1)
+            v, r, c = polynomial_at(times, samples, t, order)
+            values.append(v[index]); rates.append(r[index]); curvatures.append(c[index])
+        coupling.inputs[name].write(values)
+        instance, inputs = coupling.instances[name], coupling.input_names[name]
+        if order >= 1:
+            instance.set_input_derivatives(inputs, rates)
+        if order >= 2:
+            instance.set_input_derivatives(inputs, curvatures, order=2)
+
+    def step(self, coupling: Coupling, t: float, h: float) -> None:
+        if len(self.history.samples) == 1 and self.order > 0:
+            self._start_up(coupling, t, h)
+        else:
+            self._sweep(coupling, t, h)
+
+    @abstractmethod
+    def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
+        """One pass over the instances from t to t + h, pushing the new outputs to the history."""
+
+    def _start_up(self, coupling: Coupling, t: float, h: float, tolerance: float = 1e-13, sweeps: int = 50) -> None:
+        """First step: iterate with inputs interpolated linearly between t and the latest guess of
+        the outputs at t + h until the guess stops changing."""
+        states = {n: i.get_state() for n, i in coupling.instances.items()}
+        guess = self.history.samples[-1][1]
+        try:
+            for sweep in range(sweeps):
+                for name in coupling.names:
+                    if name in coupling.feeds:
+                        self._set_inputs(coupling, name, t, guess, t + h, order=1)
+                    coupling.instances[name].do_step(h)
+                new = coupling.read()
+                change = max(np.max(np.abs(new[n] - guess[n]) / (1.0 + np.abs(new[n]))) for n in new)
+                guess = new
+                if change < tolerance or sweep == sweeps - 1:
+                    break  # the instances stay at t + h
+                for n, instance in coupling.instances.items():
+                    instance.set_state(states[n])
+        finally:
+            for n, instance in coupling.instances.items():
+                instance.free_state(states[n])
+        self.history.push(t + h, guess)
+
+
+class Jacobi(CouplingAlgorithm):
+    """All instances step from t together; inputs extrapolated from the sources' history."""
+
+    def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
+        for name in coupling.names:
+            if name in coupling.feeds:
+                self._set_inputs(coupling, name, t, {}, t + h, self.order)
+        for name in coupling.names:
+            coupling.instances[name].do_step(h)
+        self.history.push(t + h, coupling.read())
+
+
+class GaussSeidel(CouplingAlgorithm):
+    """Instances step in `sequence` (default: the coupling's order); an input whose source has
+    already stepped is interpolated through the source's new sample."""
+
+    def __init__(self, order: int = 0, sequence: Sequence[str] | None = None):
+        super().__init__(order)
+        self.sequence = list(sequence) if sequence else None
+
+    def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
+        new: dict[str, np.ndarray] = {}
+        for name in self.sequence or coupling.names:
+            if name in coupling.feeds:
+                self._set_inputs(coupling, name, t, new, t + h, self.order)
+            coupling.instances[name].do_step(h)
+            if name in coupling.outputs:
+                new[name] = coupling.outputs[name].read().copy()
+        self.history.push(t + h, new)
