@@ -121,21 +121,25 @@ class CouplingAlgorithm(ABC):
         self.history.push(t, outputs)
 
     def _set_inputs(self, coupling: Coupling, name: str, t: float, new: dict[str, np.ndarray], t_new: float,
-                    order: int) -> None:
+                    order: int, polynomials: dict) -> None:
         """Inputs of `name` over [t, t + h]: from the polynomial through its sources' samples (with
-        the new sample at t + h where a source has one), evaluated at t."""
+        the new sample at t + h where a source has one), evaluated at t. `polynomials` caches each
+        source's polynomial for this step (key: source and whether it had a new sample)."""
         values, rates, curvatures = [], [], []
         for source, index in coupling.feeds[name]:
-            extra = (t_new, new[source]) if source in new else None
-            times, samples = self.history.source_samples(source, extra, count=order + 1)
-            v, r, c = polynomial_at(times, samples, t, order)
+            key = (source, source in new)
+            if key not in polynomials:
+                extra = (t_new, new[source]) if source in new else None
+                times, samples = self.history.source_samples(source, extra, count=order + 1)
+                polynomials[key] = polynomial_at(times, samples, t, order)
+            v, r, c = polynomials[key]
             values.append(v[index]); rates.append(r[index]); curvatures.append(c[index])
-        coupling.inputs[name].write(values)
-        instance, inputs = coupling.instances[name], coupling.input_names[name]
+        group = coupling.inputs[name]
+        group.write(values)
         if order >= 1:
-            instance.set_input_derivatives(inputs, rates)
+            group.write_derivatives(rates, 1)
         if order >= 2:
-            instance.set_input_derivatives(inputs, curvatures, order=2)
+            group.write_derivatives(curvatures, 2)
 
     def step(self, coupling: Coupling, t: float, h: float) -> None:
         if len(self.history.samples) == 1 and self.order > 0:
@@ -154,9 +158,10 @@ class CouplingAlgorithm(ABC):
         guess = self.history.samples[-1][1]
         try:
             for sweep in range(sweeps):
+                polynomials: dict = {}
                 for name in coupling.names:
                     if name in coupling.feeds:
-                        self._set_inputs(coupling, name, t, guess, t + h, order=1)
+                        self._set_inputs(coupling, name, t, guess, t + h, 1, polynomials)
                     coupling.instances[name].do_step(h)
                 new = coupling.read()
                 change = max(np.max(np.abs(new[n] - guess[n]) / (1.0 + np.abs(new[n]))) for n in new)
@@ -175,9 +180,10 @@ class Jacobi(CouplingAlgorithm):
     """All instances step from t together; inputs extrapolated from the sources' history."""
 
     def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
+        polynomials: dict = {}
         for name in coupling.names:
             if name in coupling.feeds:
-                self._set_inputs(coupling, name, t, {}, t + h, self.order)
+                self._set_inputs(coupling, name, t, {}, t + h, self.order, polynomials)
         for name in coupling.names:
             coupling.instances[name].do_step(h)
         self.history.push(t + h, coupling.read())
@@ -193,9 +199,10 @@ class GaussSeidel(CouplingAlgorithm):
 
     def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
         new: dict[str, np.ndarray] = {}
+        polynomials: dict = {}
         for name in self.sequence or coupling.names:
             if name in coupling.feeds:
-                self._set_inputs(coupling, name, t, new, t + h, self.order)
+                self._set_inputs(coupling, name, t, new, t + h, self.order, polynomials)
             coupling.instances[name].do_step(h)
             if name in coupling.outputs:
                 new[name] = coupling.outputs[name].read().copy()

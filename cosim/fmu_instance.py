@@ -22,6 +22,7 @@ from fmpy.fmi2 import (
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
+    fmi2Integer,
     fmi2Real,
     fmi2ValueReference,
 )
@@ -184,3 +185,14 @@ class RealGroup:
             self.values[:] = values
         self.instance._call("fmi2SetReal", self.instance.fmu.fmi2SetReal, self.instance.fmu.component,
                             self._vr, len(self.names), self._pointer)
+
+    def write_derivatives(self, derivatives: Iterable[float], order: int = 1) -> None:
+        """fmi2SetRealInputDerivatives of the given order for these (input) variables."""
+        n = len(self.names)
+        if not hasattr(self, "_derivatives"):
+            self._derivatives = np.zeros(n)
+            self._derivative_pointer = self._derivatives.ctypes.data_as(ctypes.POINTER(fmi2Real))
+            self._orders = {k: (fmi2Integer * n)(*([k] * n)) for k in (1, 2)}
+        self._derivatives[:] = derivatives
+        self.instance._call("fmi2SetRealInputDerivatives", self.instance.fmu.fmi2SetRealInputDerivatives,
+                            self.instance.fmu.component, self._vr, n, self._orders[order], self._derivative_pointer)

@@ -1,14 +1,12 @@
 """The platform system: the mechanics FMU and six drive FMUs wired as ../shared/INTERFACES.md says,
 stepped together at a fixed communication step.
 
-This is the small fixed-step loop the drives' tests need until the master of issue 5 (scenes,
-coupling strategies, step control, results) replaces it. The wiring lives in DRIVES: swapping the
-drive kind changes those connections and nothing else.
-
-Coupling (Gauss-Seidel): the drives step first from the mechanics' outputs at t, with the rate of
-their reference (a backward difference of the leg references) as its input derivative; the
-mechanics then steps with each drive effort interpolated linearly between its values at t and t + h
-(through fmi2SetRealInputDerivatives), which keeps the coupling second order.
+The wiring lives in DRIVES: swapping the drive kind changes those connections and nothing else.
+Coupling: cosim.coupling's Gauss-Seidel with first-order extrapolation (by default): the drives
+step first, their inputs extrapolated linearly from the mechanics' last two samples (so a drive
+also sees the rate of its leg reference); the mechanics then steps with each drive effort
+interpolated linearly between its values at t and t + h. The fixed-step runner here is what the
+tests and the main job use until the master of issue 5 (scenes, step control, results) exists.
 """
 
 from __future__ import annotations
@@ -19,6 +17,7 @@ from typing import Callable, Mapping
 import numpy as np
 from fmpy import extract
 
+from .coupling import Connection, Coupling, GaussSeidel
 from .fmu_instance import FmuInstance
 from .fmus import fmu_path
 
@@ -51,7 +50,7 @@ class PlatformSystem:
     """Mechanics plus six drives of one kind, initialized with the given start values."""
 
     def __init__(self, drive: str, mechanics_values: Mapping[str, float] | None = None,
-                 drive_values: Mapping[str, float] | None = None):
+                 drive_values: Mapping[str, float] | None = None, order: int = 1):
         if drive not in DRIVES:
             raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
         self.wiring = wiring = DRIVES[drive]
@@ -62,17 +61,17 @@ class PlatformSystem:
         self.mechanics.initialize(dict(mechanics_values or {}))
         for d in self.drives:
             d.initialize(dict(drive_values or {}))
-        legs = range(1, 7)
+        instances = {"mechanics": self.mechanics, **{d.name: d for d in self.drives}}
+        connections = []
+        for i, d in enumerate(self.drives, start=1):
+            for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
+                connections.append(Connection(("mechanics", output.format(i=i)), (d.name, drive_input)))
+            connections.append(Connection((d.name, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
+        self.coupling = Coupling(instances, connections)
+        self.algorithm = GaussSeidel(order, [d.name for d in self.drives] + ["mechanics"])
         self._pose_ref = self.mechanics.real_group([f"pose_ref.{a}" for a in POSE])
-        self._leg_outputs = self.mechanics.real_group(
-            [name.format(i=i) for i in legs for name in (wiring.reference[0], wiring.position[0], wiring.velocity[0])])
-        self._effort_names = [wiring.effort[1].format(i=i) for i in legs]
-        self._efforts_in = self.mechanics.real_group(self._effort_names)
-        self._drive_inputs = [d.real_group([wiring.reference[1], wiring.position[1], wiring.velocity[1]])
-                              for d in self.drives]
-        self._drive_efforts = [d.real_group([wiring.effort[0]]) for d in self.drives]
-        self.pose = self.mechanics.real_group([f"pose.{a}" for a in POSE])
         self._wrench = self.mechanics.real_group(list(WRENCH))
+        self.pose = self.mechanics.real_group([f"pose.{a}" for a in POSE])
         self.record_names: list[str] = []
         self._record_mechanics = None
         self._record_drives: list = []
@@ -87,8 +86,7 @@ class PlatformSystem:
     def _recorded(self) -> np.ndarray:
         parts = [self._record_mechanics.read()] if self._record_mechanics else []
         if self._record_drives:
-            per_drive = np.array([g.read() for g in self._record_drives])  # 6 x outputs
-            parts.append(per_drive.T.ravel())
+            parts.append(np.array([g.read() for g in self._record_drives]).T.ravel())
         return np.concatenate(parts) if parts else np.zeros(0)
 
     @property
@@ -97,34 +95,21 @@ class PlatformSystem:
 
     def run(self, stop_time: float, step: float, pose_ref: PoseReference, wrench: Wrench | None = None) -> np.ndarray:
         """Steps to stop_time; returns rows of time, pose_ref (6), pose (6) and the recorded
-        outputs at every communication point."""
+        outputs at every communication point. pose_ref and the wrench are held over each step."""
         n = int(round((stop_time - self.time) / step))
         out = np.zeros((n + 1, 13 + len(self.record_names)))
-        efforts = np.array([g.read()[0] for g in self._drive_efforts])
-        self._pose_ref.write(pose_ref(self.time))
-        if wrench:
-            self._wrench.write(wrench(self.time))
-        out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
-        previous_refs = self._leg_outputs.read().reshape(6, 3)[:, 0].copy()
-        reference_input = [self.wiring.reference[1]]
-        for row in range(1, n + 1):
-            legs = self._leg_outputs.read().reshape(6, 3)
-            reference_rates = (legs[:, 0] - previous_refs) / step  # backward difference
-            previous_refs = legs[:, 0].copy()
-            new_efforts = np.empty(6)
-            for k, drive in enumerate(self.drives):
-                self._drive_inputs[k].write(legs[k])
-                drive.set_input_derivatives(reference_input, [reference_rates[k]])
-                drive.do_step(step)
-                new_efforts[k] = self._drive_efforts[k].read()[0]
-            self._efforts_in.write(efforts)
-            self.mechanics.set_input_derivatives(self._effort_names, (new_efforts - efforts) / step)
-            self.mechanics.do_step(step)
-            efforts = new_efforts
-            self._efforts_in.write(efforts)
-            self._pose_ref.write(pose_ref(self.time))
+
+        def set_external(t: float) -> None:
+            self._pose_ref.write(pose_ref(t))
             if wrench:
-                self._wrench.write(wrench(self.time))
+                self._wrench.write(wrench(t))
+
+        set_external(self.time)
+        self.algorithm.initialize(self.coupling, self.time)
+        out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
+        for row in range(1, n + 1):
+            self.algorithm.step(self.coupling, self.time, step)
+            set_external(self.time)
             out[row] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
         return out
 
