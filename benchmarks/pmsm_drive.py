@@ -62,7 +62,7 @@ def main() -> None:
         print(f"{name:<34} {cpu*1e3:>12.3f} {1/cpu:>11.0f} {goal*1e3:>8.1f} {cpu/goal:>9.2f} {error:>10.2e} rad")
     averaged = CASES[1]
     python_cost = python_loop_cost(averaged[1], min(args.seconds, 2.0))
-    print(f"\nratios measured in this run:")
+    print("\nratios measured in this run:")
     print(f"  switching / averaged (defaults):          {native[CASES[3][0]] / native[averaged[0]]:8.1f}")
     print(f"  Dormand-Prince / RK4 (averaged):          {native[CASES[2][0]] / native[averaged[0]]:8.1f}")
     print(f"  fmpy Python loop / native loop (averaged): {python_cost / native[averaged[0]]:8.1f}"

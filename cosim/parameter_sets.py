@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import tomllib
-from pathlib import Path
 
 from .fmus import ROOT
 

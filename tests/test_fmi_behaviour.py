@@ -157,7 +157,7 @@ def test_foreign_bytes_do_not_deserialize(make_drive):
     drive = make_drive()
     state = drive.get_state()
     data = bytearray(drive.serialize_state(state))
-    data[0:4] = b"XXXX"
+    data[0:4] = b"JUNK"
     with pytest.raises(FmuError) as error:
         drive.deserialize_state(bytes(data), 0.0)
     assert "not a state of this build" in str(error.value)

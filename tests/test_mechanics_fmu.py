@@ -164,7 +164,6 @@ def test_energy_balance_with_drives_friction_and_load(make_mechanics, dll):
     hold = hold_torques(dll, core.neutral_pose)
     mech = make_mechanics({"solver.method": 2})
     e0, _ = energy_error(mech)
-    rng = np.random.default_rng(12)
     torques = mech.real_group([f"leg[{i}].torque" for i in range(1, 7)] +
                               ["load.force.x", "load.force.y", "load.force.z", "load.torque.z"])
     for k in range(500):

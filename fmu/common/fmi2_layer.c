@@ -161,6 +161,14 @@ double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t) {
     return rate;
 }
 
+int fmu_reject(const FmuInstance *fmu, int vr, const char *rule) {
+    const FmuVariable *var = &fmu_variables[vr];
+    const char *address = (const char *)&fmu->s.v + var->offset;
+    double value = var->type == FMU_REAL ? *(const double *)address : *(const int *)address;
+    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name, value, var->unit, rule);
+    return 1;
+}
+
 double *fmu_real(FmuInstance *fmu, int vr) { return (double *)value_address(fmu, vr); }
 
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }

@@ -153,32 +153,22 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->energy_ripple = x[E_RIPPLE];
 }
 
-static int reject(const FmuInstance *fmu, int vr, const char *rule) {
-    const FmuVariable *var = &fmu_variables[vr];
-    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name,
-            *(const double *)((const char *)&fmu->s.v + var->offset), var->unit, rule);
-    return 1;
-}
-
-#define REQUIRE_POSITIVE(field) \
-    if (!(v->field > 0.0)) errors += reject(fmu, VR_##field, "must be > 0")
-
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    REQUIRE_POSITIVE(motor_force_constant);
-    REQUIRE_POSITIVE(motor_back_emf_constant);
-    REQUIRE_POSITIVE(motor_resistance);
-    REQUIRE_POSITIVE(motor_inductance);
-    REQUIRE_POSITIVE(friction_stribeck_velocity);
-    REQUIRE_POSITIVE(friction_smoothing_velocity);
-    REQUIRE_POSITIVE(ripple_period);
-    REQUIRE_POSITIVE(control_position_kp);
-    REQUIRE_POSITIVE(control_current_kp);
-    REQUIRE_POSITIVE(limit_force);
-    REQUIRE_POSITIVE(limit_current);
-    REQUIRE_POSITIVE(limit_voltage);
+    FMU_REQUIRE_POSITIVE(motor_force_constant);
+    FMU_REQUIRE_POSITIVE(motor_back_emf_constant);
+    FMU_REQUIRE_POSITIVE(motor_resistance);
+    FMU_REQUIRE_POSITIVE(motor_inductance);
+    FMU_REQUIRE_POSITIVE(friction_stribeck_velocity);
+    FMU_REQUIRE_POSITIVE(friction_smoothing_velocity);
+    FMU_REQUIRE_POSITIVE(ripple_period);
+    FMU_REQUIRE_POSITIVE(control_position_kp);
+    FMU_REQUIRE_POSITIVE(control_current_kp);
+    FMU_REQUIRE_POSITIVE(limit_force);
+    FMU_REQUIRE_POSITIVE(limit_current);
+    FMU_REQUIRE_POSITIVE(limit_voltage);
     if (v->friction_static < v->friction_coulomb)
-        errors += reject(fmu, VR_friction_static, "must not be below friction.coulomb (Stribeck: f_s >= f_c)");
+        errors += fmu_reject(fmu, VR_friction_static, "must not be below friction.coulomb (Stribeck: f_s >= f_c)");
     return errors ? fmi2Error : fmi2OK;
 }

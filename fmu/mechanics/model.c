@@ -228,34 +228,24 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->energy_load = x[E_LOAD];
 }
 
-static int reject(const FmuInstance *fmu, int vr, const char *rule) {
-    const FmuVariable *var = &fmu_variables[vr];
-    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name,
-            *(const double *)((const char *)&fmu->s.v + var->offset), var->unit, rule);
-    return 1;
-}
-
-#define REQUIRE_POSITIVE(field) \
-    if (!(v->field > 0.0)) errors += reject(fmu, VR_##field, "must be > 0")
-
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    REQUIRE_POSITIVE(geometry_upper_joint_radius);
-    REQUIRE_POSITIVE(geometry_lower_joint_radius);
-    REQUIRE_POSITIVE(geometry_middle_leg_length);
-    REQUIRE_POSITIVE(platform_mass);
-    REQUIRE_POSITIVE(platform_inertia_xx);
-    REQUIRE_POSITIVE(platform_inertia_yy);
-    REQUIRE_POSITIVE(platform_inertia_zz);
-    REQUIRE_POSITIVE(transmission_screw_ratio);
-    REQUIRE_POSITIVE(transmission_force_torque);
+    FMU_REQUIRE_POSITIVE(geometry_upper_joint_radius);
+    FMU_REQUIRE_POSITIVE(geometry_lower_joint_radius);
+    FMU_REQUIRE_POSITIVE(geometry_middle_leg_length);
+    FMU_REQUIRE_POSITIVE(platform_mass);
+    FMU_REQUIRE_POSITIVE(platform_inertia_xx);
+    FMU_REQUIRE_POSITIVE(platform_inertia_yy);
+    FMU_REQUIRE_POSITIVE(platform_inertia_zz);
+    FMU_REQUIRE_POSITIVE(transmission_screw_ratio);
+    FMU_REQUIRE_POSITIVE(transmission_force_torque);
     if (errors) return fmi2Error;
     if (v->transmission_force_torque > v->transmission_screw_ratio)
-        errors += reject(fmu, VR_transmission_force_torque,
+        errors += fmu_reject(fmu, VR_transmission_force_torque,
                          "exceeds transmission.screw_ratio: the transfer efficiency K_FT / i_theta would pass 1");
     if (!(v->limit_leg_length_min < v->limit_leg_length_max))
-        errors += reject(fmu, VR_limit_leg_length_min, "must be below limit.leg_length_max");
+        errors += fmu_reject(fmu, VR_limit_leg_length_min, "must be below limit.leg_length_max");
 
     ModelInternal in;
     if (build_internal(v, &in) != 0) {

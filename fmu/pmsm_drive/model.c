@@ -255,39 +255,27 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->inverter_switchings = fmu->s.internal.switchings;
 }
 
-/* Logs and counts one violated rule. */
-static int reject(const FmuInstance *fmu, int vr, const char *rule) {
-    const FmuVariable *var = &fmu_variables[vr];
-    double value = var->type == FMU_REAL ? *(const double *)((const char *)&fmu->s.v + var->offset)
-                                         : *(const int *)((const char *)&fmu->s.v + var->offset);
-    fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name, value, var->unit, rule);
-    return 1;
-}
-
-#define REQUIRE_POSITIVE(field) \
-    if (!(v->field > 0.0)) errors += reject(fmu, VR_##field, "must be > 0")
-
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    REQUIRE_POSITIVE(motor_torque_constant);
-    REQUIRE_POSITIVE(motor_inductance_d);
-    REQUIRE_POSITIVE(motor_inductance_q);
-    REQUIRE_POSITIVE(motor_inductance_0);
-    REQUIRE_POSITIVE(motor_resistance);
-    REQUIRE_POSITIVE(inverter_gain);
-    REQUIRE_POSITIVE(inverter_time_constant);
-    REQUIRE_POSITIVE(inverter_dc_link_voltage);
-    REQUIRE_POSITIVE(inverter_hysteresis_band);
-    REQUIRE_POSITIVE(control_position_kp);
-    REQUIRE_POSITIVE(control_speed_kp);
-    REQUIRE_POSITIVE(control_current_kp);
-    REQUIRE_POSITIVE(limit_speed);
-    REQUIRE_POSITIVE(limit_current);
-    REQUIRE_POSITIVE(limit_voltage);
+    FMU_REQUIRE_POSITIVE(motor_torque_constant);
+    FMU_REQUIRE_POSITIVE(motor_inductance_d);
+    FMU_REQUIRE_POSITIVE(motor_inductance_q);
+    FMU_REQUIRE_POSITIVE(motor_inductance_0);
+    FMU_REQUIRE_POSITIVE(motor_resistance);
+    FMU_REQUIRE_POSITIVE(inverter_gain);
+    FMU_REQUIRE_POSITIVE(inverter_time_constant);
+    FMU_REQUIRE_POSITIVE(inverter_dc_link_voltage);
+    FMU_REQUIRE_POSITIVE(inverter_hysteresis_band);
+    FMU_REQUIRE_POSITIVE(control_position_kp);
+    FMU_REQUIRE_POSITIVE(control_speed_kp);
+    FMU_REQUIRE_POSITIVE(control_current_kp);
+    FMU_REQUIRE_POSITIVE(limit_speed);
+    FMU_REQUIRE_POSITIVE(limit_current);
+    FMU_REQUIRE_POSITIVE(limit_voltage);
     if (!(fabs(v->control_current_d_ref) < v->limit_current))
-        errors += reject(fmu, VR_control_current_d_ref, "|i_d*| must be below limit.current");
+        errors += fmu_reject(fmu, VR_control_current_d_ref, "|i_d*| must be below limit.current");
     if (!(fabs(v->initial_current_q) <= v->limit_current))
-        errors += reject(fmu, VR_initial_current_q, "must not exceed limit.current");
+        errors += fmu_reject(fmu, VR_initial_current_q, "must not exceed limit.current");
     return errors ? fmi2Error : fmi2OK;
 }
