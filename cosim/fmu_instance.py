@@ -9,6 +9,7 @@ read or written in one FMI call, so a stepping loop makes no per-step allocation
 from __future__ import annotations
 
 import ctypes
+import time as clock
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Mapping, Sequence
@@ -63,6 +64,7 @@ class FmuInstance:
         self.variables = {v.name: v for v in self.model_description.modelVariables}
         self.messages: list[LogMessage] = []
         self.time = 0.0
+        self.fmi_seconds = 0.0  # wall time spent inside FMI calls (for the master-overhead share)
         self._callbacks = fmi2CallbackFunctions()
         self._logger = fmi2CallbackLoggerTYPE(self._on_log)  # kept alive with the instance
         self._callbacks.logger = self._logger
@@ -81,6 +83,7 @@ class FmuInstance:
 
     def _call(self, call: str, function, *args, **kwargs):
         logged_before = len(self.messages)
+        start = clock.perf_counter()
         try:
             return function(*args, **kwargs)
         except FMICallException as error:
@@ -89,6 +92,8 @@ class FmuInstance:
             if call == "fmi2Instantiate":
                 raise FmuError(self.name, call, self.time, self.messages[logged_before:]) from error
             raise
+        finally:
+            self.fmi_seconds += clock.perf_counter() - start
 
     def vr(self, name: str) -> int:
         try:

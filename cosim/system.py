@@ -17,8 +17,8 @@ from typing import Callable, Mapping
 import numpy as np
 from fmpy import extract
 
-from .coupling import Connection, Coupling, GaussSeidel
-from .fmu_instance import FmuInstance
+from .coupling import Connection, Coupling, GaussSeidel, Jacobi
+from .fmu_instance import FmuError, FmuInstance
 from .fmus import fmu_path
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -41,6 +41,15 @@ DRIVES = {
                           ("leg[{i}].velocity", "velocity"), ("force", "leg[{i}].force")),
 }
 
+class RunFailed(RuntimeError):
+    """An FMU failed mid-run: `error` says which instance, call and time; `result` holds the rows
+    computed up to the last good communication point."""
+
+    def __init__(self, error: FmuError, result: np.ndarray):
+        super().__init__(str(error))
+        self.error, self.result = error, result
+
+
 PoseReference = Callable[[float], np.ndarray]
 Wrench = Callable[[float], np.ndarray]  # [F (3), M (3)] on the platform, base frame
 WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
@@ -50,7 +59,8 @@ class PlatformSystem:
     """Mechanics plus six drives of one kind, initialized with the given start values."""
 
     def __init__(self, drive: str, mechanics_values: Mapping[str, float] | None = None,
-                 drive_values: Mapping[str, float] | None = None, order: int = 1):
+                 drive_values: Mapping[str, float] | None = None, order: int = 1,
+                 algorithm: str = "gauss-seidel"):
         if drive not in DRIVES:
             raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
         self.wiring = wiring = DRIVES[drive]
@@ -68,7 +78,10 @@ class PlatformSystem:
                 connections.append(Connection(("mechanics", output.format(i=i)), (d.name, drive_input)))
             connections.append(Connection((d.name, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
         self.coupling = Coupling(instances, connections)
-        self.algorithm = GaussSeidel(order, [d.name for d in self.drives] + ["mechanics"])
+        if algorithm == "jacobi":
+            self.algorithm = Jacobi(order)
+        else:
+            self.algorithm = GaussSeidel(order, [d.name for d in self.drives] + ["mechanics"])
         self._pose_ref = self.mechanics.real_group([f"pose_ref.{a}" for a in POSE])
         self._wrench = self.mechanics.real_group(list(WRENCH))
         self.pose = self.mechanics.real_group([f"pose.{a}" for a in POSE])
@@ -93,9 +106,15 @@ class PlatformSystem:
     def time(self) -> float:
         return self.mechanics.time
 
-    def run(self, stop_time: float, step: float, pose_ref: PoseReference, wrench: Wrench | None = None) -> np.ndarray:
+    @property
+    def column_names(self) -> list[str]:
+        return ["time", *[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *self.record_names]
+
+    def run(self, stop_time: float, step: float, pose_ref: PoseReference, wrench: Wrench | None = None,
+            progress: Callable[[float], None] | None = None) -> np.ndarray:
         """Steps to stop_time; returns rows of time, pose_ref (6), pose (6) and the recorded
-        outputs at every communication point. pose_ref and the wrench are held over each step."""
+        outputs (column_names) at every communication point. pose_ref and the wrench are held over
+        each step. `progress` is called with the fraction done every 100 steps."""
         n = int(round((stop_time - self.time) / step))
         out = np.zeros((n + 1, 13 + len(self.record_names)))
 
@@ -108,10 +127,19 @@ class PlatformSystem:
         self.algorithm.initialize(self.coupling, self.time)
         out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
         for row in range(1, n + 1):
-            self.algorithm.step(self.coupling, self.time, step)
+            try:
+                self.algorithm.step(self.coupling, self.time, step)
+            except FmuError as error:
+                raise RunFailed(error, out[:row]) from error
             set_external(self.time)
             out[row] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
+            if progress and row % 100 == 0:
+                progress(row / n)
         return out
+
+    @property
+    def fmi_seconds(self) -> float:
+        return sum(i.fmi_seconds for i in (self.mechanics, *self.drives))
 
     def free(self) -> None:
         for instance in (self.mechanics, *self.drives):

@@ -1,0 +1,41 @@
+"""Command line: python -m cosim run SCENE [--out DIR] [--no-plots] [--duration S]."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .runner import SceneFailed, run_scene
+from .scene import SceneError, load_scene
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m cosim", description="Stewart platform co-simulation")
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="run a scene file (see scenes/)")
+    run.add_argument("scene", type=Path)
+    run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
+    run.add_argument("--no-plots", action="store_true")
+    run.add_argument("--duration", type=float, help="override the scene's duration [s]")
+    args = parser.parse_args(argv)
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if args.duration:
+        scene.duration = args.duration
+    try:
+        _, report = run_scene(scene, args.out, plots=not args.no_plots)
+    except SceneFailed as failed:
+        print(failed.report.text(), file=sys.stderr)
+        print(f"partial results up to t = {failed.report.simulated:g} s written to {args.out}/", file=sys.stderr)
+        return 1
+    print(report.text())
+    print(f"results: {args.out}/{scene.path.stem}.csv, .mat and plots")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,109 @@
+"""Runs a scene: builds the platform system it describes, steps it, reports, and writes results.
+
+An FMU failure stops the run with a message naming the instance, the call and the time; the
+results up to the last good communication point are written all the same.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import results
+from .parameter_sets import mechanics_start_values
+from .scene import Scene
+from .signals import pose_reference, wrench
+from .system import PlatformSystem, RunFailed
+
+DRIVE_OUTPUTS = {"pmsm": ("torque", "speed", "current.q"), "linear": ("force", "velocity", "current")}
+
+
+@dataclass
+class RunReport:
+    scene: str
+    macro_steps: int
+    simulated: float
+    wall: float
+    fmi_seconds: float
+    largest_error: np.ndarray  # per DOF, after the first tenth of the run
+    warnings: list[str]
+    failure: str | None = None
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.simulated / self.wall
+
+    @property
+    def master_share(self) -> float:
+        return 1.0 - self.fmi_seconds / self.wall
+
+    def text(self) -> str:
+        lines = [f"{self.scene}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {self.macro_steps} macro steps, "
+                 f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
+                 f"master outside the FMUs"]
+        if len(self.largest_error):
+            lines.append("largest tracking error after the first tenth: " + ", ".join(
+                f"{a} {e:.2e}" for a, e in zip(("x", "y", "z", "roll", "pitch", "yaw"), self.largest_error)))
+        if self.warnings:
+            lines.append(f"{len(self.warnings)} warnings from the FMUs, first: {self.warnings[0]}")
+        if self.failure:
+            lines.append(f"FAILED: {self.failure}")
+        return "\n".join(lines)
+
+
+class SceneFailed(RuntimeError):
+    def __init__(self, report: RunReport, result: np.ndarray):
+        super().__init__(report.failure)
+        self.report, self.result = report, result
+
+
+def _progress_bar(start: float):
+    def show(fraction: float) -> None:
+        if time.perf_counter() - start > 2.0 and sys.stderr.isatty():
+            done = int(40 * fraction)
+            print(f"\r[{'#' * done}{'.' * (40 - done)}] {100 * fraction:3.0f} %", end="", file=sys.stderr, flush=True)
+    return show
+
+
+def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tuple[np.ndarray, RunReport]:
+    """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat and
+    plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
+    FMU fails."""
+    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
+    system = PlatformSystem(scene.drive, mechanics_values, scene.drive_parameters, scene.order, scene.algorithm)
+    effort, speed, current = DRIVE_OUTPUTS[scene.drive]
+    system.record([], [effort, speed, current])
+    start = time.perf_counter()
+    failure = None
+    try:
+        rows = system.run(scene.duration, scene.step, pose_reference(scene), wrench(scene), _progress_bar(start))
+    except RunFailed as failed:
+        rows, failure = failed.result, str(failed)
+    wall = time.perf_counter() - start
+    if sys.stderr.isatty() and wall > 2.0:
+        print(file=sys.stderr)
+    result = results.structured(rows, system.column_names)
+    warnings = [m.text for i in (system.mechanics, *system.drives) for m in i.messages if m.status == "warning"]
+    fmi_seconds = system.fmi_seconds
+    system.free()
+
+    late = result["time"] >= 0.1 * scene.duration
+    errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
+                       for a in ("x", "y", "z", "roll", "pitch", "yaw")])
+    report = RunReport(scene.name, len(result) - 1, float(result["time"][-1]), wall, fmi_seconds, errors, warnings,
+                       failure)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        stem = scene.path.stem
+        results.write_csv(result, out / f"{stem}.csv")
+        results.write_mat(result, out / f"{stem}.mat")
+        if plots and len(result) > 1:
+            results.plot_tracking(result, out / f"{stem}_tracking.png", scene.name)
+            results.plot_drives(result, out / f"{stem}_drives.png", scene.name, effort, speed)
+    if failure:
+        raise SceneFailed(report, result)
+    return result, report

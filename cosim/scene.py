@@ -1,0 +1,191 @@
+"""Scenes: one TOML file describes a run (see scenes/ for the shipped ones).
+
+    [scene]       name, duration [s], step [s]
+    [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives); [drive.parameters]
+    [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
+    [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2
+    [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset, sines = [{amplitude, frequency [Hz],
+                  phase [rad]}], steps = [{time, height}], ramps = [{start, end, slope}]
+    [load]        pulses = [{component = "force.z" | ..., value, start, end}]
+
+A wrong key or value is reported with its name and the line it stands on.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .system import DRIVES, POSE
+
+WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be run: the message names the file, the key and its line."""
+
+
+@dataclass
+class Sine:
+    amplitude: float
+    frequency: float
+    phase: float = 0.0
+
+
+@dataclass
+class Step:
+    time: float
+    height: float
+
+
+@dataclass
+class Ramp:
+    start: float
+    end: float
+    slope: float
+
+
+@dataclass
+class Signal:
+    offset: float = 0.0
+    sines: list[Sine] = field(default_factory=list)
+    steps: list[Step] = field(default_factory=list)
+    ramps: list[Ramp] = field(default_factory=list)
+
+
+@dataclass
+class Pulse:
+    component: str
+    value: float
+    start: float
+    end: float
+
+
+@dataclass
+class Scene:
+    path: Path
+    name: str
+    duration: float
+    step: float
+    drive: str
+    drive_parameters: dict[str, Any]
+    parameter_set: str
+    mass_set: str
+    mechanics_parameters: dict[str, Any]
+    algorithm: str
+    order: int
+    trajectory: dict[str, Signal]
+    pulses: list[Pulse]
+
+
+SCHEMA: dict[str, set[str]] = {
+    "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load"},
+    "scene": {"name", "duration", "step"},
+    "drive": {"kind", "parameters"},
+    "mechanics": {"parameter_set", "mass_set", "parameters"},
+    "coupling": {"algorithm", "order"},
+    "trajectory": set(POSE),
+    "trajectory.*": {"offset", "sines", "steps", "ramps"},
+    "load": {"pulses"},
+}
+ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "height"},
+             "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end"}}
+
+
+def line_of(text: str, table: str, key: str) -> int:
+    """The line (1-based) on which `key` stands inside [table] (or its header; also inside an
+    inline table there), the first line naming it anywhere else, or 0."""
+    assignment = re.compile(r'(^|[{,\s])"?' + re.escape(key) + r'"?\s*=')
+    current, found = "", 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if line.startswith("["):
+            current = line.strip("[]").strip()
+            if current == (f"{table}.{key}" if table else key):
+                return number
+            continue
+        if assignment.search(line):
+            if current == table:
+                return number
+            found = found or number
+    return found
+
+
+def load_scene(path: str | Path) -> Scene:
+    path = Path(path)
+    if not path.exists():
+        raise SceneError(f"{path}: no such scene file")
+    text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise SceneError(f"{path}: not valid TOML: {error}") from None
+
+    def fail(table: str, key: str, problem: str) -> SceneError:
+        where = f"{table}.{key}" if table else key
+        return SceneError(f"{path}:{line_of(text, table, key)}: '{where}' {problem}")
+
+    def check_keys(table: str, values: dict, allowed: set[str]) -> None:
+        for key in values:
+            if key not in allowed:
+                raise fail(table, key, f"is not a known key (known here: {', '.join(sorted(allowed))})")
+
+    def number(table: str, values: dict, key: str, default: float | None = None, positive: bool = False) -> float:
+        if key not in values:
+            if default is None:
+                raise SceneError(f"{path}: '{table}.{key}' is missing")
+            return default
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and not value > 0):
+            raise fail(table, key, f"= {value!r} must be a {'positive ' if positive else ''}number")
+        return float(value)
+
+    def items(table: str, values: dict, key: str, kind) -> list:
+        out = []
+        for entry in values.get(key, []):
+            if not isinstance(entry, dict):
+                raise fail(table, key, "must be a list of inline tables")
+            check_keys(table, entry, ITEM_KEYS[key])
+            try:
+                out.append(kind(**entry))
+            except TypeError:
+                raise fail(table, key, f"entries need {', '.join(sorted(ITEM_KEYS[key]))}") from None
+        return out
+
+    check_keys("", data, SCHEMA[""])
+    for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load"):
+        check_keys(table, data.get(table, {}), SCHEMA[table])
+    scene, drive, mechanics = data.get("scene", {}), data.get("drive", {}), data.get("mechanics", {})
+    coupling = data.get("coupling", {})
+    kind = drive.get("kind", "pmsm")
+    if kind not in DRIVES:
+        raise fail("drive", "kind", f"= {kind!r} is not a drive kind ({', '.join(DRIVES)})")
+    algorithm = coupling.get("algorithm", "gauss-seidel")
+    if algorithm not in ("gauss-seidel", "jacobi"):
+        raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")
+    order = coupling.get("order", 1)
+    if order not in (0, 1, 2):
+        raise fail("coupling", "order", f"= {order!r}: use 0, 1 or 2")
+    parameter_set = mechanics.get("parameter_set", "meng2010")
+    if parameter_set not in ("meng2010", "sumnu2015"):
+        raise fail("mechanics", "parameter_set", f"= {parameter_set!r}: use 'meng2010' or 'sumnu2015'")
+
+    trajectory = {}
+    for dof, spec in data.get("trajectory", {}).items():
+        table = f"trajectory.{dof}"
+        check_keys(table, spec, SCHEMA["trajectory.*"])
+        offset = number(table, spec, "offset", 0.0)
+        trajectory[dof] = Signal(offset, items(table, spec, "sines", Sine), items(table, spec, "steps", Step),
+                                 items(table, spec, "ramps", Ramp))
+    pulses = items("load", data.get("load", {}), "pulses", Pulse)
+    for pulse in pulses:
+        if pulse.component not in WRENCH_COMPONENTS:
+            raise fail("load", "pulses", f"component {pulse.component!r} is not one of {', '.join(WRENCH_COMPONENTS)}")
+    return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
+                 step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
+                 drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
+                 mass_set=mechanics.get("mass_set", "heavy"), mechanics_parameters=dict(mechanics.get("parameters", {})),
+                 algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses)

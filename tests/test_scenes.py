@@ -1,0 +1,111 @@
+"""Scenes and the command line: shipped scenes load, wrong keys and values are named with their
+line, the drive swaps by one line, and a run that fails mid-way says where and keeps its results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.io import loadmat
+
+from cosim.__main__ import main
+from cosim.fmus import ROOT, fmu_path
+from cosim.runner import SceneFailed, run_scene
+from cosim.scene import SceneError, load_scene
+from cosim.system import DRIVES, PlatformSystem
+
+SCENES = sorted((ROOT / "scenes").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_shipped_scenes_load(path):
+    scene = load_scene(path)
+    assert scene.duration > 0 and scene.drive in DRIVES and scene.trajectory
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return path
+
+
+BASE = """[scene]
+duration = 1.0
+[drive]
+kind = "pmsm"
+[coupling]
+order = 1
+"""
+
+
+@pytest.mark.parametrize("extra,message", [
+    ('algoritm = "jacobi"\n', "scene.toml:7: 'coupling.algoritm' is not a known key"),
+    ("[trajectory.surge]\n", "scene.toml:7: 'trajectory.surge' is not a known key"),
+    ("[trajectory.x]\nsines = [{amplitude = 1.0, frequncy = 2.0}]\n", "scene.toml:8: 'trajectory.x.frequncy' is not a known key"),
+])
+def test_a_wrong_key_is_named_with_its_line(tmp_path, extra, message):
+    with pytest.raises(SceneError) as error:
+        load_scene(write(tmp_path, BASE + extra))
+    assert message.split(": ", 1)[0] in str(error.value)
+    assert message.split(": ", 1)[1].split(" is")[0] in str(error.value)
+
+
+@pytest.mark.parametrize("text,message", [
+    (BASE.replace("order = 1", "order = 3"), ":6: 'coupling.order' = 3"),
+    (BASE.replace('kind = "pmsm"', 'kind = "hydraulic"'), ":4: 'drive.kind' = 'hydraulic' is not a drive kind"),
+    (BASE.replace("duration = 1.0", "duration = -1"), ":2: 'scene.duration' = -1 must be a positive number"),
+    (BASE.replace("duration = 1.0", 'duration = "long"'), ":2: 'scene.duration' = 'long'"),
+])
+def test_a_wrong_value_is_named_with_its_line(tmp_path, text, message):
+    with pytest.raises(SceneError) as error:
+        load_scene(write(tmp_path, text))
+    assert message in str(error.value)
+
+
+def test_cli_reports_a_bad_scene_and_exits_2(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "missing.toml")]) == 2
+    assert "missing.toml: no such scene file" in capsys.readouterr().err
+
+
+def test_a_missing_fmu_is_named():
+    with pytest.raises(FileNotFoundError, match="no FMU 'hydraulic_drive'"):
+        fmu_path("hydraulic_drive")
+
+
+def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
+    """sumnu_case_1 with kind = "pmsm" instead of "linear": the two scene files differ in that line,
+    the loaded scenes only in the drive kind, and the systems only in the drive connections."""
+    original = (ROOT / "scenes" / "sumnu_case_1.toml").read_text()
+    swapped = original.replace('kind = "linear"', 'kind = "pmsm"')
+    differing = [(a, b) for a, b in zip(original.splitlines(), swapped.splitlines()) if a != b]
+    assert differing == [('kind = "linear"', 'kind = "pmsm"')]
+    a, b = load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), load_scene(write(tmp_path, swapped))
+    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path"}
+    for scene in (a, b):
+        system = PlatformSystem(scene.drive, {})
+        try:
+            wiring = DRIVES[scene.drive]
+            assert system.coupling.input_names["mechanics"] == [wiring.effort[1].format(i=i) for i in range(1, 7)]
+        finally:
+            system.free()
+
+
+def test_a_run_that_fails_names_the_fmu_and_keeps_its_results(tmp_path, capsys):
+    """The Meng platform (950 kg) on six linear motors (610 N peak each) cannot be held: it sinks
+    until its legs lie nearly flat and the leg Jacobian turns singular; the mechanics stops the run
+    with an error, and the CLI
+    names the instance, the call and the time, exits 1, and the CSV and .mat files hold the
+    results up to the last good step."""
+    scene_file = write(tmp_path, BASE.replace('kind = "pmsm"', 'kind = "linear"').replace("duration = 1.0", "duration = 3.0")
+                       + "[trajectory.z]\noffset = 1.689527733348906\n")
+    out = tmp_path / "out"
+    assert main(["run", str(scene_file), "--out", str(out), "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    assert "FAILED: mechanics: fmi2DoStep failed at t = " in err and "near-singular" in err
+    saved = np.genfromtxt(out / "scene.csv", delimiter=",", names=True)
+    assert 0.1 < saved["time"][-1] < 3.0
+    assert saved["posez"][-1] < 1.0  # it was sinking
+    mat = loadmat(out / "scene.mat")
+    assert mat["pose_z"].size == saved.size
+    with pytest.raises(SceneFailed) as failed:
+        run_scene(load_scene(scene_file))
+    assert failed.value.report.failure.startswith("mechanics: fmi2DoStep failed at t = ")
