@@ -34,11 +34,20 @@ class Connection:
     target: tuple[str, str]  # (instance, input variable)
 
 
+@dataclass(frozen=True)
+class Bond:
+    """A power bond: an effort (torque, force) and a flow (speed, velocity) connection whose product
+    is the power one side gives the other (ECCO, Sadjina et al. 2017)."""
+    effort: Connection
+    flow: Connection
+
+
 class Coupling:
     """Instances and their connections, resolved into one output group and one input group per
     instance, so that each macro step makes one get and one set call per instance."""
 
-    def __init__(self, instances: Mapping[str, FmuInstance], connections: Sequence[Connection]):
+    def __init__(self, instances: Mapping[str, FmuInstance], connections: Sequence[Connection],
+                 bonds: Sequence[Bond] = ()):
         self.instances = dict(instances)
         self.names = list(self.instances)
         for c in connections:
@@ -54,6 +63,14 @@ class Coupling:
         # for each target instance: (source instance, index in the source's output group) per input
         self.feeds = {n: [(c.source[0], self.sources[c.source[0]].index(c.source[1])) for c in cs]
                       for n, cs in targets.items() if cs}
+        # each bond as (source, index) and (target, index) of its effort and of its flow
+        def ends(c: Connection):
+            return ((c.source[0], self.sources[c.source[0]].index(c.source[1])),
+                    (c.target[0], self.input_names[c.target[0]].index(c.target[1])))
+        for bond in bonds:
+            if bond.effort not in connections or bond.flow not in connections:
+                raise KeyError(f"bond {bond}: both of its connections must be among the coupling's connections")
+        self.bonds = [(ends(b.effort), ends(b.flow)) for b in bonds]
 
     def read(self) -> dict[str, np.ndarray]:
         return {n: group.read().copy() for n, group in self.outputs.items()}
@@ -103,11 +120,14 @@ class CouplingAlgorithm(ABC):
         if order not in (0, 1, 2):
             raise ValueError(f"extrapolation order {order}: 0, 1 and 2 are supported")
         self.order = order
-        self.history = History(keep=order + 1)
+        self.history = History(keep=max(order + 1, 2))
+        self.inputs_set: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.energy_residuals: list[float] = []  # per macro step, the largest over the bonds [J]
 
     def initialize(self, coupling: Coupling, t: float, sweeps: int = 20) -> None:
         """Makes the outputs at t consistent with the connected inputs (outputs that feed through
         from inputs, such as a spring force from a position, depend on them) and starts the history."""
+        self.energy_residuals = []
         outputs = coupling.read()
         for _ in range(sweeps):
             for name, feeds in coupling.feeds.items():
@@ -117,7 +137,7 @@ class CouplingAlgorithm(ABC):
             outputs = new
             if settled:
                 break
-        self.history = History(keep=self.order + 1)
+        self.history = History(keep=max(self.order + 1, 2))
         self.history.push(t, outputs)
 
     def _set_inputs(self, coupling: Coupling, name: str, t: float, new: dict[str, np.ndarray], t_new: float,
@@ -134,6 +154,7 @@ class CouplingAlgorithm(ABC):
                 polynomials[key] = polynomial_at(times, samples, t, order)
             v, r, c = polynomials[key]
             values.append(v[index]); rates.append(r[index]); curvatures.append(c[index])
+        self.inputs_set[name] = (np.array(values), np.array(rates), np.array(curvatures))
         group = coupling.inputs[name]
         group.write(values)
         if order >= 1:
@@ -146,6 +167,27 @@ class CouplingAlgorithm(ABC):
             self._start_up(coupling, t, h)
         else:
             self._sweep(coupling, t, h)
+        if coupling.bonds:
+            self.energy_residuals.append(self._energy_residual(coupling, h))
+
+    def _energy_residual(self, coupling: Coupling, h: float) -> float:
+        """Largest |energy residual| of the bonds over the step just taken: the energy the output
+        sides delivered minus what the input sides received, each power taken as its side saw it
+        (outputs at t and t + h against the inputs as set over the step), by the trapezoidal rule."""
+        (t0, before), (t1, after) = self.history.samples[-2], self.history.samples[-1]
+        largest = 0.0
+        for (effort_out, effort_in), (flow_out, flow_in) in coupling.bonds:
+            def seen(target, dt):
+                values, rates, curvatures = self.inputs_set[target[0]]
+                k = target[1]
+                return values[k] + rates[k] * dt + 0.5 * curvatures[k] * dt * dt
+            e0, e1 = before[effort_out[0]][effort_out[1]], after[effort_out[0]][effort_out[1]]
+            f0, f1 = before[flow_out[0]][flow_out[1]], after[flow_out[0]][flow_out[1]]
+            # the effort side sees the flow it was given; the flow side the effort it was given
+            given_side = 0.5 * h * (e0 * seen(flow_in, 0.0) + e1 * seen(flow_in, h))
+            taken_side = 0.5 * h * (seen(effort_in, 0.0) * f0 + seen(effort_in, h) * f1)
+            largest = max(largest, abs(given_side - taken_side))
+        return largest
 
     @abstractmethod
     def _sweep(self, coupling: Coupling, t: float, h: float) -> None:

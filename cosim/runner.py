@@ -30,6 +30,7 @@ class RunReport:
     wall: float
     fmi_seconds: float
     largest_error: np.ndarray  # per DOF, after the first tenth of the run
+    largest_energy_residual: float  # [J] over the power bonds, per macro step
     warnings: list[str]
     failure: str | None = None
 
@@ -44,7 +45,8 @@ class RunReport:
     def text(self) -> str:
         lines = [f"{self.scene}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {self.macro_steps} macro steps, "
                  f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
-                 f"master outside the FMUs"]
+                 f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
+                 f"{self.largest_energy_residual:.2e} J"]
         if len(self.largest_error):
             lines.append("largest tracking error after the first tenth: " + ", ".join(
                 f"{a} {e:.2e}" for a, e in zip(("x", "y", "z", "roll", "pitch", "yaw"), self.largest_error)))
@@ -89,13 +91,14 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
     result = results.structured(rows, system.column_names)
     warnings = [m.text for i in (system.mechanics, *system.drives) for m in i.messages if m.status == "warning"]
     fmi_seconds = system.fmi_seconds
+    residuals = system.algorithm.energy_residuals
     system.free()
 
     late = result["time"] >= 0.1 * scene.duration
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in ("x", "y", "z", "roll", "pitch", "yaw")])
-    report = RunReport(scene.name, len(result) - 1, float(result["time"][-1]), wall, fmi_seconds, errors, warnings,
-                       failure)
+    report = RunReport(scene.name, len(result) - 1, float(result["time"][-1]), wall, fmi_seconds, errors,
+                       max(residuals, default=0.0), warnings, failure)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         stem = scene.path.stem

@@ -17,7 +17,7 @@ from typing import Callable, Mapping
 import numpy as np
 from fmpy import extract
 
-from .coupling import Connection, Coupling, GaussSeidel, Jacobi
+from .coupling import Bond, Connection, Coupling, GaussSeidel, Jacobi
 from .fmu_instance import FmuError, FmuInstance
 from .fmus import fmu_path
 
@@ -72,12 +72,13 @@ class PlatformSystem:
         for d in self.drives:
             d.initialize(dict(drive_values or {}))
         instances = {"mechanics": self.mechanics, **{d.name: d for d in self.drives}}
-        connections = []
+        connections, bonds = [], []
         for i, d in enumerate(self.drives, start=1):
             for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
                 connections.append(Connection(("mechanics", output.format(i=i)), (d.name, drive_input)))
             connections.append(Connection((d.name, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
-        self.coupling = Coupling(instances, connections)
+            bonds.append(Bond(effort=connections[-1], flow=connections[-2]))  # torque x speed, force x velocity
+        self.coupling = Coupling(instances, connections, bonds)
         if algorithm == "jacobi":
             self.algorithm = Jacobi(order)
         else:

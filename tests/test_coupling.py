@@ -8,7 +8,7 @@ import pytest
 from fmpy import extract
 from scipy.linalg import expm
 
-from cosim.coupling import Connection, Coupling, GaussSeidel, Jacobi
+from cosim.coupling import Bond, Connection, Coupling, GaussSeidel, Jacobi
 from cosim.fmu_instance import FmuInstance
 from cosim.fmus import fmu_path
 
@@ -34,6 +34,9 @@ def unzipped():
     return {name: extract(str(fmu_path(name, test=True))) for name in ("oscillator_mass", "oscillator_coupling")}
 
 
+BONDS = [Bond(effort=CONNECTIONS[2], flow=CONNECTIONS[1])]  # force x velocity of mass 1
+
+
 def coupled_error(unzipped, algorithm, steps: int, stop_time: float = 1.0) -> float:
     instances = {"mass": FmuInstance(fmu_path("oscillator_mass", test=True), "mass", unzipped["oscillator_mass"]),
                  "coupling": FmuInstance(fmu_path("oscillator_coupling", test=True), "coupling",
@@ -41,7 +44,7 @@ def coupled_error(unzipped, algorithm, steps: int, stop_time: float = 1.0) -> fl
     try:
         for instance in instances.values():
             instance.initialize()
-        coupling = Coupling(instances, CONNECTIONS)
+        coupling = Coupling(instances, CONNECTIONS, BONDS)
         h = stop_time / steps
         algorithm.initialize(coupling, 0.0)
         for k in range(steps):
@@ -64,6 +67,20 @@ def test_global_error_converges_with_order_k_plus_1(unzipped, kind, order):
     errors = np.array([coupled_error(unzipped, make(), n) for n in steps])
     slope = np.polyfit(np.log(1.0 / steps), np.log(errors), 1)[0]
     assert slope == pytest.approx(order + 1, abs=0.15), (errors, slope)
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_energy_residual_of_the_bond_converges_with_order_k_plus_1(unzipped, order):
+    """The energy that the force x velocity bond loses or gains in the coupling, summed over the
+    run, shrinks like h^(k+1): each step's residual is h times the flow's extrapolation error."""
+    totals = []
+    for n in (200, 400, 800, 1600):
+        algorithm = Jacobi(order)
+        coupled_error(unzipped, algorithm, n)
+        assert len(algorithm.energy_residuals) == n
+        totals.append(sum(algorithm.energy_residuals))
+    slope = np.polyfit(np.log(1.0 / np.array([200, 400, 800, 1600])), np.log(totals), 1)[0]
+    assert slope == pytest.approx(order + 1, abs=0.2), (totals, slope)
 
 
 def test_gauss_seidel_is_more_accurate_than_jacobi_at_equal_order(unzipped):
