@@ -249,3 +249,70 @@ class GaussSeidel(CouplingAlgorithm):
             if name in coupling.outputs:
                 new[name] = coupling.outputs[name].read().copy()
         self.history.push(t + h, new)
+
+
+class AdaptiveStep:
+    """Macro-step control by step doubling with rollback. Each macro step H is taken once whole
+    and, from the same saved FMU states and history, once as two halves; the difference of the
+    coupled outputs estimates the local error of the halves (Richardson). Accepted when
+    err = max |y_half - y_full| / (atol + rtol |y_half|) <= 1 (the halves' result is kept);
+    otherwise every FMU is rolled back through fmi2SetFMUstate and the step retried with a smaller
+    H. H_next = H min(2, max(0.2, 0.9 err^(-1/(k+2)))) for extrapolation order k, within
+    [h_min, h_max]."""
+
+    def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-4, atol: float = 1e-6,
+                 h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2):
+        self.algorithm, self.rtol, self.atol = algorithm, rtol, atol
+        self.h, self.h_min, self.h_max = h_initial, h_min, h_max
+        self.accepted: list[float] = []  # accepted macro steps H
+        self.rejected = 0
+        self.force_reject: set[int] = set()  # test hook: reject the first try of these accepted-step indices
+
+    def _snapshot(self, coupling: Coupling):
+        states = {n: i.get_state() for n, i in coupling.instances.items()}
+        memory = (deque(self.algorithm.history.samples, maxlen=self.algorithm.history.samples.maxlen),
+                  dict(self.algorithm.inputs_set), list(self.algorithm.energy_residuals))
+        return states, memory
+
+    def _restore(self, coupling: Coupling, snapshot) -> None:
+        states, (samples, inputs_set, residuals) = snapshot
+        for n, instance in coupling.instances.items():
+            instance.set_state(states[n])
+        self.algorithm.history.samples = deque(samples, maxlen=samples.maxlen)
+        self.algorithm.inputs_set, self.algorithm.energy_residuals = dict(inputs_set), list(residuals)
+
+    @staticmethod
+    def _free(coupling: Coupling, snapshot) -> None:
+        for n, instance in coupling.instances.items():
+            instance.free_state(snapshot[0][n])
+
+    def advance(self, coupling: Coupling, t: float, t_end: float) -> float:
+        """Steps from t to t_end (the last step shortened to land on it); returns t_end."""
+        while t_end - t > 1e-12 * max(1.0, abs(t_end)):
+            h = min(self.h, t_end - t)
+            start = self._snapshot(coupling)
+            try:
+                self.algorithm.step(coupling, t, h)
+                full = self.algorithm.history.samples[-1][1]
+                self._restore(coupling, start)
+                self.algorithm.step(coupling, t, h / 2)
+                self.algorithm.step(coupling, t + h / 2, h / 2)
+                half = self.algorithm.history.samples[-1][1]
+                error = max(float(np.max(np.abs(half[n] - full[n]) / (self.atol + self.rtol * np.abs(half[n]))))
+                            for n in half)
+                forced = len(self.accepted) in self.force_reject
+                if forced:
+                    self.force_reject.discard(len(self.accepted))
+                if (error <= 1.0 or h <= self.h_min) and not forced:
+                    t += h
+                    self.accepted.append(h)
+                else:
+                    self._restore(coupling, start)
+                    self.rejected += 1
+                factor = 2.0 if error == 0 else min(2.0, max(0.2, 0.9 * error ** (-1.0 / (self.algorithm.order + 2))))
+                if forced:
+                    factor = 1.0  # the forced retry takes the same step again
+                self.h = min(self.h_max, max(self.h_min, h * factor))
+            finally:
+                self._free(coupling, start)
+        return t_end
