@@ -174,7 +174,7 @@ class CouplingAlgorithm(ABC):
         """Largest |energy residual| of the bonds over the step just taken: the energy the output
         sides delivered minus what the input sides received, each power taken as its side saw it
         (outputs at t and t + h against the inputs as set over the step), by the trapezoidal rule."""
-        (t0, before), (t1, after) = self.history.samples[-2], self.history.samples[-1]
+        (_, before), (_, after) = self.history.samples[-2], self.history.samples[-1]
         largest = 0.0
         for (effort_out, effort_in), (flow_out, flow_in) in coupling.bonds:
             def seen(target, dt):
