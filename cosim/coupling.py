@@ -21,7 +21,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections import deque
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -261,8 +261,13 @@ class AdaptiveStep:
     [h_min, h_max]."""
 
     def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-4, atol: float = 1e-6,
-                 h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2):
+                 h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2,
+                 before_step: Callable[[float], None] | None = None,
+                 after_accept: Callable[[float], None] | None = None):
+        """before_step(t) runs before every (partial) macro step from t, e.g. to set external
+        inputs; after_accept(t) after every accepted step, e.g. to record results."""
         self.algorithm, self.rtol, self.atol = algorithm, rtol, atol
+        self.before_step, self.after_accept = before_step or (lambda t: None), after_accept or (lambda t: None)
         self.h, self.h_min, self.h_max = h_initial, h_min, h_max
         self.accepted: list[float] = []  # accepted macro steps H
         self.rejected = 0
@@ -292,10 +297,13 @@ class AdaptiveStep:
             h = min(self.h, t_end - t)
             start = self._snapshot(coupling)
             try:
+                self.before_step(t)
                 self.algorithm.step(coupling, t, h)
                 full = self.algorithm.history.samples[-1][1]
                 self._restore(coupling, start)
+                self.before_step(t)
                 self.algorithm.step(coupling, t, h / 2)
+                self.before_step(t + h / 2)
                 self.algorithm.step(coupling, t + h / 2, h / 2)
                 half = self.algorithm.history.samples[-1][1]
                 error = max(float(np.max(np.abs(half[n] - full[n]) / (self.atol + self.rtol * np.abs(half[n]))))
@@ -306,6 +314,7 @@ class AdaptiveStep:
                 if (error <= 1.0 or h <= self.h_min) and not forced:
                     t += h
                     self.accepted.append(h)
+                    self.after_accept(t)
                 else:
                     self._restore(coupling, start)
                     self.rejected += 1
