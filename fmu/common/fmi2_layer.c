@@ -128,11 +128,12 @@ static int check_settable(FmuInstance *fmu, const char *call, int vr, double val
 }
 
 /* Called after values were set: outputs must be recomputed; a tunable parameter changed after
- * initialization must leave the model valid, or it is put back. */
-static fmi2Status after_set(FmuInstance *fmu, const ModelVariables *before, int any_input) {
+ * initialization must leave the model valid, or it is put back (inputs are checked one by one
+ * when set, so setting only inputs costs no model validation). */
+static fmi2Status after_set(FmuInstance *fmu, const ModelVariables *before, int any_input, int any_parameter) {
     if (any_input) fmu->s.input_time = fmu->s.time;
     fmu->outputs_stale = 1;
-    if ((fmu->s.phase & PHASE_STEP_COMPLETE) && model_validate(fmu) != fmi2OK) {
+    if (any_parameter && (fmu->s.phase & PHASE_STEP_COMPLETE) && model_validate(fmu) != fmi2OK) {
         fmu->s.v = *before;
         return fmi2Error;
     }
@@ -378,12 +379,13 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             !check_settable(fmu, "fmi2SetReal", (int)vr[i], value[i]))
             return fmi2Error;
     ModelVariables before = fmu->s.v;
-    int any_input = 0;
+    int any_input = 0, any_parameter = 0;
     for (size_t i = 0; i < nvr; i++) {
         *(double *)value_address(fmu, (int)vr[i]) = value[i];
         if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
+        else any_parameter = 1;
     }
-    return after_set(fmu, &before, any_input);
+    return after_set(fmu, &before, any_input, any_parameter);
 }
 
 static fmi2Status set_ints(FmuInstance *fmu, const char *call, FmuType type,
@@ -395,12 +397,13 @@ static fmi2Status set_ints(FmuInstance *fmu, const char *call, FmuType type,
             !check_settable(fmu, call, (int)vr[i], type == FMU_BOOLEAN ? (value[i] != 0) : value[i]))
             return fmi2Error;
     ModelVariables before = fmu->s.v;
-    int any_input = 0;
+    int any_input = 0, any_parameter = 0;
     for (size_t i = 0; i < nvr; i++) {
         *(int *)value_address(fmu, (int)vr[i]) = type == FMU_BOOLEAN ? (value[i] != 0) : value[i];
         if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
+        else any_parameter = 1;
     }
-    return after_set(fmu, &before, any_input);
+    return after_set(fmu, &before, any_input, any_parameter);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
