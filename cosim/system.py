@@ -5,8 +5,7 @@ The wiring lives in DRIVES: swapping the drive kind changes those connections an
 Coupling: cosim.coupling's Gauss-Seidel with first-order extrapolation (by default): the drives
 step first, their inputs extrapolated linearly from the mechanics' last two samples (so a drive
 also sees the rate of its leg reference); the mechanics then steps with each drive effort
-interpolated linearly between its values at t and t + h. The fixed-step runner here is what the
-tests and the main job use until the master of issue 5 (scenes, step control, results) exists.
+interpolated linearly between its values at t and t + h. cosim.runner runs a scene on it.
 """
 
 from __future__ import annotations
@@ -40,6 +39,7 @@ DRIVES = {
     "linear": DriveWiring("linear_motor", ("leg[{i}].length_ref", "position_ref"), ("leg[{i}].length", "position"),
                           ("leg[{i}].velocity", "velocity"), ("force", "leg[{i}].force")),
 }
+
 
 class RunFailed(RuntimeError):
     """An FMU failed mid-run: `error` says which instance, call and time; `result` holds the rows
