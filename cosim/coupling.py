@@ -10,6 +10,9 @@ Inputs over a macro step are polynomials in time fitted to the samples of the so
 - Gauss-Seidel: instances step in sequence; an input whose source has already stepped is
   interpolated through that source's new sample at t + h and its last k samples, the others are
   extrapolated as in Jacobi.
+A source that provides its outputs' time derivatives (maxOutputDerivativeOrder > 0, such as the
+trajectory FMU) is not extrapolated from its history: its inputs are its Taylor polynomial at t of
+order min(k, its order), exact for the signals it describes and free of ringing after a step.
 At the start the outputs are made consistent with the connected inputs. The first macro step has no
 history; it is iterated to a fixed point (waveform relaxation over one
 step, FMU states restored between sweeps) with inputs interpolated between t and t + h, so the
@@ -71,9 +74,17 @@ class Coupling:
             if bond.effort not in connections or bond.flow not in connections:
                 raise KeyError(f"bond {bond}: both of its connections must be among the coupling's connections")
         self.bonds = [(ends(b.effort), ends(b.flow)) for b in bonds]
+        # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order
+        self.rate_orders = {n: min(2, self.instances[n].max_output_derivative_order) for n in self.outputs
+                            if self.instances[n].max_output_derivative_order > 0}
 
     def read(self) -> dict[str, np.ndarray]:
         return {n: group.read().copy() for n, group in self.outputs.items()}
+
+    def read_rates(self, names=None) -> dict[str, list[np.ndarray]]:
+        """The output derivatives (orders 1.., as far as provided) of the rate-giving sources."""
+        return {n: [self.outputs[n].read_derivatives(k) for k in range(1, self.rate_orders[n] + 1)]
+                for n in (self.rate_orders if names is None else names) if n in self.rate_orders}
 
 
 def polynomial_at(times: Sequence[float], values: Sequence[np.ndarray], t: float, order: int):
@@ -96,17 +107,18 @@ def polynomial_at(times: Sequence[float], values: Sequence[np.ndarray], t: float
 
 
 class History:
-    """The last few output samples of every source instance."""
+    """The last few output samples of every source instance, with the output derivatives of the
+    sources that provide them."""
 
     def __init__(self, keep: int):
-        self.samples: deque[tuple[float, dict[str, np.ndarray]]] = deque(maxlen=keep)
+        self.samples: deque[tuple[float, dict[str, np.ndarray], dict[str, list[np.ndarray]]]] = deque(maxlen=keep)
 
-    def push(self, t: float, outputs: dict[str, np.ndarray]) -> None:
-        self.samples.append((t, outputs))
+    def push(self, t: float, outputs: dict[str, np.ndarray], rates: dict[str, list[np.ndarray]] | None = None) -> None:
+        self.samples.append((t, outputs, rates or {}))
 
     def source_samples(self, name: str, extra: tuple[float, np.ndarray] | None = None, count: int = 3):
-        times = [t for t, _ in self.samples][-count:]
-        values = [o[name] for _, o in self.samples][-count:]
+        times = [t for t, _, _ in self.samples][-count:]
+        values = [o[name] for _, o, _ in self.samples][-count:]
         if extra is not None:
             times = (times + [extra[0]])[-count:]
             values = (values + [extra[1]])[-count:]
@@ -123,6 +135,8 @@ class CouplingAlgorithm(ABC):
         self.history = History(keep=max(order + 1, 2))
         self.inputs_set: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.energy_residuals: list[float] = []  # per macro step, the largest over the bonds [J]
+        # of the last step, per bond: the energy residual and the energy transferred [J]
+        self.bond_energies: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0))
 
     def initialize(self, coupling: Coupling, t: float, sweeps: int = 20) -> None:
         """Makes the outputs at t consistent with the connected inputs (outputs that feed through
@@ -138,7 +152,7 @@ class CouplingAlgorithm(ABC):
             if settled:
                 break
         self.history = History(keep=max(self.order + 1, 2))
-        self.history.push(t, outputs)
+        self.history.push(t, outputs, coupling.read_rates())
 
     def _set_inputs(self, coupling: Coupling, name: str, t: float, new: dict[str, np.ndarray], t_new: float,
                     order: int, polynomials: dict) -> None:
@@ -148,6 +162,11 @@ class CouplingAlgorithm(ABC):
         values, rates, curvatures = [], [], []
         for source, index in coupling.feeds[name]:
             key = (source, source in new)
+            if key not in polynomials and source in coupling.rate_orders:
+                _, outputs, exact = self.history.samples[-1]  # at t: Taylor with the exact derivatives
+                zero = np.zeros_like(outputs[source])
+                derivatives = [*exact[source][:order], zero, zero][:2]
+                polynomials[key] = (outputs[source], derivatives[0], derivatives[1])
             if key not in polynomials:
                 extra = (t_new, new[source]) if source in new else None
                 times, samples = self.history.source_samples(source, extra, count=order + 1)
@@ -174,8 +193,8 @@ class CouplingAlgorithm(ABC):
         """Largest |energy residual| of the bonds over the step just taken: the energy the output
         sides delivered minus what the input sides received, each power taken as its side saw it
         (outputs at t and t + h against the inputs as set over the step), by the trapezoidal rule."""
-        (_, before), (_, after) = self.history.samples[-2], self.history.samples[-1]
-        largest = 0.0
+        (_, before, _), (_, after, _) = self.history.samples[-2], self.history.samples[-1]
+        residuals, transferred = [], []
         for (effort_out, effort_in), (flow_out, flow_in) in coupling.bonds:
             def seen(target, dt):
                 values, rates, curvatures = self.inputs_set[target[0]]
@@ -186,8 +205,10 @@ class CouplingAlgorithm(ABC):
             # the effort side sees the flow it was given; the flow side the effort it was given
             given_side = 0.5 * h * (e0 * seen(flow_in, 0.0) + e1 * seen(flow_in, h))
             taken_side = 0.5 * h * (seen(effort_in, 0.0) * f0 + seen(effort_in, h) * f1)
-            largest = max(largest, abs(given_side - taken_side))
-        return largest
+            residuals.append(given_side - taken_side)
+            transferred.append(0.5 * (abs(given_side) + abs(taken_side)))
+        self.bond_energies = (np.array(residuals), np.array(transferred))
+        return float(np.max(np.abs(residuals)))
 
     @abstractmethod
     def _sweep(self, coupling: Coupling, t: float, h: float) -> None:
@@ -198,6 +219,7 @@ class CouplingAlgorithm(ABC):
         the outputs at t + h until the guess stops changing."""
         states = {n: i.get_state() for n, i in coupling.instances.items()}
         guess = self.history.samples[-1][1]
+        rates: dict = {}
         try:
             for sweep in range(sweeps):
                 polynomials: dict = {}
@@ -205,7 +227,7 @@ class CouplingAlgorithm(ABC):
                     if name in coupling.feeds:
                         self._set_inputs(coupling, name, t, guess, t + h, 1, polynomials)
                     coupling.instances[name].do_step(h)
-                new = coupling.read()
+                new, rates = coupling.read(), coupling.read_rates()
                 change = max(np.max(np.abs(new[n] - guess[n]) / (1.0 + np.abs(new[n]))) for n in new)
                 guess = new
                 if change < tolerance or sweep == sweeps - 1:
@@ -215,7 +237,7 @@ class CouplingAlgorithm(ABC):
         finally:
             for n, instance in coupling.instances.items():
                 instance.free_state(states[n])
-        self.history.push(t + h, guess)
+        self.history.push(t + h, guess, rates)
 
 
 class Jacobi(CouplingAlgorithm):
@@ -228,7 +250,7 @@ class Jacobi(CouplingAlgorithm):
                 self._set_inputs(coupling, name, t, {}, t + h, self.order, polynomials)
         for name in coupling.names:
             coupling.instances[name].do_step(h)
-        self.history.push(t + h, coupling.read())
+        self.history.push(t + h, coupling.read(), coupling.read_rates())
 
 
 class GaussSeidel(CouplingAlgorithm):
@@ -248,7 +270,7 @@ class GaussSeidel(CouplingAlgorithm):
             coupling.instances[name].do_step(h)
             if name in coupling.outputs:
                 new[name] = coupling.outputs[name].read().copy()
-        self.history.push(t + h, new)
+        self.history.push(t + h, new, coupling.read_rates())
 
 
 class AdaptiveStep:
@@ -260,18 +282,26 @@ class AdaptiveStep:
     H. H_next = H min(2, max(0.2, 0.9 err^(-1/(k+2)))) for extrapolation order k, within
     [h_min, h_max]."""
 
-    def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-4, atol: float = 1e-6,
+    def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-4, atol: float | Mapping[str, float] = 1e-6,
                  h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2,
                  before_step: Callable[[float], None] | None = None,
                  after_accept: Callable[[float], None] | None = None):
-        """before_step(t) runs before every (partial) macro step from t, e.g. to set external
-        inputs; after_accept(t) after every accepted step, e.g. to record results."""
+        """atol is one number or one per source instance; a mapping also selects the instances
+        whose outputs the error is measured on (those it names). before_step(t) runs before every
+        (partial) macro step from t, e.g. to set external inputs; after_accept(t) after every
+        accepted step, e.g. to record results."""
         self.algorithm, self.rtol, self.atol = algorithm, rtol, atol
         self.before_step, self.after_accept = before_step or (lambda t: None), after_accept or (lambda t: None)
         self.h, self.h_min, self.h_max = h_initial, h_min, h_max
         self.accepted: list[float] = []  # accepted macro steps H
         self.rejected = 0
         self.force_reject: set[int] = set()  # test hook: reject the first try of these accepted-step indices
+
+    def error(self, full: dict[str, np.ndarray], half: dict[str, np.ndarray]) -> float:
+        """The scaled difference of the two results: <= 1 is within tolerance."""
+        atol = self.atol if isinstance(self.atol, Mapping) else dict.fromkeys(half, self.atol)
+        return max(float(np.max(np.abs(half[n] - full[n]) / (atol[n] + self.rtol * np.abs(half[n]))))
+                   for n in atol)
 
     def _snapshot(self, coupling: Coupling):
         states = {n: i.get_state() for n, i in coupling.instances.items()}
@@ -306,8 +336,7 @@ class AdaptiveStep:
                 self.before_step(t + h / 2)
                 self.algorithm.step(coupling, t + h / 2, h / 2)
                 half = self.algorithm.history.samples[-1][1]
-                error = max(float(np.max(np.abs(half[n] - full[n]) / (self.atol + self.rtol * np.abs(half[n]))))
-                            for n in half)
+                error = self.error(full, half)
                 forced = len(self.accepted) in self.force_reject
                 if forced:
                     self.force_reject.discard(len(self.accepted))
@@ -324,4 +353,41 @@ class AdaptiveStep:
                 self.h = min(self.h_max, max(self.h_min, h * factor))
             finally:
                 self._free(coupling, start)
+        return t_end
+
+
+class EnergyStep:
+    """Macro-step control from the power bonds' energy residuals (ECCO, Sadjina et al. 2017): after
+    each step the residual of every bond is scaled, eps = |dE| / (atol + rtol |E|) with E the energy
+    the bond transferred over the step, and the next step follows a PI law,
+    H_next = H (1 / eps_n)^k_I (eps_{n-1} / eps_n)^k_P, limited to [0.2 H, 2 H] and [h_min, h_max].
+    No rollback: the controller only looks ahead (it needs no FMU state), so it is cheap, and it
+    keeps the coupling's energy error, not a state error, near its tolerance."""
+
+    def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-3, atol: float = 1e-4,
+                 h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2, k_i: float = 0.15,
+                 k_p: float = 0.2, before_step: Callable[[float], None] | None = None,
+                 after_accept: Callable[[float], None] | None = None):
+        self.algorithm, self.rtol, self.atol = algorithm, rtol, atol
+        self.h, self.h_min, self.h_max, self.k_i, self.k_p = h_initial, h_min, h_max, k_i, k_p
+        self.before_step, self.after_accept = before_step or (lambda t: None), after_accept or (lambda t: None)
+        self.accepted: list[float] = []
+        self.rejected = 0  # never: kept for the same report as AdaptiveStep
+        self._previous = 1.0
+
+    def advance(self, coupling: Coupling, t: float, t_end: float) -> float:
+        if not coupling.bonds:
+            raise ValueError("energy step control needs power bonds in the coupling")
+        while t_end - t > 1e-12 * max(1.0, abs(t_end)):
+            h = min(self.h, t_end - t)
+            self.before_step(t)
+            self.algorithm.step(coupling, t, h)
+            t += h
+            self.accepted.append(h)
+            self.after_accept(t)
+            residual, transferred = self.algorithm.bond_energies
+            eps = max(float(np.max(np.abs(residual) / (self.atol + self.rtol * transferred))), 1e-10)
+            factor = (1.0 / eps) ** self.k_i * (self._previous / eps) ** self.k_p
+            self._previous = eps
+            self.h = min(self.h_max, max(self.h_min, h * min(2.0, max(0.2, factor))))
         return t_end

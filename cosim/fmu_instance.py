@@ -114,15 +114,23 @@ class FmuInstance:
                 self._call(f"fmi2SetInteger({name})", self.fmu.setInteger, vr, [int(value)])
             elif kind == "Boolean":
                 self._call(f"fmi2SetBoolean({name})", self.fmu.setBoolean, vr, [bool(value)])
+            elif kind == "String":
+                self._call(f"fmi2SetString({name})", self.fmu.setString, vr, [str(value)])
             else:
                 raise TypeError(f"{self.name}: cannot set '{name}' of type {kind}")
 
-    def get(self, name: str) -> float:
+    @property
+    def max_output_derivative_order(self) -> int:
+        return int(self.model_description.coSimulation.maxOutputDerivativeOrder or 0)
+
+    def get(self, name: str) -> float | str:
         kind, vr = self.variables[name].type if name in self.variables else None, [self.vr(name)]
         if kind == "Real":
             return self._call(f"fmi2GetReal({name})", self.fmu.getReal, vr)[0]
         if kind in ("Integer", "Enumeration"):
             return self._call(f"fmi2GetInteger({name})", self.fmu.getInteger, vr)[0]
+        if kind == "String":
+            return self._call(f"fmi2GetString({name})", self.fmu.getString, vr)[0].decode()
         return self._call(f"fmi2GetBoolean({name})", self.fmu.getBoolean, vr)[0]
 
     def real_group(self, names: Sequence[str]) -> "RealGroup":
@@ -190,6 +198,17 @@ class RealGroup:
             self.values[:] = values
         self.instance._call("fmi2SetReal", self.instance.fmu.fmi2SetReal, self.instance.fmu.component,
                             self._vr, len(self.names), self._pointer)
+
+    def read_derivatives(self, order: int) -> np.ndarray:
+        """fmi2GetRealOutputDerivatives of the given order for these (output) variables."""
+        n = len(self.names)
+        if not hasattr(self, "_read_orders"):
+            self._read_orders = {k: (fmi2Integer * n)(*([k] * n)) for k in (1, 2)}
+            self._rates = np.zeros(n)
+            self._rates_pointer = self._rates.ctypes.data_as(ctypes.POINTER(fmi2Real))
+        self.instance._call("fmi2GetRealOutputDerivatives", self.instance.fmu.fmi2GetRealOutputDerivatives,
+                            self.instance.fmu.component, self._vr, n, self._read_orders[order], self._rates_pointer)
+        return self._rates.copy()
 
     def write_derivatives(self, derivatives: Iterable[float], order: int = 1) -> None:
         """fmi2SetRealInputDerivatives of the given order for these (input) variables."""

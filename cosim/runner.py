@@ -16,8 +16,9 @@ import numpy as np
 from . import results
 from .parameter_sets import mechanics_start_values
 from .scene import Scene
-from .signals import pose_reference, wrench
-from .system import PlatformSystem, RunFailed
+from .coupling import AdaptiveStep, EnergyStep
+from .signals import scene_trajectory
+from .system import PlatformSystem, RunFailed, StepControl
 
 DRIVE_OUTPUTS = {"pmsm": ("torque", "speed", "current.q"), "linear": ("force", "velocity", "current")}
 
@@ -33,6 +34,8 @@ class RunReport:
     largest_energy_residual: float  # [J] over the power bonds, per macro step
     warnings: list[str]
     failure: str | None = None
+    rejected_steps: int = 0
+    step_control: str = "fixed"
 
     @property
     def real_time_factor(self) -> float:
@@ -43,7 +46,9 @@ class RunReport:
         return 1.0 - self.fmi_seconds / self.wall
 
     def text(self) -> str:
-        lines = [f"{self.scene}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {self.macro_steps} macro steps, "
+        steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"
+                                                     if self.step_control != "fixed" else "")
+        lines = [f"{self.scene}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {steps}, "
                  f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
                  f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
                  f"{self.largest_energy_residual:.2e} J"]
@@ -71,25 +76,38 @@ def _progress_bar(start: float):
     return show
 
 
+def step_control(scene: Scene, system: PlatformSystem) -> StepControl | None:
+    """The scene's macro-step controller, or None for its fixed step. Step doubling measures the
+    error on the mechanics' outputs to the drives (leg angles and speeds, or lengths and velocities)."""
+    bounds = dict(rtol=scene.rtol, h_initial=scene.step, h_min=scene.h_min, h_max=scene.h_max)
+    if scene.step_control == "doubling":
+        return AdaptiveStep(system.algorithm, atol={"mechanics": scene.atol or 1e-3}, **bounds)
+    if scene.step_control == "energy":
+        return EnergyStep(system.algorithm, atol=scene.atol or 1e-4, **bounds)
+    return None
+
+
 def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat and
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
     FMU fails."""
     mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
-    system = PlatformSystem(scene.drive, mechanics_values, scene.drive_parameters, scene.order, scene.algorithm)
+    system = PlatformSystem(scene.drive, mechanics_values, scene.drive_parameters, scene.order, scene.algorithm,
+                            scene_trajectory(scene))
+    control = step_control(scene, system)
     effort, speed, current = DRIVE_OUTPUTS[scene.drive]
     system.record([], [effort, speed, current])
     start = time.perf_counter()
     failure = None
     try:
-        rows = system.run(scene.duration, scene.step, pose_reference(scene), wrench(scene), _progress_bar(start))
+        rows = system.run(scene.duration, scene.step, control, _progress_bar(start))
     except RunFailed as failed:
         rows, failure = failed.result, str(failed)
     wall = time.perf_counter() - start
     if sys.stderr.isatty() and wall > 2.0:
         print(file=sys.stderr)
     result = results.structured(rows, system.column_names)
-    warnings = [m.text for i in (system.mechanics, *system.drives) for m in i.messages if m.status == "warning"]
+    warnings = [m.text for i in system.coupling.instances.values() for m in i.messages if m.status == "warning"]
     fmi_seconds = system.fmi_seconds
     residuals = system.algorithm.energy_residuals
     system.free()
@@ -98,7 +116,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in ("x", "y", "z", "roll", "pitch", "yaw")])
     report = RunReport(scene.name, len(result) - 1, float(result["time"][-1]), wall, fmi_seconds, errors,
-                       max(residuals, default=0.0), warnings, failure)
+                       max(residuals, default=0.0), warnings, failure, control.rejected if control else 0,
+                       scene.step_control)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         stem = scene.path.stem

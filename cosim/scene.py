@@ -3,10 +3,19 @@
     [scene]       name, duration [s], step [s]
     [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives); [drive.parameters]
     [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
-    [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2
+    [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2,
+                  step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
+                  step doubling, with rollback) | "energy" (ECCO: the power bonds' energy residual),
+                  rtol, atol, h_min, h_max (of the adaptive controls; atol in m and rad of the legs'
+                  outputs for doubling, in J for energy)
+    [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
+                  pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset, sines = [{amplitude, frequency [Hz],
-                  phase [rad]}], steps = [{time, height}], ramps = [{start, end, slope}]
-    [load]        pulses = [{component = "force.z" | ..., value, start, end}]
+                  phase [rad]}] (up to 3), steps = [{time, height}] (2), ramps = [{start, end, slope}] (2)
+    [load]        pulses = [{component = "force.z" | ..., value, start, end}] (2 per component)
+
+The signals become parameters of the trajectory FMU (fmu/trajectory/), so a scene is FMUs and
+connections only.
 
 A wrong key or value is reported with its name and the line it stands on.
 """
@@ -79,6 +88,13 @@ class Scene:
     order: int
     trajectory: dict[str, Signal]
     pulses: list[Pulse]
+    table: Path | None = None
+    interpolation: str = "cubic"
+    step_control: str = "fixed"
+    rtol: float = 1e-3
+    atol: float | None = None  # the controller's default if None
+    h_min: float = 1e-6
+    h_max: float = 1e-2
 
 
 SCHEMA: dict[str, set[str]] = {
@@ -86,13 +102,15 @@ SCHEMA: dict[str, set[str]] = {
     "scene": {"name", "duration", "step"},
     "drive": {"kind", "parameters"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
-    "coupling": {"algorithm", "order"},
-    "trajectory": set(POSE),
+    "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max"},
+    "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
 }
 ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "height"},
              "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end"}}
+CAPACITY = {"sines": 3, "steps": 2, "ramps": 2, "pulses": 2}  # what the trajectory FMU holds
+STEP_CONTROLS = ("fixed", "doubling", "energy")
 
 
 def line_of(text: str, table: str, key: str) -> int:
@@ -145,6 +163,8 @@ def load_scene(path: str | Path) -> Scene:
 
     def items(table: str, values: dict, key: str, kind) -> list:
         out = []
+        if key != "pulses" and len(values.get(key, [])) > CAPACITY[key]:
+            raise fail(table, key, f"has {len(values[key])} entries; the trajectory FMU holds {CAPACITY[key]}")
         for entry in values.get(key, []):
             if not isinstance(entry, dict):
                 raise fail(table, key, "must be a list of inline tables")
@@ -173,8 +193,23 @@ def load_scene(path: str | Path) -> Scene:
     if parameter_set not in ("meng2010", "sumnu2015"):
         raise fail("mechanics", "parameter_set", f"= {parameter_set!r}: use 'meng2010' or 'sumnu2015'")
 
+    step_control = coupling.get("step_control", "fixed")
+    if step_control not in STEP_CONTROLS:
+        raise fail("coupling", "step_control", f"= {step_control!r}: use {', '.join(map(repr, STEP_CONTROLS))}")
+    tolerances = {key: number("coupling", coupling, key, default, positive=True)
+                  for key, default in (("rtol", 1e-3), ("h_min", 1e-6), ("h_max", 1e-2))}
+    atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
+
     trajectory = {}
-    for dof, spec in data.get("trajectory", {}).items():
+    signals = dict(data.get("trajectory", {}))
+    table_file, interpolation = signals.pop("table", None), signals.pop("interpolation", "cubic")
+    if table_file is not None:
+        if not isinstance(table_file, str) or not (path.parent / table_file).is_file():
+            raise fail("trajectory", "table", f"= {table_file!r}: no such file (relative to the scene's folder)")
+        table_file = (path.parent / table_file).resolve()
+    if interpolation not in ("cubic", "linear"):
+        raise fail("trajectory", "interpolation", f"= {interpolation!r}: use 'cubic' or 'linear'")
+    for dof, spec in signals.items():
         table = f"trajectory.{dof}"
         check_keys(table, spec, SCHEMA["trajectory.*"])
         offset = number(table, spec, "offset", 0.0)
@@ -184,8 +219,12 @@ def load_scene(path: str | Path) -> Scene:
     for pulse in pulses:
         if pulse.component not in WRENCH_COMPONENTS:
             raise fail("load", "pulses", f"component {pulse.component!r} is not one of {', '.join(WRENCH_COMPONENTS)}")
+        if sum(p.component == pulse.component for p in pulses) > CAPACITY["pulses"]:
+            raise fail("load", "pulses", f"has more than {CAPACITY['pulses']} pulses on {pulse.component}; the "
+                       "trajectory FMU holds that many per component")
     return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
                  step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
                  drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
                  mass_set=mechanics.get("mass_set", "heavy"), mechanics_parameters=dict(mechanics.get("parameters", {})),
-                 algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses)
+                 algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
+                 interpolation=interpolation, step_control=step_control, atol=atol, **tolerances)

@@ -1,55 +1,49 @@
-"""The scene's reference pose and external wrench as functions of time."""
+"""The scene's reference pose and external wrench as parameters of the trajectory FMU
+(fmu/trajectory/), which the platform system steps with the other FMUs."""
 
 from __future__ import annotations
 
-from typing import Callable
+from pathlib import Path
+from typing import Iterable, Mapping
 
-import numpy as np
-
-from .scene import WRENCH_COMPONENTS, Scene
+from .scene import CAPACITY, WRENCH_COMPONENTS, Pulse, Scene, Signal
 from .system import POSE
 
 
-def pose_reference(scene: Scene) -> Callable[[float], np.ndarray]:
-    """pose_ref(t) = offset + sum of sines + steps + ramps, per DOF (x, y, z, roll, pitch, yaw)."""
-    offset = np.zeros(6)
-    sines, steps, ramps = [], [], []
-    for k, dof in enumerate(POSE):
-        signal = scene.trajectory.get(dof)
-        if signal is None:
-            continue
-        offset[k] = signal.offset
-        sines += [(k, s.amplitude, 2 * np.pi * s.frequency, s.phase) for s in signal.sines]
-        steps += [(k, s.time, s.height) for s in signal.steps]
-        ramps += [(k, r.start, r.end, r.slope) for r in signal.ramps]
-    sine = np.array(sines).reshape(-1, 4)
-    sine_dof = sine[:, 0].astype(int)
+def trajectory_parameters(trajectory: Mapping[str, Signal], pulses: Iterable[Pulse] = (),
+                          table: str | Path | None = None, interpolation: str = "cubic") -> dict[str, float | str]:
+    """Start values of the trajectory FMU for these signals. Every coordinate's offset is set (0
+    where the scene names none). Raises ValueError when a signal has more parts than the FMU holds."""
+    values: dict[str, float | str] = {}
+    for dof in POSE:
+        signal = trajectory.get(dof, Signal())
+        values[f"{dof}.offset"] = signal.offset
+        for kind in ("sines", "steps", "ramps"):
+            if len(getattr(signal, kind)) > CAPACITY[kind]:
+                raise ValueError(f"trajectory.{dof}: {len(getattr(signal, kind))} {kind}; the trajectory FMU holds "
+                                 f"{CAPACITY[kind]}")
+        for k, sine in enumerate(signal.sines, start=1):
+            values.update({f"{dof}.sine[{k}].amplitude": sine.amplitude, f"{dof}.sine[{k}].frequency": sine.frequency,
+                           f"{dof}.sine[{k}].phase": sine.phase})
+        for k, step in enumerate(signal.steps, start=1):
+            values.update({f"{dof}.step[{k}].time": step.time, f"{dof}.step[{k}].height": step.height})
+        for k, ramp in enumerate(signal.ramps, start=1):
+            values.update({f"{dof}.ramp[{k}].start": ramp.start, f"{dof}.ramp[{k}].end": ramp.end,
+                           f"{dof}.ramp[{k}].slope": ramp.slope})
+    count = dict.fromkeys(WRENCH_COMPONENTS, 0)
+    for pulse in pulses:
+        count[pulse.component] += 1
+        k = count[pulse.component]
+        if k > CAPACITY["pulses"]:
+            raise ValueError(f"load: more than {CAPACITY['pulses']} pulses on {pulse.component}")
+        prefix = f"load.{pulse.component}.pulse[{k}]"
+        values.update({f"{prefix}.value": pulse.value, f"{prefix}.start": pulse.start, f"{prefix}.end": pulse.end})
+    if table:
+        values["table.file"] = str(Path(table).resolve())
+        values["table.interpolation"] = {"linear": 1, "cubic": 2}[interpolation]
+    return values
 
-    def reference(t: float) -> np.ndarray:
-        pose = offset.copy()
-        if len(sine):
-            np.add.at(pose, sine_dof, sine[:, 1] * np.sin(sine[:, 2] * t + sine[:, 3]))
-        for k, time, height in steps:
-            if t >= time:
-                pose[k] += height
-        for k, start, end, slope in ramps:
-            pose[k] += slope * (min(t, end) - start) if t > start else 0.0
-        return pose
 
-    return reference
-
-
-def wrench(scene: Scene) -> Callable[[float], np.ndarray] | None:
-    """The load pulses as [F (3), M (3)] on the platform, or None without pulses."""
-    if not scene.pulses:
-        return None
-    pulses = [(WRENCH_COMPONENTS.index(p.component), p.value, p.start, p.end) for p in scene.pulses]
-
-    def load(t: float) -> np.ndarray:
-        w = np.zeros(6)
-        for k, value, start, end in pulses:
-            if start <= t <= end:
-                w[k] += value
-        return w
-
-    return load
+def scene_trajectory(scene: Scene) -> dict[str, float | str]:
+    """The trajectory FMU's start values for a scene."""
+    return trajectory_parameters(scene.trajectory, scene.pulses, scene.table, scene.interpolation)

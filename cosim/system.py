@@ -1,17 +1,19 @@
-"""The platform system: the mechanics FMU and six drive FMUs wired as ../shared/INTERFACES.md says,
-stepped together at a fixed communication step.
+"""The platform system: the trajectory FMU (reference pose and external wrench), the mechanics FMU
+and six drive FMUs, wired as ../shared/INTERFACES.md says, stepped together at a fixed
+communication step or under a step controller of cosim.coupling.
 
 The wiring lives in DRIVES: swapping the drive kind changes those connections and nothing else.
-Coupling: cosim.coupling's Gauss-Seidel with first-order extrapolation (by default): the drives
-step first, their inputs extrapolated linearly from the mechanics' last two samples (so a drive
-also sees the rate of its leg reference); the mechanics then steps with each drive effort
-interpolated linearly between its values at t and t + h. cosim.runner runs a scene on it.
+Coupling: cosim.coupling's Gauss-Seidel with first-order extrapolation (by default): the
+trajectory steps first and gives its outputs' exact derivatives; the drives step next, their
+inputs extrapolated linearly from the mechanics' last two samples (so a drive also sees the rate of
+its leg reference); the mechanics then steps with each drive effort interpolated linearly between
+its values at t and t + h. cosim.runner runs a scene on it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Protocol
 
 import numpy as np
 from fmpy import extract
@@ -50,29 +52,42 @@ class RunFailed(RuntimeError):
         self.error, self.result = error, result
 
 
-PoseReference = Callable[[float], np.ndarray]
-Wrench = Callable[[float], np.ndarray]  # [F (3), M (3)] on the platform, base frame
 WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
 
 
+class StepControl(Protocol):
+    """An adaptive macro-step controller of cosim.coupling (AdaptiveStep, EnergyStep)."""
+    accepted: list[float]
+    rejected: int
+    before_step: Callable[[float], None]
+    after_accept: Callable[[float], None]
+
+    def advance(self, coupling: Coupling, t: float, t_end: float) -> float: ...
+
+
 class PlatformSystem:
-    """Mechanics plus six drives of one kind, initialized with the given start values."""
+    """Trajectory, mechanics and six drives of one kind, initialized with the given start values
+    (trajectory_values: the trajectory FMU's parameters, see cosim.signals)."""
 
     def __init__(self, drive: str, mechanics_values: Mapping[str, float] | None = None,
                  drive_values: Mapping[str, float] | None = None, order: int = 1,
-                 algorithm: str = "gauss-seidel"):
+                 algorithm: str = "gauss-seidel", trajectory_values: Mapping[str, float | str] | None = None):
         if drive not in DRIVES:
             raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
         self.wiring = wiring = DRIVES[drive]
         mechanics_path, drive_path = fmu_path("mechanics"), fmu_path(wiring.fmu)
         drive_unzip = extract(str(drive_path))
+        self.trajectory = FmuInstance(fmu_path("trajectory"), "trajectory")
         self.mechanics = FmuInstance(mechanics_path, "mechanics")
         self.drives = [FmuInstance(drive_path, f"{drive}{i}", unzip_dir=drive_unzip) for i in range(1, 7)]
+        self.trajectory.initialize(dict(trajectory_values or {}))
         self.mechanics.initialize(dict(mechanics_values or {}))
         for d in self.drives:
             d.initialize(dict(drive_values or {}))
-        instances = {"mechanics": self.mechanics, **{d.name: d for d in self.drives}}
-        connections, bonds = [], []
+        instances = {"trajectory": self.trajectory, "mechanics": self.mechanics, **{d.name: d for d in self.drives}}
+        connections = [Connection(("trajectory", name), ("mechanics", name))
+                       for name in [*[f"pose_ref.{a}" for a in POSE], *WRENCH]]
+        bonds = []
         for i, d in enumerate(self.drives, start=1):
             for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
                 connections.append(Connection(("mechanics", output.format(i=i)), (d.name, drive_input)))
@@ -82,9 +97,8 @@ class PlatformSystem:
         if algorithm == "jacobi":
             self.algorithm = Jacobi(order)
         else:
-            self.algorithm = GaussSeidel(order, [d.name for d in self.drives] + ["mechanics"])
-        self._pose_ref = self.mechanics.real_group([f"pose_ref.{a}" for a in POSE])
-        self._wrench = self.mechanics.real_group(list(WRENCH))
+            self.algorithm = GaussSeidel(order, ["trajectory", *[d.name for d in self.drives], "mechanics"])
+        self.pose_ref = self.trajectory.real_group([f"pose_ref.{a}" for a in POSE])
         self.pose = self.mechanics.real_group([f"pose.{a}" for a in POSE])
         self.record_names: list[str] = []
         self._record_mechanics = None
@@ -111,37 +125,49 @@ class PlatformSystem:
     def column_names(self) -> list[str]:
         return ["time", *[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *self.record_names]
 
-    def run(self, stop_time: float, step: float, pose_ref: PoseReference, wrench: Wrench | None = None,
+    def _row(self) -> np.ndarray:
+        return np.r_[self.time, self.pose_ref.read(), self.pose.read(), self._recorded()]
+
+    def run(self, stop_time: float, step: float, control: StepControl | None = None,
             progress: Callable[[float], None] | None = None) -> np.ndarray:
-        """Steps to stop_time; returns rows of time, pose_ref (6), pose (6) and the recorded
-        outputs (column_names) at every communication point. pose_ref and the wrench are held over
-        each step. `progress` is called with the fraction done every 100 steps."""
-        n = int(round((stop_time - self.time) / step))
-        out = np.zeros((n + 1, 13 + len(self.record_names)))
-
-        def set_external(t: float) -> None:
-            self._pose_ref.write(pose_ref(t))
-            if wrench:
-                self._wrench.write(wrench(t))
-
-        set_external(self.time)
+        """Steps to stop_time, at the fixed macro step `step` or under `control` (an adaptive step
+        controller of cosim.coupling that starts from `step`); returns rows of time, pose_ref (6),
+        pose (6) and the recorded outputs (column_names) at every communication point.
+        `progress` is called with the fraction done now and then. On an FMU error, raises RunFailed
+        with the rows up to the last good communication point."""
         self.algorithm.initialize(self.coupling, self.time)
-        out[0] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
-        for row in range(1, n + 1):
-            try:
-                self.algorithm.step(self.coupling, self.time, step)
-            except FmuError as error:
-                raise RunFailed(error, out[:row]) from error
-            set_external(self.time)
-            out[row] = np.r_[self.time, self._pose_ref.values, self.pose.read(), self._recorded()]
-            if progress and row % 100 == 0:
-                progress(row / n)
-        return out
+        start = self.time
+        if control is None:
+            n = int(round((stop_time - start) / step))
+            out = np.zeros((n + 1, 13 + len(self.record_names)))
+            out[0] = self._row()
+            for row in range(1, n + 1):
+                try:
+                    self.algorithm.step(self.coupling, self.time, step)
+                except FmuError as error:
+                    raise RunFailed(error, out[:row]) from error
+                out[row] = self._row()
+                if progress and row % 100 == 0:
+                    progress(row / n)
+            return out
+        rows = [self._row()]
+
+        def record(t: float) -> None:
+            rows.append(self._row())
+            if progress and len(rows) % 100 == 0:
+                progress((t - start) / (stop_time - start))
+
+        control.after_accept = record
+        try:
+            control.advance(self.coupling, start, stop_time)
+        except FmuError as error:
+            raise RunFailed(error, np.array(rows)) from error
+        return np.array(rows)
 
     @property
     def fmi_seconds(self) -> float:
-        return sum(i.fmi_seconds for i in (self.mechanics, *self.drives))
+        return sum(i.fmi_seconds for i in self.coupling.instances.values())
 
     def free(self) -> None:
-        for instance in (self.mechanics, *self.drives):
+        for instance in self.coupling.instances.values():
             instance.free()

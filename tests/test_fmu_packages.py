@@ -82,7 +82,7 @@ def test_project_parameter_copies_equal_the_canonical_sets(name):
     assert ours == canonical
 
 
-FMUS = ["pmsm_drive", "mechanics", "linear_motor"]
+FMUS = ["pmsm_drive", "mechanics", "linear_motor", "trajectory"]
 
 
 @pytest.mark.parametrize("name", FMUS)

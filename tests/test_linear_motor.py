@@ -17,6 +17,8 @@ from cosim.fmu_instance import FmuError, FmuInstance
 from cosim.fmus import ROOT, fmu_path
 from cosim.loads import RigidInertia
 from cosim.parameter_sets import mechanics_start_values
+from cosim.scene import Signal, Sine
+from cosim.signals import trajectory_parameters
 from cosim.system import PlatformSystem
 
 with open(ROOT / "params" / "sumnu2015.toml", "rb") as _f:
@@ -224,14 +226,21 @@ def sumnu_case(initial, reference):
 
 
 W = 3.0
+
+
+def sines(offsets: dict[str, float], amplitudes: dict[str, float]) -> dict[str, float | str]:
+    """Trajectory FMU parameters: offset + amplitude sin(W t) per coordinate."""
+    return trajectory_parameters({dof: Signal(offsets.get(dof, 0.0), [Sine(a, W / (2 * np.pi))] if a else [])
+                                  for dof in ("x", "y", "z", "roll", "pitch", "yaw")
+                                  for a in [amplitudes.get(dof, 0.0)]})
+
+
 CASES = {  # Section 5.3: start pose, trajectory, the thesis' error bounds (x, y, z [m]; roll, pitch, yaw [rad])
-    "I": (sumnu_case([-1.5, 0, 1, 0, 0, 0],
-                     lambda t: np.array([-1.5 + 0.1 * np.sin(W * t), 0.2 * np.sin(W * t), 1 + 0.2 * np.sin(W * t), 0, 0, 0])),
+    "I": (sumnu_case([-1.5, 0, 1, 0, 0, 0], sines({"x": -1.5, "z": 1}, {"x": 0.1, "y": 0.2, "z": 0.2})),
           [1e-4, 1e-4, 1e-3, 1e-3, 1e-4, 1e-4]),
-    "II": (sumnu_case([-1.3, 0.2, 1.2, 0, 0, 0], lambda t: np.array([-1.5, 0, 1, 0, 0, 0.35 * np.sin(W * t)])),
+    "II": (sumnu_case([-1.3, 0.2, 1.2, 0, 0, 0], sines({"x": -1.5, "z": 1}, {"yaw": 0.35})),
            [1e-7, 1e-7, 1e-3, 1e-7, 1e-7, 1e-3]),
-    "III": (sumnu_case([-1.3, 0.2, 1.2, 0, 0, 0],
-                       lambda t: np.array([-1.5 + 0.1 * np.sin(W * t), 0, 1, 0.1 * np.sin(W * t), 0, 0])),
+    "III": (sumnu_case([-1.3, 0.2, 1.2, 0, 0, 0], sines({"x": -1.5, "z": 1}, {"x": 0.1, "roll": 0.1})),
             [1e-5, 4e-4, 1e-3, 1e-3, 1e-3, 1e-3]),
 }
 
@@ -247,9 +256,9 @@ def test_sumnu_case_studies_with_linear_motors(case):
       III: x 2.2e-4 [1e-5], y 4.5e-4 [4e-4], z 2.8e-4 [1e-3], roll 2.5e-3 [1e-3], pitch 7.6e-4 [1e-3], yaw 6.7e-5 [1e-3]
     within a factor 1 to 30 of the thesis, whose PID constants are not published."""
     (values, reference), bounds = CASES[case]
-    system = PlatformSystem("linear", values)
+    system = PlatformSystem("linear", values, trajectory_values=reference)
     try:
-        r = system.run(4.0, 1e-3, reference)
+        r = system.run(4.0, 1e-3)
     finally:
         system.free()
     error = np.abs(r[:, 7:13] - r[:, 1:7])[r[:, 0] > 2.0].max(axis=0)
@@ -266,14 +275,13 @@ def test_swapping_the_drive_changes_one_setting():
     need a 0.2 ms coupling step (at 1 ms they are not stable)."""
     values = mechanics_start_values("sumnu2015")
 
-    def reference(t):
-        return np.array([-1.5 + 0.01 * np.sin(W * t), 0.02 * np.sin(W * t), 1 + 0.02 * np.sin(W * t), 0, 0, 0])
+    reference = sines({"x": -1.5, "z": 1}, {"x": 0.01, "y": 0.02, "z": 0.02})
 
     bounds = {"pmsm": 5e-3, "linear": 3e-3}
     for drive, bound in bounds.items():
-        system = PlatformSystem(drive, values)
+        system = PlatformSystem(drive, values, trajectory_values=reference)
         try:
-            r = system.run(3.0, 2e-4, reference)
+            r = system.run(3.0, 2e-4)
         finally:
             system.free()
         error = np.abs(r[:, 7:13] - r[:, 1:7])[r[:, 0] > 1.5].max(axis=0)

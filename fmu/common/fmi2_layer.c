@@ -76,12 +76,13 @@ static void set_start_values(FmuInstance *fmu) {
     for (int vr = 1; vr < VR_COUNT; vr++) {
         const FmuVariable *var = &fmu_variables[vr];
         if (var->type == FMU_REAL) *(double *)value_address(fmu, vr) = var->start;
+        else if (var->type == FMU_STRING) ((FmuText *)value_address(fmu, vr))->text[0] = '\0';
         else *(int *)value_address(fmu, vr) = (int)var->start;
     }
 }
 
 static const char *type_name(FmuType t) {
-    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "Boolean";
+    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : t == FMU_BOOLEAN ? "Boolean" : "String";
 }
 
 static int check_reference(FmuInstance *fmu, const char *call, fmi2ValueReference vr, FmuType type) {
@@ -165,15 +166,35 @@ double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t) {
 int fmu_reject(const FmuInstance *fmu, int vr, const char *rule) {
     const FmuVariable *var = &fmu_variables[vr];
     const char *address = (const char *)&fmu->s.v + var->offset;
+    if (var->type == FMU_STRING) {
+        fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = \"%s\": %s", var->name,
+                ((const FmuText *)address)->text, rule);
+        return 1;
+    }
     double value = var->type == FMU_REAL ? *(const double *)address : *(const int *)address;
     fmu_log(fmu, fmi2Error, "logStatusError", "parameter '%s' = %g %s: %s", var->name, value, var->unit, rule);
     return 1;
+}
+
+void *fmu_calloc(const FmuInstance *fmu, size_t count, size_t size) {
+    return fmu->callbacks.allocateMemory(count, size);
+}
+
+void fmu_free(const FmuInstance *fmu, void *memory) {
+    if (memory) fmu->callbacks.freeMemory(memory);
+}
+
+void fmu_set_model_data(FmuInstance *fmu, void *data, void (*release)(FmuInstance *fmu, void *data)) {
+    if (fmu->model_data && fmu->free_model_data) fmu->free_model_data(fmu, fmu->model_data);
+    fmu->model_data = data;
+    fmu->free_model_data = release;
 }
 
 double *fmu_real(FmuInstance *fmu, int vr) { return (double *)value_address(fmu, vr); }
 
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }
 
+#if MODEL_N_STATES > 0
 fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step) {
     OdeSolver *solver = &fmu->s.solver;
     solver->method = fmu->s.v.solver_method;
@@ -187,6 +208,7 @@ fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx,
               fmu->s.time, ode_result_text(r));
     return fmi2Error;
 }
+#endif
 
 /* ------------------------------------------------------------------------------------------ */
 /* Instance life cycle                                                                         */
@@ -220,6 +242,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 }
 
 static void reset_to_start(FmuInstance *fmu) {
+    fmu_set_model_data(fmu, NULL, NULL);
     memset(&fmu->s, 0, sizeof fmu->s);
     fmu->s.phase = PHASE_INSTANTIATED;
     set_start_values(fmu);
@@ -270,6 +293,7 @@ void fmi2FreeInstance(fmi2Component c) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!fmu) return;
     fmi2CallbackFreeMemory release = fmu->callbacks.freeMemory;
+    fmu_set_model_data(fmu, NULL, NULL);
     release(fmu->instance_name);
     release(fmu);
 }
@@ -360,11 +384,13 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
-    (void)vr; (void)value;
     if (!allowed(fmu, "fmi2GetString", GET_PHASES)) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
-    LOG_ERROR(fmu, "fmi2GetString: %s has no String variables", MODEL_IDENTIFIER_STRING);
-    return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2GetString: NULL array"); return fmi2Error; }
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, "fmi2GetString", vr[i], FMU_STRING)) return fmi2Error;
+        value[i] = ((FmuText *)value_address(fmu, (int)vr[i]))->text;
+    }
+    return fmi2OK;
 }
 
 #define SET_PHASES (PHASE_INSTANTIATED | PHASE_INITIALIZATION | PHASE_STEP_COMPLETE)
@@ -416,11 +442,27 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
-    (void)vr; (void)value;
     if (!allowed(fmu, "fmi2SetString", SET_PHASES)) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
-    LOG_ERROR(fmu, "fmi2SetString: %s has no String variables", MODEL_IDENTIFIER_STRING);
-    return fmi2Error;
+    if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2SetString: NULL array"); return fmi2Error; }
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, "fmi2SetString", vr[i], FMU_STRING) ||
+            !check_settable(fmu, "fmi2SetString", (int)vr[i], fmu_variables[vr[i]].min))
+            return fmi2Error;
+        if (value[i] && strlen(value[i]) >= FMU_TEXT_MAX) {
+            LOG_ERROR(fmu, "fmi2SetString: '%s' rejected: longer than %d bytes", fmu_variables[vr[i]].name,
+                      FMU_TEXT_MAX - 1);
+            return fmi2Error;
+        }
+    }
+    ModelVariables before = fmu->s.v;
+    int any_input = 0, any_parameter = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        FmuText *text = (FmuText *)value_address(fmu, (int)vr[i]);
+        strcpy(text->text, value[i] ? value[i] : ""); /* the FMU keeps its own copy (FMI 2.0, 2.1.7) */
+        if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
+        else any_parameter = 1;
+    }
+    return after_set(fmu, &before, any_input, any_parameter);
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -558,9 +600,34 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
-    (void)vr; (void)nvr; (void)order; (void)value;
-    LOG_ERROR((FmuInstance *)c, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=0)");
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!allowed(fmu, "fmi2GetRealOutputDerivatives", PHASE_STEP_COMPLETE | PHASE_STEP_FAILED)) return fmi2Error;
+#if MODEL_MAX_OUTPUT_DERIVATIVE_ORDER > 0
+    if (nvr > 0 && (!vr || !order || !value)) {
+        LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: NULL array");
+        return fmi2Error;
+    }
+    refresh_outputs(fmu);
+    for (size_t i = 0; i < nvr; i++) {
+        if (!check_reference(fmu, "fmi2GetRealOutputDerivatives", vr[i], FMU_REAL)) return fmi2Error;
+        if (fmu_variables[vr[i]].causality != FMU_OUTPUT) {
+            LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: '%s' is not an output", fmu_variables[vr[i]].name);
+            return fmi2Error;
+        }
+        if (order[i] < 1 || order[i] > MODEL_MAX_OUTPUT_DERIVATIVE_ORDER) {
+            LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: order %d of '%s' not in 1..%d", (int)order[i],
+                      fmu_variables[vr[i]].name, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
+            return fmi2Error;
+        }
+        value[i] = model_output_derivative(fmu, (int)vr[i], order[i]);
+    }
+    return fmi2OK;
+#else
+    (void)vr; (void)order; (void)value;
+    if (nvr == 0) return fmi2OK;
+    LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=0)");
     return fmi2Error;
+#endif
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
@@ -586,8 +653,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         return fmi2Error;
     }
     fmu->s.time = t0 + h;
+#if MODEL_N_STATES > 0
     fmu->s.v.solver_steps = (int)fmu->s.solver.steps;
     fmu->s.v.solver_rejected = (int)fmu->s.solver.rejected;
+#endif
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
     memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given);

@@ -33,13 +33,17 @@ typedef struct {
     ModelInternal internal;                /* the model's own discrete state */
 } FmuSnapshot;
 
-typedef struct {
+typedef struct FmuInstance {
     FmuSnapshot s;
     char *instance_name;
     fmi2CallbackFunctions callbacks;
     int logging_on;
     int log_events, log_warnings, log_errors, log_all; /* categories */
     int outputs_stale;                     /* inputs or parameters changed since outputs were computed */
+    /* Read-only data a model derives from its fixed parameters (e.g. a table read from a file):
+     * kept outside the snapshot, so FMU states stay small; released with fmu_set_model_data. */
+    void *model_data;
+    void (*free_model_data)(struct FmuInstance *fmu, void *data);
 } FmuInstance;
 
 /* ---- hooks implemented by each model (model.c) ---- */
@@ -54,7 +58,20 @@ fmi2Status model_do_step(FmuInstance *fmu, double h);
 /* Computes every output from the state and the inputs at fmu->s.time. */
 void model_compute_outputs(FmuInstance *fmu);
 
+#if MODEL_MAX_OUTPUT_DERIVATIVE_ORDER > 0
+/* The derivative of the given order (1..MODEL_MAX_OUTPUT_DERIVATIVE_ORDER) of output `vr` with
+ * respect to time at fmu->s.time (fmi2GetRealOutputDerivatives). */
+double model_output_derivative(FmuInstance *fmu, int vr, int order);
+#endif
+
 /* ---- services of the layer for models ---- */
+
+/* Memory from the environment's allocator (zeroed), and its release. */
+void *fmu_calloc(const FmuInstance *fmu, size_t count, size_t size);
+void fmu_free(const FmuInstance *fmu, void *memory);
+/* Replaces the model data (releasing the old with its free function) by `data`, released later
+ * with `release` (at fmi2Reset and fmi2FreeInstance). */
+void fmu_set_model_data(FmuInstance *fmu, void *data, void (*release)(FmuInstance *fmu, void *data));
 
 void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, const char *format, ...)
 #if defined(__GNUC__)

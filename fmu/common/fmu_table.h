@@ -5,7 +5,8 @@
  *
  *   X(type, field, "name", causality, variability, "unit", start, min, max, "description")
  *
- *   type         Real | Integer | Boolean
+ *   type         Real | Integer | Boolean | String (a String has no start, min or max: write 0; it
+ *                starts empty and holds at most FMU_TEXT_MAX - 1 bytes)
  *   field        C name of the variable in ModelVariables (the FMI name with '.' -> '_')
  *   causality    parameter | input | output | local
  *   variability  fixed | tunable | discrete | continuous
@@ -41,19 +42,30 @@
     X(Integer, solver_rejected, "solver.rejected", output, discrete, "", 0, -FMU_INF, FMU_INF,     \
       "Internal solver steps rejected by the error control since the start")
 
+#define FMU_TEXT_MAX 1024
+typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's value, inside the snapshot */
+
 #include "model_guid.h" /* MODEL_GUID, written by the build */
 #include "variables.h"
 
-typedef enum { FMU_REAL, FMU_INTEGER, FMU_BOOLEAN } FmuType;
+/* Highest order of fmi2GetRealOutputDerivatives a model provides (it then implements
+ * model_output_derivative); 0 for none. */
+#ifndef MODEL_MAX_OUTPUT_DERIVATIVE_ORDER
+#define MODEL_MAX_OUTPUT_DERIVATIVE_ORDER 0
+#endif
+
+typedef enum { FMU_REAL, FMU_INTEGER, FMU_BOOLEAN, FMU_STRING } FmuType;
 typedef enum { FMU_PARAMETER, FMU_INPUT, FMU_OUTPUT, FMU_LOCAL } FmuCausality;
 typedef enum { FMU_FIXED, FMU_TUNABLE, FMU_DISCRETE, FMU_CONTINUOUS } FmuVariability;
 
 #define FMU_TYPE_Real FMU_REAL
 #define FMU_TYPE_Integer FMU_INTEGER
 #define FMU_TYPE_Boolean FMU_BOOLEAN
+#define FMU_TYPE_String FMU_STRING
 #define FMU_CTYPE_Real double
 #define FMU_CTYPE_Integer int
 #define FMU_CTYPE_Boolean int
+#define FMU_CTYPE_String FmuText
 #define FMU_CAUSALITY_parameter FMU_PARAMETER
 #define FMU_CAUSALITY_input FMU_INPUT
 #define FMU_CAUSALITY_output FMU_OUTPUT

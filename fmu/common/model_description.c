@@ -28,7 +28,7 @@ static const UnitDefinition UNITS[] = {
     {"Wb", 1, 2, -2, -1, 0},    {"W", 1, 2, -3, 0, 0},       {"J", 1, 2, -2, 0, 0},
     {"N.m/A", 1, 2, -2, -1, 0}, {"N/A", 1, 1, -2, -1, 0},    {"V.s/m", 1, 1, -2, -1, 0},
     {"A.s/rad", 0, 0, 1, 1, -1}, {"A/rad", 0, 0, 0, 1, -1},  {"V/A", 1, 2, -3, -2, 0},
-    {"A/m", 0, -1, 0, 1, 0},    {"1/A", 0, 0, 0, -1, 0},    {"1/m", 0, -1, 0, 0, 0},    {"kg/m", 1, -1, 0, 0, 0},   {"N/m", 1, 0, -2, 0, 0},    {"N/(m.s)", 1, 0, -3, 0, 0},    {"V/(A.s)", 1, 2, -4, -2, 0},    {"1/(A.s)", 0, 0, -1, -1, 0},    {"A/(m.s)", 0, -1, -1, 1, 0}, {"A.s/m", 0, -1, 1, 1, 0},
+    {"Hz", 0, 0, -1, 0, 0},     {"A/m", 0, -1, 0, 1, 0},    {"1/A", 0, 0, 0, -1, 0},    {"1/m", 0, -1, 0, 0, 0},    {"kg/m", 1, -1, 0, 0, 0},   {"N/m", 1, 0, -2, 0, 0},    {"N/(m.s)", 1, 0, -3, 0, 0},    {"V/(A.s)", 1, 2, -4, -2, 0},    {"1/(A.s)", 0, 0, -1, -1, 0},    {"A/(m.s)", 0, -1, -1, 1, 0}, {"A.s/m", 0, -1, 1, 1, 0},
 };
 #define N_UNITS (sizeof UNITS / sizeof UNITS[0])
 
@@ -61,12 +61,13 @@ static const char *variability_name(FmuVariability v) {
 }
 
 static const char *type_element(FmuType t) {
-    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "Boolean";
+    return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : t == FMU_BOOLEAN ? "Boolean" : "String";
 }
 
 static int has_start(const FmuVariable *v) { return v->causality != FMU_OUTPUT; }
 
 static void put_number(FILE *f, FmuType type, double value) {
+    if (type == FMU_STRING) return; /* Strings start empty */
     if (type == FMU_REAL) fprintf(f, "%.17g", value);
     else if (type == FMU_INTEGER) fprintf(f, "%d", (int)value);
     else fputs(value != 0.0 ? "true" : "false", f);
@@ -84,9 +85,9 @@ static int write_model_description(const char *path, int n_sources, char **sourc
                "  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n",
             MODEL_VERSION);
     fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
-               "    canInterpolateInputs=\"true\" maxOutputDerivativeOrder=\"0\" canGetAndSetFMUstate=\"true\"\n"
+               "    canInterpolateInputs=\"true\" maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUstate=\"true\"\n"
                "    canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\">\n",
-            MODEL_IDENTIFIER_STRING);
+            MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
     fprintf(f, "    <SourceFiles>\n");
     for (int i = 0; i < n_sources; i++) {
         const char *base = strrchr(sources[i], '/');
@@ -139,8 +140,8 @@ static int write_model_description(const char *path, int n_sources, char **sourc
         put_escaped(f, v->description);
         fprintf(f, "\">\n      <%s", type_element(v->type));
         if (v->type == FMU_REAL && v->unit[0]) fprintf(f, " unit=\"%s\"", v->unit);
-        if (v->type != FMU_BOOLEAN && isfinite(v->min)) { fputs(" min=\"", f); put_number(f, v->type, v->min); fputc('"', f); }
-        if (v->type != FMU_BOOLEAN && isfinite(v->max)) { fputs(" max=\"", f); put_number(f, v->type, v->max); fputc('"', f); }
+        if (v->type != FMU_BOOLEAN && v->type != FMU_STRING && isfinite(v->min)) { fputs(" min=\"", f); put_number(f, v->type, v->min); fputc('"', f); }
+        if (v->type != FMU_BOOLEAN && v->type != FMU_STRING && isfinite(v->max)) { fputs(" max=\"", f); put_number(f, v->type, v->max); fputc('"', f); }
         if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
         fprintf(f, "/>\n    </ScalarVariable>\n");
     }
