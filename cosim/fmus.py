@@ -18,7 +18,7 @@ TEST_FMU_DIR = BUILD_DIR / "test_fmus"
 
 def _newest_source_time() -> float:
     paths = [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*"),
-             *(ROOT / "tests" / "fmus").rglob("*")]
+             *(ROOT / "tests" / "fmus").rglob("*"), *(ROOT / "cosim" / "native").rglob("*.c")]
     return max(p.stat().st_mtime for p in paths if p.is_file())
 
 
@@ -48,4 +48,14 @@ def fmu_path(name: str, rebuild_if_stale: bool = True, test: bool = False) -> Pa
         build_fmus()
     if not path.exists():
         raise FileNotFoundError(f"no FMU '{name}': {path} was not built (is there a fmu/{name}/ folder?)")
+    return path
+
+
+def native_library_path(rebuild_if_stale: bool = True) -> Path:
+    """Path of the master's native inner loop (cosim/native/loop.c), built like the FMUs."""
+    path = BUILD_DIR / "lib" / "libcosim_loop.so"
+    if rebuild_if_stale and (not path.exists() or path.stat().st_mtime < _newest_source_time()):
+        build_fmus()
+    if not path.exists():
+        raise FileNotFoundError(f"{path} was not built")
     return path

@@ -21,6 +21,7 @@ from fmpy import extract
 from .coupling import Bond, Connection, Coupling, GaussSeidel, Jacobi
 from .fmu_instance import FmuError, FmuInstance
 from .fmus import fmu_path
+from .native import NativeLoop
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 
@@ -103,6 +104,7 @@ class PlatformSystem:
         self.record_names: list[str] = []
         self._record_mechanics = None
         self._record_drives: list = []
+        self._columns = [*[("trajectory", f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE]]
 
     def record(self, mechanics_outputs: list[str], drive_outputs: list[str]) -> None:
         """Also record these mechanics outputs and, for each drive, these outputs (columns
@@ -110,6 +112,9 @@ class PlatformSystem:
         self._record_mechanics = self.mechanics.real_group(mechanics_outputs) if mechanics_outputs else None
         self._record_drives = [d.real_group(drive_outputs) for d in self.drives] if drive_outputs else []
         self.record_names = [*mechanics_outputs, *[f"{n}[{i}]" for n in drive_outputs for i in range(1, 7)]]
+        self._columns = [*[("trajectory", f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
+                         *[("mechanics", n) for n in mechanics_outputs],
+                         *[(d.name, n) for n in drive_outputs for d in self.drives]]
 
     def _recorded(self) -> np.ndarray:
         parts = [self._record_mechanics.read()] if self._record_mechanics else []
@@ -129,26 +134,37 @@ class PlatformSystem:
         return np.r_[self.time, self.pose_ref.read(), self.pose.read(), self._recorded()]
 
     def run(self, stop_time: float, step: float, control: StepControl | None = None,
-            progress: Callable[[float], None] | None = None) -> np.ndarray:
+            progress: Callable[[float], None] | None = None, native: bool = True) -> np.ndarray:
         """Steps to stop_time, at the fixed macro step `step` or under `control` (an adaptive step
         controller of cosim.coupling that starts from `step`); returns rows of time, pose_ref (6),
         pose (6) and the recorded outputs (column_names) at every communication point.
         `progress` is called with the fraction done now and then. On an FMU error, raises RunFailed
-        with the rows up to the last good communication point."""
+        with the rows up to the last good communication point. At a fixed step, `native` runs the
+        steps after the first in the C inner loop (cosim.native), which gives the same numbers."""
         self.algorithm.initialize(self.coupling, self.time)
         start = self.time
         if control is None:
             n = int(round((stop_time - start) / step))
             out = np.zeros((n + 1, 13 + len(self.record_names)))
             out[0] = self._row()
-            for row in range(1, n + 1):
+            loop = NativeLoop(self.coupling, self.algorithm, self._columns, "mechanics") if native else None
+            row = 1
+            while row <= n:
                 try:
-                    self.algorithm.step(self.coupling, self.time, step)
+                    if loop is None or row == 1:  # the first step (the start-up) always in Python
+                        self.algorithm.step(self.coupling, self.time, step)
+                        out[row] = self._row()
+                        row += 1
+                    else:
+                        batch = min(n + 1 - row, 500)
+                        try:
+                            loop.run(step, batch, out[row:row + batch])
+                        finally:
+                            row += loop.completed
                 except FmuError as error:
                     raise RunFailed(error, out[:row]) from error
-                out[row] = self._row()
-                if progress and row % 100 == 0:
-                    progress(row / n)
+                if progress and (loop is not None or row % 100 == 0):
+                    progress(min(row / n, 1.0))
             return out
         rows = [self._row()]
 

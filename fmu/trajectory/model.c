@@ -8,7 +8,8 @@
  *                 + sum_k slope_k (min(t, end_k) - start_k)^+   2 ramps
  *                 + table(t)                                    its column of table.file, if any
  *
- * and each wrench component is the sum of its two pulses (value for start <= t <= end). The FMU has
+ * and each wrench component is the sum of its two pulses (value for start <= t <= end; edges within
+ * 1e-9 relative count as reached, for communication points' round-off). The FMU has
  * no state: outputs are evaluated at the communication point, and fmi2GetRealOutputDerivatives gives
  * their exact first and second time derivatives (zero across steps and pulses), so that a master
  * extrapolating its inputs over a macro step never rings on a step.
@@ -194,7 +195,7 @@ static Table *read_table(FmuInstance *fmu, const char *given_path) {
 static void table_at(const Table *table, int c, int interpolation, double t, double out[3]) {
     const int n = table->rows, stride = table->columns;
     out[1] = out[2] = 0.0;
-    if (t <= table->time[0]) { out[0] = table->values[c]; return; }
+    if (t < table->time[0] || n == 1) { out[0] = table->values[c]; return; } /* from time[0] on: its first interval */
     if (t >= table->time[n - 1]) { out[0] = table->values[(n - 1) * stride + c]; return; }
     int lo = 0, hi = n - 1; /* time[lo] <= t < time[hi] */
     while (hi - lo > 1) {
@@ -218,6 +219,10 @@ static void table_at(const Table *table, int c, int interpolation, double t, dou
 
 /* ---- the signals ---- */
 
+/* Communication points accumulate round-off (1000 steps of 1 ms end near, not at, 1 s): an edge
+ * within this of t counts as reached, so a step or pulse edge on a communication point is hit. */
+static double edge_tolerance(double t) { return 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0); }
+
 /* Value and first two time derivatives of coordinate d at t. */
 static void pose_at(FmuInstance *fmu, int d, double t, double out[3]) {
     const DofSignal *q = &DOFS[d];
@@ -231,7 +236,7 @@ static void pose_at(FmuInstance *fmu, int d, double t, double out[3]) {
         out[2] -= amplitude * w * w * sin(angle);
     }
     for (int k = 0; k < 2; k++)
-        if (t >= *fmu_real(fmu, q->step[k][0])) out[0] += *fmu_real(fmu, q->step[k][1]);
+        if (t >= *fmu_real(fmu, q->step[k][0]) - edge_tolerance(t)) out[0] += *fmu_real(fmu, q->step[k][1]);
     for (int k = 0; k < 2; k++) {
         const double start = *fmu_real(fmu, q->ramp[k][0]), end = *fmu_real(fmu, q->ramp[k][1]);
         const double slope = *fmu_real(fmu, q->ramp[k][2]);
@@ -250,7 +255,8 @@ static double wrench_at(FmuInstance *fmu, int component, double t) {
     double value = 0.0;
     for (int k = 0; k < 2; k++) {
         const int *pulse = WRENCH[component].pulse[k];
-        if (t >= *fmu_real(fmu, pulse[1]) && t <= *fmu_real(fmu, pulse[2])) value += *fmu_real(fmu, pulse[0]);
+        if (t >= *fmu_real(fmu, pulse[1]) - edge_tolerance(t) && t <= *fmu_real(fmu, pulse[2]) + edge_tolerance(t))
+            value += *fmu_real(fmu, pulse[0]);
     }
     return value;
 }
