@@ -14,6 +14,9 @@ FMU_DIR = BUILD_DIR / "fmus"
 
 
 TEST_FMU_DIR = BUILD_DIR / "test_fmus"
+# Touched after every successful build: the build is current when it is newer than every source
+# (an output CMake did not need to rewrite keeps its old time, so outputs' times cannot tell).
+BUILD_STAMP = BUILD_DIR / "built.stamp"
 
 
 def _newest_source_time() -> float:
@@ -38,14 +41,20 @@ def build_fmus() -> None:
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
             raise RuntimeError(f"FMU build failed: {' '.join(command)}\n{result.stdout}\n{result.stderr}")
+    BUILD_STAMP.touch()
+
+
+def _build_if_stale(path: Path) -> None:
+    if not path.exists() or not BUILD_STAMP.exists() or BUILD_STAMP.stat().st_mtime < _newest_source_time():
+        build_fmus()
 
 
 def fmu_path(name: str, rebuild_if_stale: bool = True, test: bool = False) -> Path:
     """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test FMU), built first if it is missing
     or older than the C sources."""
     path = (TEST_FMU_DIR if test else FMU_DIR) / f"{name}.fmu"
-    if rebuild_if_stale and (not path.exists() or path.stat().st_mtime < _newest_source_time()):
-        build_fmus()
+    if rebuild_if_stale:
+        _build_if_stale(path)
     if not path.exists():
         raise FileNotFoundError(f"no FMU '{name}': {path} was not built (is there a fmu/{name}/ folder?)")
     return path
@@ -54,8 +63,8 @@ def fmu_path(name: str, rebuild_if_stale: bool = True, test: bool = False) -> Pa
 def native_library_path(rebuild_if_stale: bool = True) -> Path:
     """Path of the master's native inner loop (cosim/native/loop.c), built like the FMUs."""
     path = BUILD_DIR / "lib" / "libcosim_loop.so"
-    if rebuild_if_stale and (not path.exists() or path.stat().st_mtime < _newest_source_time()):
-        build_fmus()
+    if rebuild_if_stale:
+        _build_if_stale(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} was not built")
     return path
