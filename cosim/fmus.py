@@ -60,9 +60,10 @@ def fmu_path(name: str, rebuild_if_stale: bool = True, test: bool = False) -> Pa
     return path
 
 
-def native_library_path(rebuild_if_stale: bool = True) -> Path:
-    """Path of the master's native inner loop (cosim/native/loop.c), built like the FMUs."""
-    path = BUILD_DIR / "lib" / "libcosim_loop.so"
+def native_library_path(name: str = "libcosim_loop.so", rebuild_if_stale: bool = True) -> Path:
+    """Path of a native library of build/lib/ (the master's inner loop cosim/native/loop.c, the
+    mechanics' dynamics core libplatform_core.so), built like the FMUs."""
+    path = BUILD_DIR / "lib" / name
     if rebuild_if_stale:
         _build_if_stale(path)
     if not path.exists():

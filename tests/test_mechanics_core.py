@@ -8,12 +8,12 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from platform_core import Core, build
+from cosim.platform_core import Core, load
 
 
 @pytest.fixture(scope="module")
-def dll(tmp_path_factory):
-    return build(tmp_path_factory.mktemp("platform"))
+def dll():
+    return load()
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ from fmpy.validation import validate_fmu
 from cosim.fmu_instance import FmuError, FmuInstance
 from cosim.fmus import ROOT, fmu_path
 from cosim.parameter_sets import mechanics_start_values
-from platform_core import Core, build
+from cosim.platform_core import Core, load
 from scipy.spatial.transform import Rotation
 
 POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
@@ -25,8 +25,8 @@ def mechanics_fmu():
 
 
 @pytest.fixture(scope="module")
-def dll(tmp_path_factory):
-    return build(tmp_path_factory.mktemp("core"))
+def dll():
+    return load()
 
 
 @pytest.fixture

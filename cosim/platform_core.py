@@ -1,16 +1,16 @@
-"""ctypes access to the plain-C dynamics core of the mechanics (fmu/mechanics/platform.c), built
-for tests; parameters come from params/meng2010.toml."""
+"""ctypes access to the plain-C dynamics core of the mechanics (fmu/mechanics/platform.c, built by
+CMake into build/lib/ as the library the FMU is built from): inverse dynamics, leg kinematics and
+energies without the FMI layer, for tests and the validation report. Parameters come from
+params/meng2010.toml, or from mechanics-FMU start values (Core.use_start_values)."""
 
 from __future__ import annotations
 
 import ctypes
-import subprocess
 import tomllib
-from pathlib import Path
 
 import numpy as np
 
-from cosim.fmus import ROOT
+from .fmus import ROOT, native_library_path
 
 LEGS = 6
 D = ctypes.c_double
@@ -37,11 +37,9 @@ class Diagnostics(ctypes.Structure):
                 ("transmission_loss", D), ("friction_loss", D), ("load_power", D), ("singular", ctypes.c_int)]
 
 
-def build(directory: Path) -> ctypes.CDLL:
-    lib = directory / "platform_core.so"
-    subprocess.run(["cc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-shared", "-fPIC",
-                    str(ROOT / "fmu" / "mechanics" / "platform.c"), "-o", str(lib), "-lm"], check=True)
-    dll = ctypes.CDLL(str(lib))
+def load() -> ctypes.CDLL:
+    """The core's library, built if stale."""
+    dll = ctypes.CDLL(str(native_library_path("libplatform_core.so")))
     P = ctypes.POINTER
     dll.platform_layout_from_radii.argtypes = [P(Platform), D, D, D, D, D, P(D), P(D)]
     dll.platform_layout_from_radii.restype = ctypes.c_int
@@ -65,8 +63,8 @@ def arr(values) -> ctypes.Array:
 class Core:
     """The Meng platform of params/meng2010.toml, with the C core's functions on numpy arrays."""
 
-    def __init__(self, dll: ctypes.CDLL, actuators: bool = True, motors: bool = True, friction: bool = True):
-        self.dll = dll
+    def __init__(self, dll: ctypes.CDLL | None = None, actuators: bool = True, motors: bool = True, friction: bool = True):
+        self.dll = dll = dll or load()
         with open(ROOT / "params" / "meng2010.toml", "rb") as f:
             c = tomllib.load(f)
         g, pl, act, ms, tr, mo = (c["geometry"], c["platform"], c["actuator"], c["motor_system"],
