@@ -1,4 +1,6 @@
-"""Command line: python -m cosim run SCENE [--out DIR] [--no-plots] [--duration S]."""
+"""Command line:
+    python -m cosim run SCENE [--out DIR] [--no-plots] [--duration S]
+    python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)"""
 
 from __future__ import annotations
 
@@ -18,7 +20,13 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=float, help="override the scene's duration [s]")
+    validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
+    validate.add_argument("--out", type=Path, default=Path("docs"), help="folder of validation.md and figures/")
     args = parser.parse_args(argv)
+    if args.command == "validate":
+        from .validation.report import build
+        print(f"written: {build(args.out)}")
+        return 0
     try:
         scene = load_scene(args.scene)
     except SceneError as error:
