@@ -23,7 +23,8 @@ class Platform(ctypes.Structure):
         ("moving_mass", D), ("moving_inertia", D), ("moving_com", D),
         ("rotating_mass", D), ("rotating_inertia", D), ("rotating_com", D),
         ("motor_mass", D), ("motor_inertia", D), ("motor_com", D), ("rotor_inertia", D),
-        ("screw_ratio", D), ("force_torque", D), ("viscous_friction", D), ("gravity", D * 3),
+        ("screw_ratio", D), ("force_torque", D), ("viscous_friction", D), ("leg_spin_inertia", D),
+        ("joint_friction_lower", D), ("joint_friction_upper", D), ("gravity", D * 3),
         ("actuator_inertia_on", ctypes.c_int), ("motor_inertia_on", ctypes.c_int), ("friction_on", ctypes.c_int),
     ]
 
@@ -100,7 +101,12 @@ class Core:
                   "actuator.moving_inertia": "moving_inertia", "actuator.moving_com": "moving_com",
                   "actuator.rotating_mass": "rotating_mass", "actuator.rotating_inertia": "rotating_inertia",
                   "actuator.rotating_com": "rotating_com", "effects.motor_inertia": "motor_inertia_on",
-                  "effects.friction": "friction_on", "effects.actuator_inertia": "actuator_inertia_on"}
+                  "effects.friction": "friction_on", "effects.actuator_inertia": "actuator_inertia_on",
+                  "actuator.spin_inertia": "leg_spin_inertia", "joint.friction_lower": "joint_friction_lower",
+                  "joint.friction_upper": "joint_friction_upper", "motor_system.rotor_inertia": "rotor_inertia",
+                  "transmission.screw_ratio": "screw_ratio", "transmission.force_torque": "force_torque",
+                  "motor.viscous_friction": "viscous_friction", "motor_system.mass": "motor_mass",
+                  "motor_system.inertia": "motor_inertia", "motor_system.com": "motor_com"}
         for name, field in fields.items():
             if name in values:
                 setattr(p, field, type(getattr(p, field))(values[name]))

@@ -65,6 +65,9 @@ static int build_platform(const ModelVariables *v, Platform *p) {
     p->screw_ratio = v->transmission_screw_ratio;
     p->force_torque = v->transmission_force_torque;
     p->viscous_friction = v->motor_viscous_friction;
+    p->leg_spin_inertia = v->actuator_spin_inertia;
+    p->joint_friction_lower = v->joint_friction_lower;
+    p->joint_friction_upper = v->joint_friction_upper;
     p->gravity[0] = v->environment_gravity_x;
     p->gravity[1] = v->environment_gravity_y;
     p->gravity[2] = v->environment_gravity_z;

@@ -342,6 +342,41 @@ static void assemble(const Platform *p, const double *x, const double wrench[6],
                 M[6 * (3 + a) + 3 + b] -= rx_S_rx;
             }
 
+        /* Leg spin with the platform and joint friction (see platform.h). For y a torque-like
+         * vector at the leg, (d w_b / du)' y = E_w' n (n.y) + (1/L) J_a' (y x n): a torque on the
+         * platform plus a force (y x n) / L at the upper joint. */
+        const double I_s = act ? p->leg_spin_inertia : 0.0;
+        const double C_S = p->friction_on ? p->joint_friction_lower : 0.0;
+        const double C_U = p->friction_on ? p->joint_friction_upper : 0.0;
+        if (I_s != 0.0 || C_S != 0.0 || C_U != 0.0) {
+            const double s = dot(n, w);
+            double n_dot[3], n_x_v[3], w_b[3], rho[3];
+            for (int k = 0; k < 3; k++) n_dot[k] = P_v[k] / L;
+            cross(n, v_a, n_x_v);
+            for (int k = 0; k < 3; k++) {
+                w_b[k] = s * n[k] + n_x_v[k] / L;
+                rho[k] = w_b[k] - w[k]; /* rate across the upper joint; rho . n = 0 */
+            }
+            /* dH/dt of the spin, I_s (s_dot n + s n_dot): its s_dot part, with s_dot = n_dot.w + n.w_dot,
+             * goes to M and the rest here; C_S w_b on the leg; C_U rho on the leg and -C_U rho on the
+             * platform. */
+            double n_x_ndot[3], friction_y[3], y_x_n[3], f_joint[3], r_x_f_joint[3];
+            cross(n, n_dot, n_x_ndot);
+            for (int k = 0; k < 3; k++) friction_y[k] = C_S * w_b[k] + C_U * rho[k];
+            cross(friction_y, n, y_x_n);
+            const double n_dot_w = dot(n_dot, w);
+            for (int k = 0; k < 3; k++) f_joint[k] = I_s * s / L * n_x_ndot[k] - y_x_n[k] / L;
+            cross(r, f_joint, r_x_f_joint);
+            for (int k = 0; k < 3; k++) {
+                rhs0[k] += f_joint[k];
+                rhs0[3 + k] += r_x_f_joint[k] - I_s * n_dot_w * n[k] - C_S * s * n[k] + C_U * rho[k];
+            }
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) M[6 * (3 + a) + 3 + b] += I_s * n[a] * n[b];
+            kinetic += 0.5 * I_s * s * s;
+            friction_loss += C_S * dot(w_b, w_b) + C_U * dot(rho, rho);
+        }
+
         kinetic += 0.5 * (mu_axial * L_dot * L_dot + mu_perp * vPv);
         /* centres of mass: p_a - r_ac n (moving), b + r_bc n (rotating), b + r_sc n (motor) */
         potential -= m_a * (dot(g, t) + dot(g, r) - r_ac * dot(g, n)) +

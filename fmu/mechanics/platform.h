@@ -13,6 +13,14 @@
  *     mu_perp  = m_a (1 - r_ac/L)^2 + m_b (r_bc/L)^2 + m_s (r_sc/L)^2 + (i_a + i_b + i_s)/L^2,
  * which is Eqs 7, 11, 14, 15 and 19 collected; Lagrange's equations in p_a give the leg's force at
  * the upper joint, and Kane's partial velocities J_a (Eq 3) carry it to the platform (Eqs 20-23).
+ *
+ * Legs that turn about their own axis with the platform (Halder et al.'s 6-SBU: spherical joint at
+ * the base, universal at the top) add, per leg, with spin s = n.w, swing w_sw = n x v_a / L and the
+ * leg's angular velocity w_b = s n + w_sw:
+ *     T_spin = 1/2 I_s s^2                         (leg_spin_inertia I_s about the leg axis),
+ *     D      = 1/2 C_S |w_b|^2 + 1/2 C_U |w_b - w|^2  (viscous friction of the lower and upper joints),
+ * entered through Kane's partial angular velocities d w_b / d u = E_w' n n' + (1/L) [n]x J_a.
+ * Both are zero for Meng's and Sumnu's platforms.
  */
 #ifndef PLATFORM_H
 #define PLATFORM_H
@@ -37,6 +45,8 @@ typedef struct {
     double screw_ratio;                                   /* i_theta: motor angle per leg length [rad/m] */
     double force_torque;                                  /* K_FT: leg force per motor torque [N/(N m)] */
     double viscous_friction;                              /* B_m on the motor shaft [N m s/rad] */
+    double leg_spin_inertia;                              /* I_s: leg about its axis, turning with the platform [kg m^2] */
+    double joint_friction_lower, joint_friction_upper;    /* C_S, C_U: viscous joint friction [N m s/rad] */
     double gravity[3];
     /* effect switches */
     int actuator_inertia_on, motor_inertia_on, friction_on;
@@ -83,7 +93,7 @@ typedef struct {
     double kinetic, potential;  /* energies [J] */
     double drive_power;         /* sum of T_i w_m,i + F_i L_dot_i delivered by the drives [W] */
     double transmission_loss;   /* (1 - eta) sum T_i w_m,i [W] */
-    double friction_loss;       /* sum B_m w_m,i^2 [W] */
+    double friction_loss;       /* sum B_m w_m,i^2 + joint friction C_S |w_b|^2 + C_U |w_b - w|^2 [W] */
     double load_power;          /* external wrench times twist [W] */
     int singular;               /* the mass matrix did not factorise */
 } PlatformDiagnostics;

@@ -132,12 +132,15 @@ X(Real, motor_system_rotor_inertia, "motor_system.rotor_inertia", parameter, fix
 X(Real, transmission_screw_ratio, "transmission.screw_ratio", parameter, fixed, "rad/m", 277.777777777778, 0.0, FMU_INF, "i_theta, motor angle per metre of leg (assumed: eta = K_FT / i_theta = 0.9)") \
 X(Real, transmission_force_torque, "transmission.force_torque", parameter, fixed, "1/m", 250.0, 0.0, FMU_INF, "K_FT, leg force per motor torque (Table 3)") \
 X(Real, motor_viscous_friction, "motor.viscous_friction", parameter, fixed, "N.m.s/rad", 0.00792, 0.0, FMU_INF, "B_m on the motor shaft (Table 2)") \
+X(Real, actuator_spin_inertia, "actuator.spin_inertia", parameter, fixed, "kg.m2", 0.0, 0.0, FMU_INF, "I_s, the leg about its own axis, for legs that turn with the platform (spherical joint at the base, universal at the top: Halder et al.'s 6-SBU, I^ml); 0 for Meng's UPS legs") \
+X(Real, joint_friction_lower, "joint.friction_lower", parameter, fixed, "N.m.s/rad", 0.0, 0.0, FMU_INF, "C_S, viscous friction of the lower (spherical) joint on the leg's angular velocity (Halder et al.)") \
+X(Real, joint_friction_upper, "joint.friction_upper", parameter, fixed, "N.m.s/rad", 0.0, 0.0, FMU_INF, "C_U, viscous friction of the upper (universal) joint on the rate across it (Halder et al.)") \
 X(Real, environment_gravity_x, "environment.gravity_x", parameter, fixed, "m/s2", 0.0, -FMU_INF, FMU_INF, "Gravity, base frame, x") \
 X(Real, environment_gravity_y, "environment.gravity_y", parameter, fixed, "m/s2", 0.0, -FMU_INF, FMU_INF, "Gravity, y") \
 X(Real, environment_gravity_z, "environment.gravity_z", parameter, fixed, "m/s2", -9.81, -FMU_INF, FMU_INF, "Gravity, z") \
-X(Boolean, effects_actuator_inertia, "effects.actuator_inertia", parameter, fixed, "", 1, 0, 1, "Include the actuators' moving and rotating parts (m_a, i_a, m_b, i_b)") \
+X(Boolean, effects_actuator_inertia, "effects.actuator_inertia", parameter, fixed, "", 1, 0, 1, "Include the actuators' moving and rotating parts (m_a, i_a, m_b, i_b) and the legs' spin I_s") \
 X(Boolean, effects_motor_inertia, "effects.motor_inertia", parameter, fixed, "", 1, 0, 1, "Include the motor systems: rotor and screw spin i_R, motor carried by the leg (m_s, i_s)") \
-X(Boolean, effects_friction, "effects.friction", parameter, fixed, "", 1, 0, 1, "Include the motors' viscous friction B_m") \
+X(Boolean, effects_friction, "effects.friction", parameter, fixed, "", 1, 0, 1, "Include the motors' viscous friction B_m and the joints' friction C_S, C_U") \
 X(Real, limit_leg_length_min, "limit.leg_length_min", parameter, fixed, "m", 1.535, 0.0, FMU_INF, "Shortest leg of the stroke (Table 4)") \
 X(Real, limit_leg_length_max, "limit.leg_length_max", parameter, fixed, "m", 2.2, 0.0, FMU_INF, "Longest leg of the stroke (Table 4)") \
 X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, "Largest tilt of a leg from its neutral direction at either joint (20 deg, Halder et al.)") \
