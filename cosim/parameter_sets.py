@@ -103,11 +103,78 @@ def home_leg_lengths(geometry: dict) -> list[float]:
     return lengths
 
 
+def halder_joints(c: dict) -> tuple[list[list[float]], list[list[float]], list[float]]:
+    """Halder's Eqs 1-4: the lower (spherical) joints B_i in the base frame, the upper (universal)
+    joints T_i in the payload frame (origin at the payload's centre of mass p), and the neutral pose.
+    Each joint lies on the line from the stub's end on the base circle, b_i, to its end on the disc,
+    t_i, a stub length from it (the stubs and the leg are collinear at the neutral, Eq 3)."""
+    g = c["geometry"]
+    theta_s = math.radians(g["half_pair_angle_deg"])
+    theta_b = {1: theta_s - math.pi / 3, 2: math.pi / 3 - theta_s}
+    theta_t = {1: -theta_s, 2: theta_s}
+    for i in range(3, 7):  # odd legs from leg 1, even legs from leg 2 (see params/halder2013.toml)
+        first = 1 if i % 2 else 2
+        theta_b[i] = theta_b[first] + (i - first) * math.pi / 3
+        theta_t[i] = theta_t[first] + (i - first) * math.pi / 3
+    z_disc, z_com = g["disc_height"], g["disc_height"] + g["payload_com_above_disc"]
+    lower, upper = [], []
+    for i in range(1, 7):
+        b = [g["base_radius"] * math.cos(theta_b[i]), g["base_radius"] * math.sin(theta_b[i]), 0.0]
+        t = [g["top_radius"] * math.cos(theta_t[i]), g["top_radius"] * math.sin(theta_t[i]), z_disc]
+        length = math.dist(b, t)
+        lower.append([bk + (tk - bk) * g["bottom_stub"] / length for bk, tk in zip(b, t)])
+        top = [tk - (tk - bk) * g["top_stub"] / length for bk, tk in zip(b, t)]
+        upper.append([top[0], top[1], top[2] - z_com])
+    return lower, upper, [0.0, 0.0, z_com, 0.0, 0.0, 0.0]
+
+
+def halder_mechanics(c: dict) -> dict[str, float]:
+    """Halder's 6-SBU platform: explicit joints, the payload, legs as upper part (slides with the top
+    joint), lower part and motor (swing about the bottom joint), leg spin and joint friction."""
+    lower, upper, neutral = halder_joints(c)
+    legs, friction, payload = c["legs"], c["friction"], c["payload"]
+    values: dict[str, float] = {"geometry.layout": 2}
+    for i, (b, a) in enumerate(zip(lower, upper), start=1):
+        for axis, bv, av in zip("xyz", b, a):
+            values[f"geometry.base_joint[{i}].{axis}"] = bv
+            values[f"geometry.platform_joint[{i}].{axis}"] = av
+    for axis, value in zip(POSE, neutral):
+        values[f"geometry.neutral.{axis}"] = value
+        values[f"initial.pose.{axis}"] = value
+        values[f"pose_ref.{axis}"] = value
+    l_u, l_l, l_m = legs["upper_part_length"], legs["lower_part_length"], legs["motor_length"]
+    stubs = c["geometry"]["top_stub"] + c["geometry"]["bottom_stub"]
+    values.update({
+        "platform.mass": payload["mass"],
+        "actuator.moving_mass": legs["upper_part_mass"], "actuator.moving_com": l_u / 2,
+        "actuator.moving_inertia": legs["upper_part_mass"] * l_u ** 2 / 12,
+        "actuator.rotating_mass": legs["lower_part_mass"], "actuator.rotating_com": l_m + l_l / 2,
+        "actuator.rotating_inertia": legs["lower_part_mass"] * l_l ** 2 / 12,
+        "motor_system.mass": legs["motor_mass"], "motor_system.com": l_m / 2,
+        "motor_system.inertia": legs["motor_mass"] * l_m ** 2 / 12,
+        "motor_system.rotor_inertia": legs["rotor_inertia"],
+        "actuator.spin_inertia": legs["spin_inertia"],
+        "transmission.screw_ratio": 2 * math.pi / legs["screw_lead"],
+        "transmission.force_torque": 2 * math.pi / legs["screw_lead"],
+        "motor.viscous_friction": friction["ball_screw"],
+        "joint.friction_lower": friction["spherical"], "joint.friction_upper": friction["universal"],
+        "limit.leg_length_min": c["geometry"]["running_length_min"] - stubs,
+        "limit.leg_length_max": c["geometry"]["running_length_max"] - stubs,
+    })
+    for axis, value in zip(("xx", "yy", "zz"), payload["inertia_diag"]):
+        values[f"platform.inertia_{axis}"] = value
+    for axis, value in zip("xyz", c["environment"]["gravity"]):
+        values[f"environment.gravity_{axis}"] = value
+    return values
+
+
 def mechanics_start_values(name: str, mass_set: str = "heavy") -> dict[str, float]:
-    """Start values of the mechanics FMU for parameter set `name` (meng2010 or sumnu2015)."""
+    """Start values of the mechanics FMU for parameter set `name` (meng2010, sumnu2015, halder2013)."""
     c = load(name)
     if name == "meng2010":
         return meng_mechanics(c)
     if name == "sumnu2015":
         return sumnu_mechanics(c, mass_set)
+    if name == "halder2013":
+        return halder_mechanics(c)
     raise ValueError(f"parameter set '{name}' has no mapping to the mechanics FMU")

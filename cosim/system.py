@@ -13,7 +13,7 @@ its values at t and t + h. cosim.runner runs a scene on it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Mapping, Protocol
+from typing import Callable, Mapping, Protocol, Sequence
 
 import numpy as np
 from fmpy import extract
@@ -68,11 +68,13 @@ class StepControl(Protocol):
 
 class PlatformSystem:
     """Trajectory, mechanics and six drives of one kind, initialized with the given start values
-    (trajectory_values: the trajectory FMU's parameters, see cosim.signals)."""
+    (trajectory_values: the trajectory FMU's parameters, see cosim.signals; leg_values: per drive,
+    start values on top of drive_values, e.g. each leg's force feedforward)."""
 
     def __init__(self, drive: str, mechanics_values: Mapping[str, float] | None = None,
                  drive_values: Mapping[str, float] | None = None, order: int = 1,
-                 algorithm: str = "gauss-seidel", trajectory_values: Mapping[str, float | str] | None = None):
+                 algorithm: str = "gauss-seidel", trajectory_values: Mapping[str, float | str] | None = None,
+                 leg_values: Sequence[Mapping[str, float]] | None = None):
         if drive not in DRIVES:
             raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
         self.wiring = wiring = DRIVES[drive]
@@ -83,8 +85,8 @@ class PlatformSystem:
         self.drives = [FmuInstance(drive_path, f"{drive}{i}", unzip_dir=drive_unzip) for i in range(1, 7)]
         self.trajectory.initialize(dict(trajectory_values or {}))
         self.mechanics.initialize(dict(mechanics_values or {}))
-        for d in self.drives:
-            d.initialize(dict(drive_values or {}))
+        for k, d in enumerate(self.drives):
+            d.initialize({**(drive_values or {}), **(leg_values[k] if leg_values else {})})
         instances = {"trajectory": self.trajectory, "mechanics": self.mechanics, **{d.name: d for d in self.drives}}
         connections = [Connection(("trajectory", name), ("mechanics", name))
                        for name in [*[f"pose_ref.{a}" for a in POSE], *WRENCH]]
