@@ -51,7 +51,7 @@ def _load() -> ctypes.CDLL:
     if _library is None:
         _library = ctypes.CDLL(str(native_library_path()))
         _library.cosim_loop_run.argtypes = [ctypes.POINTER(_Setup), ctypes.c_int, ctypes.c_double, ctypes.c_int,
-                                            _DOUBLES, _DOUBLES]
+                                            _DOUBLES, _DOUBLES, _DOUBLES]
         _library.cosim_loop_run.restype = ctypes.c_int
     return _library
 
@@ -190,14 +190,16 @@ class NativeLoop:
 
     def run(self, h: float, n_steps: int, rows: np.ndarray) -> None:
         """n_steps macro steps of h; rows (n_steps x (1 + columns), C order) receives the time and
-        the recorded columns after each. Raises FmuError naming the instance and call that failed;
-        the rows of the steps completed (self.completed) are filled."""
+        the recorded columns after each, self.bond_energy (steps x bonds x (residual, transferred))
+        the bonds' energies. Raises FmuError naming the instance and call that failed; the rows of
+        the steps completed (self.completed) are filled."""
         assert rows.shape == (n_steps, 1 + self.n_columns) and rows.flags.c_contiguous
         residuals = np.zeros(max(n_steps, 1))
+        self.bond_energy = np.zeros((max(n_steps, 1), max(len(self.coupling.bonds), 1), 2))
         self._to_native()
         logged = {n: len(i.messages) for n, i in self.coupling.instances.items()}
         done = self.library.cosim_loop_run(ctypes.byref(self.setup), self.clock, h, n_steps, _ptr(rows, _DOUBLES),
-                                           _ptr(residuals, _DOUBLES))
+                                           _ptr(residuals, _DOUBLES), _ptr(self.bond_energy, _DOUBLES))
         self._from_native(done, residuals)
         self.completed = done
         if done < n_steps:

@@ -18,7 +18,7 @@ from typing import Callable, Mapping, Protocol, Sequence
 import numpy as np
 from fmpy import extract
 
-from .coupling import Bond, Connection, Coupling, GaussSeidel, Jacobi
+from .coupling import Bond, Connection, Coupling, DivergenceMonitor, Diverged, GaussSeidel, Jacobi, bond_names
 from .fmu_instance import FmuError, FmuInstance
 from .fmus import fmu_path
 from .native import NativeLoop
@@ -45,10 +45,11 @@ DRIVES = {
 
 
 class RunFailed(RuntimeError):
-    """An FMU failed mid-run: `error` says which instance, call and time; `result` holds the rows
-    computed up to the last good communication point."""
+    """An FMU failed mid-run (`error` an FmuError: which instance, call and time) or the coupling
+    diverged (`error` a Diverged: when, how much, where, what to try); `result` holds the rows
+    computed up to then."""
 
-    def __init__(self, error: FmuError, result: np.ndarray):
+    def __init__(self, error: FmuError | Diverged, result: np.ndarray):
         super().__init__(str(error))
         self.error, self.result = error, result
 
@@ -136,13 +137,16 @@ class PlatformSystem:
         return np.r_[self.time, self.pose_ref.read(), self.pose.read(), self._recorded()]
 
     def run(self, stop_time: float, step: float, control: StepControl | None = None,
-            progress: Callable[[float], None] | None = None, native: bool = True) -> np.ndarray:
+            progress: Callable[[float], None] | None = None, native: bool = True,
+            divergence_ratio: float | None = 0.05) -> np.ndarray:
         """Steps to stop_time, at the fixed macro step `step` or under `control` (an adaptive step
         controller of cosim.coupling that starts from `step`); returns rows of time, pose_ref (6),
         pose (6) and the recorded outputs (column_names) at every communication point.
         `progress` is called with the fraction done now and then. On an FMU error, raises RunFailed
         with the rows up to the last good communication point. At a fixed step, `native` runs the
-        steps after the first in the C inner loop (cosim.native), which gives the same numbers."""
+        steps after the first in the C inner loop (cosim.native), which gives the same numbers, and
+        a DivergenceMonitor (threshold divergence_ratio; None: off) stops a diverging coupling with
+        RunFailed(Diverged) instead of returning garbage."""
         self.algorithm.initialize(self.coupling, self.time)
         start = self.time
         if control is None:
@@ -150,21 +154,31 @@ class PlatformSystem:
             out = np.zeros((n + 1, 13 + len(self.record_names)))
             out[0] = self._row()
             loop = NativeLoop(self.coupling, self.algorithm, self._columns, "mechanics") if native else None
+            monitor = (DivergenceMonitor(bond_names(self.coupling), step, ratio=divergence_ratio)
+                       if divergence_ratio and self.coupling.bonds else None)
+            self.monitor = monitor
             row = 1
             while row <= n:
+                first = row
                 try:
                     if loop is None or row == 1:  # the first step (the start-up) always in Python
                         self.algorithm.step(self.coupling, self.time, step)
                         out[row] = self._row()
                         row += 1
+                        if monitor:
+                            monitor.add(self.time, *self.algorithm.bond_energies)
                     else:
-                        batch = min(n + 1 - row, 500)
+                        batch = min(n + 1 - row, 200)
                         try:
                             loop.run(step, batch, out[row:row + batch])
                         finally:
                             row += loop.completed
+                            if monitor:
+                                monitor.add_batch(out[first:row, 0], loop.bond_energy[:row - first])
                 except FmuError as error:
                     raise RunFailed(error, out[:row]) from error
+                if monitor and monitor.message:
+                    raise RunFailed(Diverged(monitor.message, monitor.time), out[:row])
                 if progress and (loop is not None or row % 100 == 0):
                     progress(min(row / n, 1.0))
             return out

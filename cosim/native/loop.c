@@ -180,8 +180,9 @@ static int push_sample(LoopSetup *s, double t_new) {
     return 1;
 }
 
-/* _energy_residual: the largest |energy residual| of the bonds over the step just taken. */
-static double energy_residual(const LoopSetup *s, double h) {
+/* _energy_residual: the largest |energy residual| of the bonds over the step just taken; per bond,
+ * the residual and the energy transferred into bond_energy (2 per bond) if it is not NULL. */
+static double energy_residual(const LoopSetup *s, double h, double *bond_energy) {
     const double *before = s->samples + (s->n_samples - 2) * s->n_sample_values;
     const double *after = s->samples + (s->n_samples - 1) * s->n_sample_values;
     double largest = 0.0;
@@ -197,6 +198,10 @@ static double energy_residual(const LoopSetup *s, double h) {
 #undef SEEN
         const double residual = fabs(given - taken);
         if (residual > largest) largest = residual;
+        if (bond_energy) {
+            bond_energy[2 * b] = given - taken;
+            bond_energy[2 * b + 1] = 0.5 * (fabs(given) + fabs(taken));
+        }
     }
     return largest;
 }
@@ -215,8 +220,10 @@ static int record(LoopSetup *s, double *row, double t) {
 
 /* Takes n_steps macro steps of h from the time of instance `clock` (whose time the rows carry).
  * Returns the number of steps completed; fewer than n_steps when an FMI call failed (then
- * failed_instance and failed_call say which). rows: n_steps x (1 + n_columns); residuals: n_steps. */
-int cosim_loop_run(LoopSetup *s, int clock, double h, int n_steps, double *rows, double *residuals) {
+ * failed_instance and failed_call say which). rows: n_steps x (1 + n_columns); residuals: n_steps;
+ * bond_energy: n_steps x n_bonds x (residual, transferred), or NULL. */
+int cosim_loop_run(LoopSetup *s, int clock, double h, int n_steps, double *rows, double *residuals,
+                   double *bond_energy) {
     s->failed_instance = s->failed_call = -1;
     for (int step = 0; step < n_steps; step++) {
         const double t = s->instance_time[clock], t_new = t + h;
@@ -238,7 +245,9 @@ int cosim_loop_run(LoopSetup *s, int clock, double h, int n_steps, double *rows,
                 if (!read_outputs(s, s->sequence[j])) return step;
         }
         if (!push_sample(s, t_new)) return step;
-        residuals[step] = s->n_bonds > 0 ? energy_residual(s, h) : 0.0;
+        residuals[step] = s->n_bonds > 0
+                              ? energy_residual(s, h, bond_energy ? bond_energy + (size_t)step * 2 * (size_t)s->n_bonds : NULL)
+                              : 0.0;
         if (!record(s, rows + (size_t)step * (size_t)(1 + s->n_columns), s->instance_time[clock])) return step;
     }
     return n_steps;
