@@ -1,6 +1,7 @@
 """Command line:
     python -m cosim run SCENE [--out DIR] [--no-plots] [--duration S]
-    python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)"""
+    python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
+    python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL"""
 
 from __future__ import annotations
 
@@ -22,7 +23,21 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--duration", type=float, help="override the scene's duration [s]")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
     validate.add_argument("--out", type=Path, default=Path("docs"), help="folder of validation.md and figures/")
+    advise = commands.add_parser("advise", help="recommend the cheapest effects, drive fidelity and step for a tolerance")
+    advise.add_argument("scene", type=Path)
+    advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
+    advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
     args = parser.parse_args(argv)
+    if args.command == "advise":
+        from .advise import advise as run_advice, text
+        try:
+            scene = load_scene(args.scene)
+        except SceneError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        candidates, info = run_advice(scene, args.tolerance, args.probe)
+        print(text(scene, args.tolerance, candidates, info))
+        return 0
     if args.command == "validate":
         from .validation.report import build
         print(f"written: {build(args.out)}")
