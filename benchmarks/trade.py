@@ -1,0 +1,203 @@
+"""The speed-accuracy trade (issue 7), in one run: coupling algorithm x extrapolation order x macro
+step (fixed and adaptive) x drive fidelity x mechanics effects, on the Meng scene and on a fast
+small scene (Sumnu's case I, linear motors), next to libcosim stepping the same FMUs (fixed step,
+and its ECCO algorithm with a power bond per drive).
+
+For each point: the pose error against a converged reference, the largest energy residual of a
+bond in one step, macro steps, wall time and real-time factor. The reference is the scene under
+Gauss-Seidel of order 1 at a sixteenth of its step; its convergence is shown as its difference to
+the run at an eighth. Errors are taken at the same checkpoints (every 50 ms) for every run, ours and
+libcosim's. Prints each scene's table and Pareto front, writes docs/trade.md and
+docs/figures/trade_<scene>.png.
+
+    .venv/bin/python benchmarks/trade.py [--probe 1.0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from cosim.fmus import ROOT  # noqa: E402
+from cosim.libcosim import Ecco, run_in_libcosim  # noqa: E402
+from cosim.runner import SceneFailed, run_scene  # noqa: E402
+from cosim.scene import Scene, load_scene  # noqa: E402
+from cosim.system import POSE  # noqa: E402
+
+
+@dataclass
+class Point:
+    family: str          # "ours fixed", "ours doubling", "ours energy", "libcosim fixed", "libcosim ECCO"
+    label: str
+    error: float = float("nan")
+    residual: float = float("nan")
+    steps: int = 0
+    wall: float = float("nan")
+    diverged: bool = False
+
+
+def _at(result: np.ndarray, checkpoints: np.ndarray) -> np.ndarray:
+    return np.column_stack([np.interp(checkpoints, result["time"], result[f"pose.{a}"]) for a in POSE])
+
+
+def ours(scene: Scene, label: str, family: str, reference: np.ndarray, checkpoints: np.ndarray, **changes) -> Point:
+    point = Point(family, label)
+    try:
+        result, report = run_scene(dataclasses.replace(scene, **changes))
+    except SceneFailed as failed:
+        point.diverged, point.wall = True, failed.report.wall
+        return point
+    point.error = float(np.abs(_at(result, checkpoints) - reference).max())
+    point.residual, point.steps, point.wall = report.largest_energy_residual, report.macro_steps, report.wall
+    return point
+
+
+def pareto(points: list[Point]) -> list[Point]:
+    good = sorted((p for p in points if not p.diverged and np.isfinite(p.error)), key=lambda p: p.wall)
+    front, best = [], np.inf
+    for p in good:
+        if p.error < best:
+            front.append(p)
+            best = p.error
+    return front
+
+
+def study(scene: Scene, fidelities: dict[str, dict], effects: dict[str, dict]) -> tuple[list[Point], dict]:
+    h = scene.step
+    checkpoints = np.round(np.arange(0.05, scene.duration + 1e-9, 0.05), 9)
+    reference_result, _ = run_scene(dataclasses.replace(scene, step=h / 16))
+    reference = _at(reference_result, checkpoints)
+    eighth, _ = run_scene(dataclasses.replace(scene, step=h / 8))
+    convergence = float(np.abs(_at(eighth, checkpoints) - reference).max())
+    points = []
+    for algorithm in ("gauss-seidel", "jacobi"):
+        for order in (0, 1, 2):
+            for factor in (0.25, 0.5, 1.0, 2.0):
+                points.append(ours(scene, f"{algorithm} {order}, {h * factor * 1e3:g} ms", "ours fixed", reference,
+                                   checkpoints, algorithm=algorithm, order=order, step=h * factor))
+    for tolerance in (1e-2, 1e-3, 1e-4):
+        points.append(ours(scene, f"doubling rtol=atol={tolerance:g}", "ours doubling", reference, checkpoints,
+                           step_control="doubling", rtol=tolerance, atol=tolerance))
+        points.append(ours(scene, f"energy rtol={tolerance:g}", "ours energy", reference, checkpoints,
+                           step_control="energy", rtol=tolerance, atol=tolerance / 10))
+    for name, drive in fidelities.items():
+        for factor in (0.5, 1.0):
+            points.append(ours(scene, f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", reference, checkpoints,
+                               step=h * factor, drive_parameters={**scene.drive_parameters, **drive}))
+    for name, mechanics in effects.items():
+        points.append(ours(scene, f"{name}, {h * 1e3:g} ms", "ours effects", reference, checkpoints,
+                           mechanics_parameters={**scene.mechanics_parameters, **mechanics}))
+    for factor in (0.25, 0.5, 1.0, 2.0):
+        point = Point("libcosim fixed", f"libcosim fixed {h * factor * 1e3:g} ms")
+        run = run_in_libcosim(dataclasses.replace(scene, step=h * factor), checkpoints=checkpoints)
+        point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
+        point.steps = int(round(scene.duration / (h * factor)))
+        points.append(point)
+    for tolerance in (1e-2, 1e-3):
+        point = Point("libcosim ECCO", f"libcosim ECCO rtol=atol={tolerance:g}")
+        start = time.perf_counter()
+        run = run_in_libcosim(scene, checkpoints=checkpoints, ecco=Ecco(rtol=tolerance, atol=tolerance))
+        point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
+        points.append(point)
+    return points, dict(convergence=convergence, duration=scene.duration)
+
+
+def ratios(points: list[Point], duration: float) -> list[str]:
+    lines = []
+    usable = [p for p in points if not p.diverged and np.isfinite(p.error)]
+    ours_points = [p for p in usable if p.family.startswith("ours")]
+    for peer in (p for p in usable if p.family.startswith("libcosim")):
+        match = [p for p in ours_points if p.error <= peer.error]
+        if match:
+            best = min(match, key=lambda p: p.wall)
+            lines.append(f"- at libcosim's error {peer.error:.1e} ({peer.label}, {peer.wall:.2f} s): ours "
+                         f"{best.wall:.3f} s ({best.label}), {peer.wall / best.wall:.1f}x less wall time")
+    for adaptive in (p for p in usable if p.family == "ours doubling"):
+        fixed = [p for p in usable if p.family == "ours fixed" and p.error <= adaptive.error]
+        if fixed:
+            best = min(fixed, key=lambda p: p.steps)
+            lines.append(f"- {adaptive.label}: error {adaptive.error:.1e} in {adaptive.steps} macro steps; the best "
+                         f"fixed step reaching it ({best.label}) takes {best.steps}: {best.steps / adaptive.steps:.1f}x")
+    for target in (1e-4, 1e-5):
+        match = [p for p in ours_points if p.error <= target]
+        if match:
+            best = min(match, key=lambda p: p.wall)
+            lines.append(f"- cheapest run within {target:g} m/rad: {best.label}, real-time factor "
+                         f"{duration / best.wall:.1f}")
+        else:
+            lines.append(f"- no run of ours reaches {target:g} m/rad")
+    return lines
+
+
+def table(points: list[Point], duration: float) -> list[str]:
+    front = set(id(p) for p in pareto(points))
+    lines = ["| point | pose error [m, rad] | largest bond residual [J] | macro steps | wall [s] | real-time factor | Pareto |",
+             "|---|---|---|---|---|---|---|"]
+    for p in sorted(points, key=lambda p: (p.diverged, p.wall)):
+        error = "diverged" if p.diverged else f"{p.error:.2e}"
+        residual = "" if p.diverged or not np.isfinite(p.residual) else f"{p.residual:.2e}"
+        lines.append(f"| {p.label} | {error} | {residual} | {p.steps or ''} | {p.wall:.3f} | {duration / p.wall:.1f} | "
+                     f"{'*' if id(p) in front else ''} |")
+    return lines
+
+
+def plot(points: list[Point], path: Path, title: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 6))
+    for family, marker in (("ours fixed", "o"), ("ours doubling", "s"), ("ours energy", "D"), ("ours fidelity", "^"),
+                           ("ours effects", "v"), ("libcosim fixed", "x"), ("libcosim ECCO", "+")):
+        chosen = [p for p in points if p.family == family and not p.diverged]
+        if chosen:
+            ax.loglog([p.wall for p in chosen], [p.error for p in chosen], marker, ls="", label=family, ms=6)
+    front = pareto(points)
+    ax.loglog([p.wall for p in front], [p.error for p in front], "k-", lw=0.8, label="Pareto front")
+    ax.set(xlabel="wall time [s]", ylabel="largest pose error [m, rad]", title=title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--probe", type=float, default=1.0, help="simulated seconds per point")
+    args = parser.parse_args()
+    meng = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=args.probe, pulses=[])
+    sumnu = dataclasses.replace(load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), duration=args.probe)
+    studies = [
+        ("meng", meng, {"ideal inverter": {"inverter.model": 1}, "averaged inverter": {"inverter.model": 2},
+                        "switching inverter": {"inverter.model": 3}},
+         {"friction off": {"effects.friction": False}, "actuator inertia off": {"effects.actuator_inertia": False},
+          "motor systems off": {"effects.motor_inertia": False}}),
+        ("sumnu_case_1", sumnu, {"ideal force source": {"effects.electrical": False},
+                                 "electrical dynamics": {"effects.electrical": True}},
+         {"actuator inertia off": {"effects.actuator_inertia": False}}),
+    ]
+    doc = ["# The speed-accuracy trade", "",
+           f"Rebuilt by `.venv/bin/python benchmarks/trade.py` (probes of {args.probe:g} s, this project's 2-core "
+           "machine); see the script's docstring for the method. Wall times are of the stepping alone.", ""]
+    for name, scene, fidelities, effects in studies:
+        points, info = study(scene, fidelities, effects)
+        lines = [f"## {scene.name}", "",
+                 f"Reference converged to {info['convergence']:.1e} m/rad (its difference to half its step's run).",
+                 "", *ratios(points, info["duration"]), "", *table(points, info["duration"]), "",
+                 f"![trade](figures/trade_{name}.png)", ""]
+        print("\n".join(lines))
+        doc += lines
+        plot(points, ROOT / "docs" / "figures" / f"trade_{name}.png", scene.name)
+    (ROOT / "docs" / "trade.md").write_text("\n".join(doc))
+
+
+if __name__ == "__main__":
+    main()
