@@ -13,6 +13,10 @@ Inputs over a macro step are polynomials in time fitted to the samples of the so
 A source that provides its outputs' time derivatives (maxOutputDerivativeOrder > 0, such as the
 trajectory FMU) is not extrapolated from its history: its inputs are its Taylor polynomial at t of
 order min(k, its order), exact for the signals it describes and free of ringing after a step.
+An FMU that does not declare canInterpolateInputs gets no derivatives: the master holds each input
+over the step at its polynomial's value at the step's midpoint. That integrates a linear input
+exactly, but an output that feeds through from a held input lags by half a step, so the global
+order is 1 whatever k (tests/test_coupling.py).
 At the start the outputs are made consistent with the connected inputs. The first macro step has no
 history; it is iterated to a fixed point (waveform relaxation over one
 step, FMU states restored between sweeps) with inputs interpolated between t and t + h, so the
@@ -50,7 +54,9 @@ class Coupling:
     instance, so that each macro step makes one get and one set call per instance."""
 
     def __init__(self, instances: Mapping[str, FmuInstance], connections: Sequence[Connection],
-                 bonds: Sequence[Bond] = ()):
+                 bonds: Sequence[Bond] = (), interpolating: Mapping[str, bool] | None = None):
+        """interpolating: per instance, whether it takes input derivatives (default: what its
+        modelDescription declares, canInterpolateInputs)."""
         self.instances = dict(instances)
         self.names = list(self.instances)
         for c in connections:
@@ -74,6 +80,8 @@ class Coupling:
             if bond.effort not in connections or bond.flow not in connections:
                 raise KeyError(f"bond {bond}: both of its connections must be among the coupling's connections")
         self.bonds = [(ends(b.effort), ends(b.flow)) for b in bonds]
+        self.interpolating = {n: (interpolating or {}).get(n, self.instances[n].can_interpolate_inputs)
+                              for n in self.names}
         # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order
         self.rate_orders = {n: min(2, self.instances[n].max_output_derivative_order) for n in self.outputs
                             if self.instances[n].max_output_derivative_order > 0}
@@ -173,8 +181,13 @@ class CouplingAlgorithm(ABC):
                 polynomials[key] = polynomial_at(times, samples, t, order)
             v, r, c = polynomials[key]
             values.append(v[index]); rates.append(r[index]); curvatures.append(c[index])
-        self.inputs_set[name] = (np.array(values), np.array(rates), np.array(curvatures))
         group = coupling.inputs[name]
+        if order >= 1 and not coupling.interpolating[name]:  # held at the midpoint value
+            half = 0.5 * (t_new - t)
+            values = [v + r * half + 0.5 * c * half * half for v, r, c in zip(values, rates, curvatures)]
+            rates, curvatures = [0.0] * len(values), [0.0] * len(values)
+            order = 0
+        self.inputs_set[name] = (np.array(values), np.array(rates), np.array(curvatures))
         group.write(values)
         if order >= 1:
             group.write_derivatives(rates, 1)

@@ -120,6 +120,10 @@ class FmuInstance:
                 raise TypeError(f"{self.name}: cannot set '{name}' of type {kind}")
 
     @property
+    def can_interpolate_inputs(self) -> bool:
+        return bool(self.model_description.coSimulation.canInterpolateInputs)
+
+    @property
     def max_output_derivative_order(self) -> int:
         return int(self.model_description.coSimulation.maxOutputDerivativeOrder or 0)
 

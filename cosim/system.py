@@ -153,6 +153,7 @@ class PlatformSystem:
             n = int(round((stop_time - start) / step))
             out = np.zeros((n + 1, 13 + len(self.record_names)))
             out[0] = self._row()
+            native = native and all(self.coupling.interpolating.values())  # the C loop always passes derivatives
             loop = NativeLoop(self.coupling, self.algorithm, self._columns, "mechanics") if native else None
             monitor = (DivergenceMonitor(bond_names(self.coupling), step, ratio=divergence_ratio)
                        if divergence_ratio and self.coupling.bonds else None)
