@@ -51,6 +51,9 @@ def main(argv: list[str] | None = None) -> int:
         scene.duration = args.duration
     try:
         _, report = run_scene(scene, args.out, plots=not args.no_plots)
+    except SceneError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     except SceneFailed as failed:
         print(failed.report.text(), file=sys.stderr)
         print(f"partial results up to t = {failed.report.simulated:g} s written to {args.out}/", file=sys.stderr)

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import results
 from .parameter_sets import mechanics_start_values
-from .scene import Scene
+from .scene import Scene, SceneError, line_of
 from .coupling import AdaptiveStep, EnergyStep
 from .signals import scene_trajectory
 from .system import PlatformSystem, RunFailed, StepControl
@@ -96,7 +96,14 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
                             scene_trajectory(scene))
     control = step_control(scene, system)
     effort, speed, current = DRIVE_OUTPUTS[scene.drive]
-    system.record([], [effort, speed, current])
+    drive_outputs = scene.outputs_drive if scene.outputs_drive is not None else [effort, speed, current]
+    try:
+        system.record(scene.outputs_mechanics, drive_outputs)
+    except KeyError as error:
+        system.free()
+        key = "mechanics" if any(f"'{n}'" in str(error) for n in scene.outputs_mechanics) else "drive"
+        raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'outputs', key)}: 'outputs.{key}': "
+                         f"{error.args[0]}") from None
     start = time.perf_counter()
     failure = None
     try:
@@ -106,6 +113,10 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
     wall = time.perf_counter() - start
     if sys.stderr.isatty() and wall > 2.0:
         print(file=sys.stderr)
+    if scene.output_interval and len(rows) > 1:
+        grid = np.arange(rows[0, 0], rows[-1, 0] + 1e-9, scene.output_interval)
+        keep = np.unique(np.minimum(np.searchsorted(rows[:, 0], grid - 1e-9), len(rows) - 1))
+        rows = rows[np.union1d(keep, [len(rows) - 1])]
     result = results.structured(rows, system.column_names)
     warnings = [m.text for i in system.coupling.instances.values() for m in i.messages if m.status == "warning"]
     fmi_seconds = system.fmi_seconds
@@ -125,7 +136,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         results.write_mat(result, out / f"{stem}.mat")
         if plots and len(result) > 1:
             results.plot_tracking(result, out / f"{stem}_tracking.png", scene.name)
-            results.plot_drives(result, out / f"{stem}_drives.png", scene.name, effort, speed)
+            if {effort, speed} <= set(drive_outputs):
+                results.plot_drives(result, out / f"{stem}_drives.png", scene.name, effort, speed)
     if failure:
         raise SceneFailed(report, result)
     return result, report

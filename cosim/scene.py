@@ -13,6 +13,9 @@
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset, sines = [{amplitude, frequency [Hz],
                   phase [rad]}] (up to 3), steps = [{time, height}] (2), ramps = [{start, end, slope}] (2)
     [load]        pulses = [{component = "force.z" | ..., value, start, end}] (2 per component)
+    [outputs]     mechanics = [...] (mechanics outputs recorded besides pose and pose_ref),
+                  drive = [...] (per drive; default: effort, speed or velocity, current),
+                  interval [s] (write results every interval; default: every macro step)
 
 The signals become parameters of the trajectory FMU (fmu/trajectory/), so a scene is FMUs and
 connections only.
@@ -95,10 +98,13 @@ class Scene:
     atol: float | None = None  # the controller's default if None
     h_min: float = 1e-6
     h_max: float = 1e-2
+    outputs_mechanics: list[str] = field(default_factory=list)
+    outputs_drive: list[str] | None = None  # None: the drive kind's default
+    output_interval: float | None = None
 
 
 SCHEMA: dict[str, set[str]] = {
-    "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load"},
+    "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"},
     "scene": {"name", "duration", "step"},
     "drive": {"kind", "parameters"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
@@ -106,6 +112,7 @@ SCHEMA: dict[str, set[str]] = {
     "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
+    "outputs": {"mechanics", "drive", "interval"},
 }
 ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "height"},
              "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end"}}
@@ -176,7 +183,7 @@ def load_scene(path: str | Path) -> Scene:
         return out
 
     check_keys("", data, SCHEMA[""])
-    for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load"):
+    for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"):
         check_keys(table, data.get(table, {}), SCHEMA[table])
     scene, drive, mechanics = data.get("scene", {}), data.get("drive", {}), data.get("mechanics", {})
     coupling = data.get("coupling", {})
@@ -222,9 +229,18 @@ def load_scene(path: str | Path) -> Scene:
         if sum(p.component == pulse.component for p in pulses) > CAPACITY["pulses"]:
             raise fail("load", "pulses", f"has more than {CAPACITY['pulses']} pulses on {pulse.component}; the "
                        "trajectory FMU holds that many per component")
+    outputs = data.get("outputs", {})
+    names = {}
+    for key in ("mechanics", "drive"):
+        value = outputs.get(key)
+        if value is not None and (not isinstance(value, list) or not all(isinstance(v, str) for v in value)):
+            raise fail("outputs", key, "must be a list of variable names")
+        names[key] = value
+    interval = number("outputs", outputs, "interval", positive=True) if "interval" in outputs else None
     return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
                  step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
                  drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
                  mass_set=mechanics.get("mass_set", "heavy"), mechanics_parameters=dict(mechanics.get("parameters", {})),
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
-                 interpolation=interpolation, step_control=step_control, atol=atol, **tolerances)
+                 interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
+                 outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval)

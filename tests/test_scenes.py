@@ -143,3 +143,22 @@ def test_what_the_trajectory_fmu_cannot_hold_is_named_with_its_line(tmp_path, ex
     with pytest.raises(SceneError) as error:
         load_scene(write(tmp_path, BASE + extra))
     assert message in str(error.value)
+
+
+def test_outputs_choose_what_is_recorded_and_how_often(tmp_path):
+    """[outputs]: mechanics energy accounts and the drives' voltage recorded, every 10 ms."""
+    text = BASE + "[trajectory.z]\noffset = 1.689527733348906\n" + \
+        '[outputs]\nmechanics = ["energy.kinetic", "power.drive"]\ndrive = ["torque", "voltage.q"]\ninterval = 0.01\n'
+    result, _ = run_scene(load_scene(write(tmp_path, text).parent / "scene.toml"))
+    assert {"energy.kinetic", "power.drive", "torque[1]", "voltage.q[6]"} <= set(result.dtype.names)
+    assert "speed[1]" not in result.dtype.names
+    np.testing.assert_allclose(np.diff(result["time"]), 0.01, atol=1e-9)
+
+
+def test_an_unknown_output_is_named_with_its_line(tmp_path, capsys):
+    text = BASE + '[outputs]\ndrive = ["torque", "torqe"]\n'
+    with pytest.raises(SceneError) as error:
+        run_scene(load_scene(write(tmp_path, text)))
+    assert "scene.toml:8: 'outputs.drive'" in str(error.value) and "no variable 'torqe'" in str(error.value)
+    assert main(["run", str(tmp_path / "scene.toml"), "--no-plots", "--out", str(tmp_path)]) == 2
+    assert "no variable 'torqe'" in capsys.readouterr().err
