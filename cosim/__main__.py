@@ -9,6 +9,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .fmus import ROOT
 from .runner import SceneFailed, run_scene
 from .scene import SceneError, load_scene
 
@@ -22,7 +23,8 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=float, help="override the scene's duration [s]")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
-    validate.add_argument("--out", type=Path, default=Path("docs"), help="folder of validation.md and figures/")
+    validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
+                          "(default: this checkout's docs/)")
     advise = commands.add_parser("advise", help="recommend the cheapest effects, drive fidelity and step for a tolerance")
     advise.add_argument("scene", type=Path)
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
