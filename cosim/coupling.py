@@ -334,9 +334,13 @@ class AdaptiveStep:
         for n, instance in coupling.instances.items():
             instance.free_state(snapshot[0][n])
 
-    def advance(self, coupling: Coupling, t: float, t_end: float) -> float:
-        """Steps from t to t_end (the last step shortened to land on it); returns t_end."""
+    def advance(self, coupling: Coupling, t: float, t_end: float, max_accepted: int | None = None) -> float:
+        """Steps from t to t_end (the last step shortened to land on it), or until max_accepted
+        steps were accepted; returns the time reached."""
+        accepted_before = len(self.accepted)
         while t_end - t > 1e-12 * max(1.0, abs(t_end)):
+            if max_accepted is not None and len(self.accepted) - accepted_before >= max_accepted:
+                return t
             h = min(self.h, t_end - t)
             start = self._snapshot(coupling)
             try:
@@ -366,7 +370,7 @@ class AdaptiveStep:
                 self.h = min(self.h_max, max(self.h_min, h * factor))
             finally:
                 self._free(coupling, start)
-        return t_end
+        return t
 
 
 class EnergyStep:

@@ -16,7 +16,7 @@ from .fmu_instance import FmuError
 from .fmus import native_library_path
 
 _CALLS = {1: "fmi2SetReal", 2: "fmi2SetRealInputDerivatives", 3: "fmi2DoStep", 4: "fmi2GetReal",
-          5: "fmi2GetRealOutputDerivatives"}
+          5: "fmi2GetRealOutputDerivatives", 6: "fmi2GetFMUstate", 7: "fmi2SetFMUstate", 8: "fmi2FreeFMUstate"}
 
 _P = ctypes.c_void_p
 _INTS, _UINTS, _DOUBLES = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_uint), ctypes.POINTER(ctypes.c_double)
@@ -24,7 +24,8 @@ _INTS, _UINTS, _DOUBLES = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_
 
 class _Instance(ctypes.Structure):
     _fields_ = [("component", _P), ("set_real", _P), ("get_real", _P), ("set_input_derivatives", _P),
-                ("get_output_derivatives", _P), ("do_step", _P),
+                ("get_output_derivatives", _P), ("do_step", _P), ("get_state", _P), ("set_state", _P),
+                ("free_state", _P),
                 ("n_outputs", ctypes.c_int), ("output_offset", ctypes.c_int), ("output_vrs", _UINTS),
                 ("n_inputs", ctypes.c_int), ("input_offset", ctypes.c_int), ("input_vrs", _UINTS),
                 ("feed_source", _INTS), ("feed_index", _INTS), ("rate_order", ctypes.c_int),
@@ -43,6 +44,14 @@ class _Setup(ctypes.Structure):
                 ("failed_instance", ctypes.c_int), ("failed_call", ctypes.c_int)]
 
 
+class _Adaptive(ctypes.Structure):
+    _fields_ = [("h", ctypes.c_double), ("h_min", ctypes.c_double), ("h_max", ctypes.c_double),
+                ("rtol", ctypes.c_double), ("atol", _DOUBLES), ("t", ctypes.c_double), ("rejected", ctypes.c_int),
+                ("states", ctypes.POINTER(ctypes.c_void_p)), ("saved_time", _DOUBLES), ("saved_samples", _DOUBLES),
+                ("saved_rates", _DOUBLES), ("saved_inputs", _DOUBLES), ("saved_instance_time", _DOUBLES),
+                ("full", _DOUBLES)]
+
+
 _library = None
 
 
@@ -53,6 +62,10 @@ def _load() -> ctypes.CDLL:
         _library.cosim_loop_run.argtypes = [ctypes.POINTER(_Setup), ctypes.c_int, ctypes.c_double, ctypes.c_int,
                                             _DOUBLES, _DOUBLES, _DOUBLES]
         _library.cosim_loop_run.restype = ctypes.c_int
+        _library.cosim_loop_adaptive.argtypes = [ctypes.POINTER(_Setup), ctypes.POINTER(_Adaptive), ctypes.c_int,
+                                                 ctypes.c_double, ctypes.c_int, ctypes.c_int, _DOUBLES, _DOUBLES,
+                                                 _DOUBLES]
+        _library.cosim_loop_adaptive.restype = ctypes.c_int
     return _library
 
 
@@ -91,7 +104,9 @@ class NativeLoop:
             c.component = fmu.fmu.component
             for field, function in (("set_real", "fmi2SetReal"), ("get_real", "fmi2GetReal"),
                                     ("set_input_derivatives", "fmi2SetRealInputDerivatives"),
-                                    ("get_output_derivatives", "fmi2GetRealOutputDerivatives"), ("do_step", "fmi2DoStep")):
+                                    ("get_output_derivatives", "fmi2GetRealOutputDerivatives"), ("do_step", "fmi2DoStep"),
+                                    ("get_state", "fmi2GetFMUstate"), ("set_state", "fmi2SetFMUstate"),
+                                    ("free_state", "fmi2FreeFMUstate")):
                 setattr(c, field, ctypes.cast(getattr(fmu.fmu.dll, function), _P).value)
             outputs = coupling.sources[n]
             vrs = _ints([fmu.vr(v) for v in outputs]).astype(np.uintc)
@@ -167,7 +182,8 @@ class NativeLoop:
             self.instance_time[k] = self.coupling.instances[n].time
         self.fmi_seconds[:] = 0.0
 
-    def _from_native(self, steps: int, residuals: np.ndarray) -> None:
+    def _from_native(self, steps: int, residuals: np.ndarray, count: int | None = None) -> None:
+        """Takes the history, inputs, times and FMI time back; `count` residuals (default: steps)."""
         history = self.algorithm.history
         for j in range(self.setup.n_samples if steps else 0):
             outputs = {n: self.samples[j, o:o + len(self.coupling.sources[n])].copy()
@@ -186,7 +202,7 @@ class NativeLoop:
             instance.time = float(self.instance_time[k])
             instance.fmi_seconds += float(self.fmi_seconds[k])
         if self.coupling.bonds:
-            self.algorithm.energy_residuals.extend(residuals[:steps].tolist())
+            self.algorithm.energy_residuals.extend(residuals[:steps if count is None else count].tolist())
 
     def run(self, h: float, n_steps: int, rows: np.ndarray) -> None:
         """n_steps macro steps of h; rows (n_steps x (1 + columns), C order) receives the time and
@@ -207,3 +223,47 @@ class NativeLoop:
             instance = self.coupling.instances[name]
             raise FmuError(name, _CALLS.get(self.setup.failed_call, "?"), instance.time,
                            instance.messages[logged[name]:])
+
+    def run_adaptive(self, control, t: float, t_end: float, record) -> float:
+        """cosim.coupling.AdaptiveStep's step doubling from t to t_end in C, with the same numbers;
+        record(rows) receives the accepted rows (time and columns) batch by batch. Updates control's
+        h, accepted and rejected, and the algorithm's energy residuals. Returns the time reached."""
+        n, names = self.n_values, self.coupling.names
+        atol = np.full(max(n, 1), np.inf)
+        scales = control.atol if isinstance(control.atol, dict) else dict.fromkeys(self.output_offset, control.atol)
+        for name, value in scales.items():
+            offset = self.output_offset[name]
+            atol[offset:offset + len(self.coupling.sources[name])] = value
+        a = _Adaptive()
+        a.h, a.h_min, a.h_max, a.rtol, a.t, a.rejected = control.h, control.h_min, control.h_max, control.rtol, t, 0
+        scratch = dict(states=(ctypes.c_void_p * len(names))(), saved_time=np.zeros(3),
+                       saved_samples=np.zeros(3 * max(n, 1)), saved_rates=np.zeros(2 * max(n, 1)),
+                       saved_inputs=np.zeros(3 * max(self.n_inputs, 1)), saved_instance_time=np.zeros(len(names)),
+                       full=np.zeros(max(n, 1)))
+        a.atol = _ptr(atol, _DOUBLES)
+        a.states = scratch["states"]
+        for field in ("saved_time", "saved_samples", "saved_rates", "saved_inputs", "saved_instance_time", "full"):
+            setattr(a, field, _ptr(scratch[field], _DOUBLES))
+        capacity = 200
+        rows = np.zeros((capacity, 1 + self.n_columns))
+        accepted, residuals = np.zeros(capacity), np.zeros(2 * capacity)
+        while t_end - a.t > 1e-12 * max(1.0, abs(t_end)):
+            self._to_native()
+            logged = {name: len(i.messages) for name, i in self.coupling.instances.items()}
+            done = self.library.cosim_loop_adaptive(ctypes.byref(self.setup), ctypes.byref(a), self.clock, t_end,
+                                                    capacity, self.n_inputs, _ptr(rows, _DOUBLES),
+                                                    _ptr(accepted, _DOUBLES), _ptr(residuals, _DOUBLES))
+            failed = done < 0
+            written = -1 - done if failed else done
+            self._from_native(written, residuals, count=2 * written)
+            control.accepted.extend(accepted[:written].tolist())
+            control.rejected += a.rejected
+            a.rejected = 0
+            control.h = a.h
+            record(rows[:written])
+            if failed:
+                name = names[self.setup.failed_instance]
+                instance = self.coupling.instances[name]
+                raise FmuError(name, _CALLS.get(self.setup.failed_call, "?"), instance.time,
+                               instance.messages[logged[name]:])
+        return a.t

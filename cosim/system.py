@@ -18,7 +18,8 @@ from typing import Callable, Mapping, Protocol, Sequence
 import numpy as np
 from fmpy import extract
 
-from .coupling import Bond, Connection, Coupling, DivergenceMonitor, Diverged, GaussSeidel, Jacobi, bond_names
+from .coupling import (AdaptiveStep, Bond, Connection, Coupling, DivergenceMonitor, Diverged, GaussSeidel, Jacobi,
+                       bond_names)
 from .fmu_instance import FmuError, FmuInstance
 from .fmus import fmu_path
 from .native import NativeLoop
@@ -191,8 +192,21 @@ class PlatformSystem:
                 progress((t - start) / (stop_time - start))
 
         control.after_accept = record
+        native = (native and isinstance(control, AdaptiveStep) and not control.force_reject
+                  and all(self.coupling.interpolating.values()))
         try:
-            control.advance(self.coupling, start, stop_time)
+            if not native:
+                control.advance(self.coupling, start, stop_time)
+            else:  # the first step (with the start-up) in Python, the rest in C with the same numbers
+                t = control.advance(self.coupling, start, stop_time, max_accepted=1)
+                loop = NativeLoop(self.coupling, self.algorithm, self._columns, "mechanics")
+
+                def record_batch(batch: np.ndarray) -> None:
+                    rows.extend(batch.copy())
+                    if progress and len(batch):
+                        progress((batch[-1, 0] - start) / (stop_time - start))
+
+                loop.run_adaptive(control, t, stop_time, record_batch)
         except FmuError as error:
             raise RunFailed(error, np.array(rows)) from error
         return np.array(rows)

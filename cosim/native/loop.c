@@ -18,9 +18,13 @@ typedef int (*GetRealFn)(void *, const unsigned *, size_t, double *);
 typedef int (*SetDerivativesFn)(void *, const unsigned *, size_t, const int *, const double *);
 typedef int (*GetDerivativesFn)(void *, const unsigned *, size_t, const int *, double *);
 typedef int (*DoStepFn)(void *, double, double, int);
+typedef int (*GetStateFn)(void *, void **);
+typedef int (*SetStateFn)(void *, void *);
+typedef int (*FreeStateFn)(void *, void **);
 
 enum { FMI2_ERROR = 3 };
-enum { CALL_SET_REAL = 1, CALL_SET_INPUT_DERIVATIVES, CALL_DO_STEP, CALL_GET_REAL, CALL_GET_OUTPUT_DERIVATIVES };
+enum { CALL_SET_REAL = 1, CALL_SET_INPUT_DERIVATIVES, CALL_DO_STEP, CALL_GET_REAL, CALL_GET_OUTPUT_DERIVATIVES,
+       CALL_GET_STATE, CALL_SET_STATE, CALL_FREE_STATE };
 
 typedef struct {
     void *component;
@@ -29,6 +33,9 @@ typedef struct {
     SetDerivativesFn set_input_derivatives;
     GetDerivativesFn get_output_derivatives;
     DoStepFn do_step;
+    GetStateFn get_state;
+    SetStateFn set_state;
+    FreeStateFn free_state;
     int n_outputs, output_offset;     /* its coupled outputs, at output_offset in a sample */
     const unsigned *output_vrs;
     int n_inputs, input_offset;       /* its coupled inputs, at input_offset in the input arrays */
@@ -218,6 +225,33 @@ static int record(LoopSetup *s, double *row, double t) {
     return 1;
 }
 
+/* One macro step of the algorithm from t (the master's time, as in cosim/coupling.py) to t + h:
+ * the sweep, the new history sample, and the bonds' energy residual (largest into *residual, per
+ * bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
+static int macro_step(LoopSetup *s, double t, double h, double *residual, double *bond_energy) {
+    const double t_new = t + h;
+    memset(s->stepped, 0, (size_t)s->n_instances * sizeof(int));
+    if (s->gauss_seidel) {
+        for (int j = 0; j < s->n_instances; j++) {
+            const int k = s->sequence[j];
+            if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new)) return 0;
+            if (!do_step(s, k, h) || !read_outputs(s, k)) return 0;
+        }
+    } else {
+        for (int j = 0; j < s->n_instances; j++) {
+            const int k = s->sequence[j];
+            if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new)) return 0;
+        }
+        for (int j = 0; j < s->n_instances; j++)
+            if (!do_step(s, s->sequence[j], h)) return 0;
+        for (int j = 0; j < s->n_instances; j++)
+            if (!read_outputs(s, s->sequence[j])) return 0;
+    }
+    if (!push_sample(s, t_new)) return 0;
+    *residual = s->n_bonds > 0 ? energy_residual(s, h, bond_energy) : 0.0;
+    return 1;
+}
+
 /* Takes n_steps macro steps of h from the time of instance `clock` (whose time the rows carry).
  * Returns the number of steps completed; fewer than n_steps when an FMI call failed (then
  * failed_instance and failed_call say which). rows: n_steps x (1 + n_columns); residuals: n_steps;
@@ -226,29 +260,126 @@ int cosim_loop_run(LoopSetup *s, int clock, double h, int n_steps, double *rows,
                    double *bond_energy) {
     s->failed_instance = s->failed_call = -1;
     for (int step = 0; step < n_steps; step++) {
-        const double t = s->instance_time[clock], t_new = t + h;
-        memset(s->stepped, 0, (size_t)s->n_instances * sizeof(int));
-        if (s->gauss_seidel) {
-            for (int j = 0; j < s->n_instances; j++) {
-                const int k = s->sequence[j];
-                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new)) return step;
-                if (!do_step(s, k, h) || !read_outputs(s, k)) return step;
-            }
-        } else {
-            for (int j = 0; j < s->n_instances; j++) {
-                const int k = s->sequence[j];
-                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new)) return step;
-            }
-            for (int j = 0; j < s->n_instances; j++)
-                if (!do_step(s, s->sequence[j], h)) return step;
-            for (int j = 0; j < s->n_instances; j++)
-                if (!read_outputs(s, s->sequence[j])) return step;
-        }
-        if (!push_sample(s, t_new)) return step;
-        residuals[step] = s->n_bonds > 0
-                              ? energy_residual(s, h, bond_energy ? bond_energy + (size_t)step * 2 * (size_t)s->n_bonds : NULL)
-                              : 0.0;
+        double *bonds = bond_energy ? bond_energy + (size_t)step * 2 * (size_t)s->n_bonds : NULL;
+        if (!macro_step(s, s->instance_time[clock], h, &residuals[step], bonds)) return step;
         if (!record(s, rows + (size_t)step * (size_t)(1 + s->n_columns), s->instance_time[clock])) return step;
     }
     return n_steps;
+}
+
+/* ---- step doubling (cosim.coupling.AdaptiveStep, operation for operation) ---- */
+
+typedef struct {
+    double h, h_min, h_max, rtol;
+    const double *atol;     /* per sample value; +inf where the error is not measured */
+    double t;               /* the controller's time, advanced by each accepted H */
+    int rejected;           /* added to */
+    /* scratch, sized by Python: */
+    void **states;          /* n_instances saved FMU states */
+    double *saved_time, *saved_samples, *saved_rates, *saved_inputs, *saved_instance_time, *full;
+} AdaptiveSetup;
+
+static void save_memory(LoopSetup *s, AdaptiveSetup *a, int *n_samples) {
+    const size_t n = (size_t)s->n_sample_values;
+    memcpy(a->saved_time, s->sample_time, 3 * sizeof(double));
+    memcpy(a->saved_samples, s->samples, 3 * n * sizeof(double));
+    memcpy(a->saved_rates, s->exact_rates, 2 * n * sizeof(double));
+    *n_samples = s->n_samples;
+}
+
+static void restore_memory(LoopSetup *s, AdaptiveSetup *a, int n_samples) {
+    const size_t n = (size_t)s->n_sample_values;
+    memcpy(s->sample_time, a->saved_time, 3 * sizeof(double));
+    memcpy(s->samples, a->saved_samples, 3 * n * sizeof(double));
+    memcpy(s->exact_rates, a->saved_rates, 2 * n * sizeof(double));
+    s->n_samples = n_samples;
+}
+
+static int save_states(LoopSetup *s, AdaptiveSetup *a, int n_inputs_total) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const LoopInstance *in = &s->instances[k];
+        a->states[k] = NULL;
+        FMI_CALL(s, k, CALL_GET_STATE, in->get_state(in->component, &a->states[k]));
+    }
+    memcpy(a->saved_instance_time, s->instance_time, (size_t)s->n_instances * sizeof(double));
+    memcpy(a->saved_inputs, s->input_values, (size_t)n_inputs_total * sizeof(double));
+    memcpy(a->saved_inputs + n_inputs_total, s->input_rates, (size_t)n_inputs_total * sizeof(double));
+    memcpy(a->saved_inputs + 2 * n_inputs_total, s->input_curvatures, (size_t)n_inputs_total * sizeof(double));
+    return 1;
+}
+
+static int restore_states(LoopSetup *s, AdaptiveSetup *a, int n_inputs_total) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const LoopInstance *in = &s->instances[k];
+        FMI_CALL(s, k, CALL_SET_STATE, in->set_state(in->component, a->states[k]));
+    }
+    memcpy(s->instance_time, a->saved_instance_time, (size_t)s->n_instances * sizeof(double));
+    memcpy(s->input_values, a->saved_inputs, (size_t)n_inputs_total * sizeof(double));
+    memcpy(s->input_rates, a->saved_inputs + n_inputs_total, (size_t)n_inputs_total * sizeof(double));
+    memcpy(s->input_curvatures, a->saved_inputs + 2 * n_inputs_total, (size_t)n_inputs_total * sizeof(double));
+    return 1;
+}
+
+static void free_states(LoopSetup *s, AdaptiveSetup *a) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const LoopInstance *in = &s->instances[k];
+        if (a->states[k]) in->free_state(in->component, &a->states[k]);
+        a->states[k] = NULL;
+    }
+}
+
+/* Step doubling from a->t towards t_end: each macro step H once whole and once as two halves from
+ * the saved states; accepted when the scaled difference of the outputs is <= 1 (or H <= h_min),
+ * then a row is recorded (time of instance `clock`), H into accepted_h and the halves' energy
+ * residuals into residuals (2 per row). Stops at t_end or after max_rows rows. Returns the rows
+ * written, or -1 - rows when an FMI call failed (failed_instance and failed_call say which). */
+int cosim_loop_adaptive(LoopSetup *s, AdaptiveSetup *a, int clock, double t_end, int max_rows, int n_inputs_total,
+                        double *rows, double *accepted_h, double *residuals) {
+    s->failed_instance = s->failed_call = -1;
+    const size_t n = (size_t)s->n_sample_values;
+    int written = 0;
+    while (written < max_rows && t_end - a->t > 1e-12 * (fabs(t_end) > 1.0 ? fabs(t_end) : 1.0)) {
+        const double t = a->t, h = a->h < t_end - t ? a->h : t_end - t;
+        int n_samples, ok = 1;
+        double r_full, r_half_1, r_half_2;
+        save_memory(s, a, &n_samples);
+        if (!save_states(s, a, n_inputs_total)) { free_states(s, a); return -1 - written; }
+        ok = macro_step(s, t, h, &r_full, NULL);
+        if (ok) {
+            memcpy(a->full, s->samples + (size_t)(s->n_samples - 1) * n, n * sizeof(double));
+            restore_memory(s, a, n_samples);
+            ok = restore_states(s, a, n_inputs_total) && macro_step(s, t, h / 2, &r_half_1, NULL) &&
+                 macro_step(s, t + h / 2, h / 2, &r_half_2, NULL);
+        }
+        if (!ok) { free_states(s, a); return -1 - written; }
+        const double *half = s->samples + (size_t)(s->n_samples - 1) * n;
+        double error = 0.0;
+        int first = 1;
+        for (size_t i = 0; i < n; i++) {
+            if (isinf(a->atol[i])) continue;
+            const double scaled = fabs(half[i] - a->full[i]) / (a->atol[i] + a->rtol * fabs(half[i]));
+            if (first || scaled > error) error = scaled;
+            first = 0;
+        }
+        if (error <= 1.0 || h <= a->h_min) {
+            a->t = t + h;
+            accepted_h[written] = h;
+            residuals[2 * written] = r_half_1;
+            residuals[2 * written + 1] = r_half_2;
+            if (!record(s, rows + (size_t)written * (size_t)(1 + s->n_columns), s->instance_time[clock])) {
+                free_states(s, a);
+                return -1 - written;
+            }
+            written++;
+        } else {
+            restore_memory(s, a, n_samples);
+            if (!restore_states(s, a, n_inputs_total)) { free_states(s, a); return -1 - written; }
+            a->rejected++;
+        }
+        const double factor = error == 0.0 ? 2.0 : fmin(2.0, fmax(0.2, 0.9 * pow(error, -1.0 / (s->order + 2))));
+        const double next = h * factor;
+        a->h = a->h_max < (a->h_min > next ? a->h_min : next) ? a->h_max : (a->h_min > next ? a->h_min : next);
+        free_states(s, a);
+    }
+    return written;
 }
