@@ -13,11 +13,9 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
-from fmpy import read_model_description
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from cosim.fmus import ROOT  # noqa: E402

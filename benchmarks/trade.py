@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -102,7 +101,6 @@ def study(scene: Scene, fidelities: dict[str, dict], effects: dict[str, dict]) -
         points.append(point)
     for tolerance in (1e-2, 1e-3):
         point = Point("libcosim ECCO", f"libcosim ECCO rtol=atol={tolerance:g}")
-        start = time.perf_counter()
         run = run_in_libcosim(scene, checkpoints=checkpoints, ecco=Ecco(rtol=tolerance, atol=tolerance))
         point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
         points.append(point)

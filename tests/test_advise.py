@@ -3,7 +3,6 @@ never picks a candidate the divergence monitor stopped."""
 
 from __future__ import annotations
 
-import dataclasses
 
 from cosim.__main__ import main
 from cosim.advise import advise, recommend
