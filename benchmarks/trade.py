@@ -26,6 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from cosim.fmus import ROOT  # noqa: E402
 from cosim.libcosim import Ecco, run_in_libcosim  # noqa: E402
+from cosim.results import save_figure  # noqa: E402
 from cosim.runner import SceneFailed, run_scene  # noqa: E402
 from cosim.scene import Scene, load_scene  # noqa: E402
 from cosim.system import POSE  # noqa: E402
@@ -161,10 +162,7 @@ def plot(points: list[Point], path: Path, title: str) -> None:
     ax.set(xlabel="wall time [s]", ylabel="largest pose error [m, rad]", title=title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:

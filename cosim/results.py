@@ -35,6 +35,14 @@ def write_mat(result: np.ndarray, path: Path) -> None:
     savemat(path, {safe(n): result[n] for n in result.dtype.names})
 
 
+def save_figure(fig, path: Path) -> None:
+    """Lays out, writes (creating the folder) and closes a figure."""
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def plot_tracking(result: np.ndarray, path: Path, title: str) -> None:
     t = result["time"]
     axes_names = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -53,9 +61,7 @@ def plot_tracking(result: np.ndarray, path: Path, title: str) -> None:
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str) -> None:
@@ -70,6 +76,4 @@ def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: 
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, ncol=6)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from ..parameter_sets import load, mechanics_start_values
 from ..platform_core import Core
 from ..scene import Pulse, Ramp, Signal, Step
@@ -184,7 +185,4 @@ def _plot(data: dict, figures: Path) -> None:
         ax.grid(True, alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    fig.tight_layout()
-    figures.mkdir(parents=True, exist_ok=True)
-    fig.savefig(figures / "halder_fig6.png", dpi=100)
-    plt.close(fig)
+    results.save_figure(fig, figures / "halder_fig6.png")

@@ -161,10 +161,7 @@ def bandwidths(figures: Path | None = None, frequencies=FREQUENCIES, dofs=POSE) 
         for ax in (gain_ax, phase_ax):
             ax.grid(True, which="both", alpha=0.3)
         gain_ax.legend(fontsize=8)
-        fig.tight_layout()
-        figures.mkdir(parents=True, exist_ok=True)
-        fig.savefig(figures / "meng_fig6_bode.png", dpi=100)
-        plt.close(fig)
+        results.save_figure(fig, figures / "meng_fig6_bode.png")
     rows = [Row(f"{DOF_NAMES[d]} bandwidth (-3 dB)", PAPER_BANDWIDTH[d], found[d], "Hz",
                 f"resonance peak {peaks[d]:+.1f} dB" if peaks[d] > 0.5 else "") for d in dofs]
     return rows, dict(frequencies=f, responses=responses, bandwidths=found, peaks=peaks)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from ..fmus import ROOT
 from ..parameter_sets import mechanics_start_values
 from ..platform_core import Core
@@ -77,10 +78,7 @@ def figures_4(figures: Path | None = None) -> tuple[list[Row], dict]:
             axes[row, 0].set_ylabel("leg force [N]")
         for ax in axes[-1]:
             ax.set_xlabel("w t [rad]")
-        fig.tight_layout()
-        figures.mkdir(parents=True, exist_ok=True)
-        fig.savefig(figures / "sumnu_fig4_forces.png", dpi=100)
-        plt.close(fig)
+        results.save_figure(fig, figures / "sumnu_fig4_forces.png")
     return rows, data
 
 
