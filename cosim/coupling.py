@@ -441,11 +441,23 @@ class DivergenceMonitor:
 
     def add(self, t: float, residual: np.ndarray, transferred: np.ndarray) -> None:
         """One macro step ending at t, per bond."""
-        self._residual += np.abs(residual)
-        self._transferred += transferred
-        self._count += 1
-        if self._count < self.window:
-            return
+        self.add_batch(np.array([t]), np.stack([residual, transferred], axis=-1)[None])
+
+    def add_batch(self, times: np.ndarray, bond_energy: np.ndarray) -> None:
+        """Steps ending at times (n), bond_energy (n x bonds x (residual, transferred)), summed
+        window by window with numpy (this runs once per batch of the native loop)."""
+        residual, transferred = np.abs(bond_energy[:, :, 0]), bond_energy[:, :, 1]
+        i = 0
+        while i < len(times) and self.message is None:
+            take = min(self.window - self._count, len(times) - i)
+            self._residual += residual[i:i + take].sum(axis=0)
+            self._transferred += transferred[i:i + take].sum(axis=0)
+            self._count += take
+            i += take
+            if self._count == self.window:
+                self._close_window(float(times[i - 1]))
+
+    def _close_window(self, t: float) -> None:
         carried = float(self._transferred.sum())
         ratio = float(self._residual.sum()) / max(carried, self.floor) if carried > self.floor else 0.0
         self.ratios.append(ratio)
@@ -462,13 +474,6 @@ class DivergenceMonitor:
         self._residual[:] = 0.0
         self._transferred[:] = 0.0
         self._count = 0
-
-    def add_batch(self, times: np.ndarray, bond_energy: np.ndarray) -> None:
-        """Several steps: times (n), bond_energy (n x bonds x (residual, transferred))."""
-        for t, energies in zip(times, bond_energy):
-            self.add(float(t), energies[:, 0], energies[:, 1])
-            if self.message:
-                return
 
 
 def bond_names(coupling: Coupling) -> list[str]:

@@ -159,7 +159,7 @@ class PlatformSystem:
             monitor = (DivergenceMonitor(bond_names(self.coupling), step, ratio=divergence_ratio)
                        if divergence_ratio and self.coupling.bonds else None)
             self.monitor = monitor
-            row = 1
+            row, batch_size = 1, 100
             while row <= n:
                 first = row
                 try:
@@ -170,7 +170,8 @@ class PlatformSystem:
                         if monitor:
                             monitor.add(self.time, *self.algorithm.bond_energies)
                     else:
-                        batch = min(n + 1 - row, 200)
+                        batch = min(n + 1 - row, batch_size)
+                        batch_size = min(2 * batch_size, 1000)  # small first: a divergence shows early
                         try:
                             loop.run(step, batch, out[row:row + batch])
                         finally:
