@@ -77,6 +77,13 @@ def _ptr(array: np.ndarray, kind):
     return array.ctypes.data_as(kind)
 
 
+def _failure_messages(messages: list) -> list:
+    """The messages of the failed call among those logged during a batch: its errors (the warnings
+    of earlier steps in the batch are not part of the failure), or all if none is an error."""
+    errors = [m for m in messages if m.status in ("error", "fatal")]
+    return errors or messages
+
+
 class NativeLoop:
     """Runs `algorithm` (Jacobi or GaussSeidel) on `coupling` in C, recording `columns` (instance,
     variable) after every step next to the time of instance `clock`."""
@@ -222,7 +229,7 @@ class NativeLoop:
             name = self.coupling.names[self.setup.failed_instance]
             instance = self.coupling.instances[name]
             raise FmuError(name, _CALLS.get(self.setup.failed_call, "?"), instance.time,
-                           instance.messages[logged[name]:])
+                           _failure_messages(instance.messages[logged[name]:]))
 
     def run_adaptive(self, control, t: float, t_end: float, record) -> float:
         """cosim.coupling.AdaptiveStep's step doubling from t to t_end in C, with the same numbers;
@@ -265,5 +272,5 @@ class NativeLoop:
                 name = names[self.setup.failed_instance]
                 instance = self.coupling.instances[name]
                 raise FmuError(name, _CALLS.get(self.setup.failed_call, "?"), instance.time,
-                               instance.messages[logged[name]:])
+                               _failure_messages(instance.messages[logged[name]:]))
         return a.t
