@@ -6,6 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Iterable, Mapping
 
+import numpy as np
+
 from .scene import CAPACITY, WRENCH_COMPONENTS, Pulse, Scene, Signal
 from .system import POSE
 
@@ -47,3 +49,18 @@ def trajectory_parameters(trajectory: Mapping[str, Signal], pulses: Iterable[Pul
 def scene_trajectory(scene: Scene) -> dict[str, float | str]:
     """The trajectory FMU's start values for a scene."""
     return trajectory_parameters(scene.trajectory, scene.pulses, scene.table, scene.interpolation)
+
+
+def sine_motion(trajectory: Mapping[str, Signal], t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pose, rate and acceleration (each n x 6) at times t of the trajectory's offsets and sines
+    (steps, ramps and tables left out): what an inverse model needs along a smooth reference."""
+    pose, rate, acc = (np.zeros((len(t), 6)) for _ in range(3))
+    for k, dof in enumerate(POSE):
+        signal = trajectory.get(dof, Signal())
+        pose[:, k] = signal.offset
+        for s in signal.sines:
+            w = 2 * np.pi * s.frequency
+            pose[:, k] += s.amplitude * np.sin(w * t + s.phase)
+            rate[:, k] += s.amplitude * w * np.cos(w * t + s.phase)
+            acc[:, k] -= s.amplitude * w * w * np.sin(w * t + s.phase)
+    return pose, rate, acc

@@ -20,6 +20,7 @@ from ..fmus import ROOT
 from ..platform_core import Core
 from ..runner import run_scene
 from ..scene import Scene, Signal, Sine, load_scene
+from ..signals import sine_motion
 from ..system import POSE
 from .rows import Row
 
@@ -32,24 +33,10 @@ def meng_scene(name: str = "meng_eq35", **changes) -> Scene:
     return dataclasses.replace(load_scene(SCENES / f"{name}.toml"), **changes)
 
 
-def reference_motion(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pose, rate and acceleration of the scene's sines (offsets and sines only) at times t (n x 6)."""
-    pose, rate, acc = (np.zeros((len(t), 6)) for _ in range(3))
-    for k, dof in enumerate(POSE):
-        signal = scene.trajectory.get(dof, Signal())
-        pose[:, k] = signal.offset
-        for s in signal.sines:
-            w = 2 * np.pi * s.frequency
-            pose[:, k] += s.amplitude * np.sin(w * t + s.phase)
-            rate[:, k] += s.amplitude * w * np.cos(w * t + s.phase)
-            acc[:, k] -= s.amplitude * w * w * np.sin(w * t + s.phase)
-    return pose, rate, acc
-
-
 def inverse_torques(scene: Scene, t: np.ndarray, core: Core | None = None) -> np.ndarray:
     """Motor torques (n x 6) the inverse model needs along the scene's reference (no load)."""
     core = core or Core()
-    pose, rate, acc = reference_motion(scene, t)
+    pose, rate, acc = sine_motion(scene.trajectory, t)
     return np.array([core.inverse_dynamics(p, r, a) for p, r, a in zip(pose, rate, acc)])
 
 

@@ -20,6 +20,7 @@ from ..parameter_sets import mechanics_start_values
 from ..platform_core import Core
 from ..runner import run_scene
 from ..scene import Scene, Signal, Sine, load_scene
+from ..signals import sine_motion
 from ..system import POSE
 from .rows import Row
 
@@ -33,19 +34,6 @@ FIGURES = [  # figure, trajectory, mass set
 WITHOUT_LOWER_PART = {"actuator.rotating_mass": 0.0, "actuator.rotating_inertia": 0.0}
 
 
-def _motion(trajectory: dict[str, Signal], t: np.ndarray):
-    pose, rate, acc = (np.zeros((len(t), 6)) for _ in range(3))
-    for k, dof in enumerate(POSE):
-        signal = trajectory.get(dof, Signal())
-        pose[:, k] = signal.offset
-        for s in signal.sines:
-            w = 2 * np.pi * s.frequency
-            pose[:, k] += s.amplitude * np.sin(w * t)
-            rate[:, k] += s.amplitude * w * np.cos(w * t)
-            acc[:, k] -= s.amplitude * w * w * np.sin(w * t)
-    return pose, rate, acc
-
-
 def driving_forces(trajectory: dict[str, Signal], mass_set: str, lower_part: bool, n: int = 200):
     """Leg forces (n x 6) of the inverse model over 0 <= w t <= 2 pi."""
     values = mechanics_start_values("sumnu2015", mass_set)
@@ -53,7 +41,7 @@ def driving_forces(trajectory: dict[str, Signal], mass_set: str, lower_part: boo
         values = {**values, **WITHOUT_LOWER_PART}
     core = Core().use_start_values(values)
     t = np.linspace(0.0, 2 * np.pi / W, n)
-    pose, rate, acc = _motion(trajectory, t)
+    pose, rate, acc = sine_motion(trajectory, t)
     return t, np.array([core.inverse_dynamics(*m) for m in zip(pose, rate, acc)]) * core.p.force_torque
 
 
