@@ -1,5 +1,6 @@
 """Command line:
-    python -m cosim run SCENE [--out DIR] [--no-plots] [--duration S]
+    python -m cosim run SCENE|FILE.ssp|FILE.ssd [--out DIR] [--no-plots] [--duration S] [--set NAME=VALUE]
+    python -m cosim export SCENE --ssp FILE.ssp    the scene as a standard SSP 1.0 archive
     python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
     python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL"""
 
@@ -9,19 +10,25 @@ import argparse
 import sys
 from pathlib import Path
 
-from .fmus import ROOT
-from .runner import SceneFailed, run_scene
-from .scene import SceneError, load_scene
+from .engine.artifacts import ROOT
+from .engine.ssp import ANNOTATION
+from .platform.runner import SceneFailed, run_scene
+from .platform.scene import SceneError, load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m cosim", description="Stewart platform co-simulation")
     commands = parser.add_subparsers(dest="command", required=True)
-    run = commands.add_parser("run", help="run a scene file (see scenes/)")
+    run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
     run.add_argument("scene", type=Path)
+    run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                     help="an SSP system's run setting (algorithm, order, step_control, step, rtol, atol, ...)")
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=float, help="override the scene's duration [s]")
+    export = commands.add_parser("export", help="write a scene as an SSP 1.0 archive (FMUs, parameters, wiring)")
+    export.add_argument("scene", type=Path)
+    export.add_argument("--ssp", type=Path, required=True, help="the .ssp file to write")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
     validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
                           "(default: this checkout's docs/)")
@@ -31,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
     args = parser.parse_args(argv)
     if args.command == "advise":
-        from .advise import advise as run_advice, text
+        from .platform.advise import advise as run_advice, text
         try:
             scene = load_scene(args.scene)
         except SceneError as error:
@@ -41,9 +48,13 @@ def main(argv: list[str] | None = None) -> int:
         print(text(scene, args.tolerance, candidates, info))
         return 0
     if args.command == "validate":
-        from .validation.report import build
+        from .platform.validation.report import build
         print(f"written: {build(args.out)}")
         return 0
+    if args.command == "export":
+        return export_scene(args.scene, args.ssp)
+    if args.scene.suffix.lower() in (".ssp", ".ssd"):
+        return run_system(args.scene, args.out, args.set, args.duration)
     try:
         scene = load_scene(args.scene)
     except SceneError as error:
@@ -61,7 +72,46 @@ def main(argv: list[str] | None = None) -> int:
         print(f"partial results up to t = {failed.report.simulated:g} s written to {args.out}/", file=sys.stderr)
         return 1
     print(report.text())
-    print(f"results: {args.out}/{scene.path.stem}.csv, .mat and plots")
+    print(f"results: {args.out}/{scene.path.stem}.csv, .mat" + ("" if args.no_plots else " and plots"))
+    return 0
+
+
+def export_scene(path: Path, ssp: Path) -> int:
+    from .engine.ssp import SspError, write_ssp
+    from .platform.runner import scene_structure
+    try:
+        written = write_ssp(scene_structure(load_scene(path)), ssp)
+    except (SceneError, SspError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    print(f"written: {written} (SSP 1.0; our coupling and step control in its annotation "
+          f"'{ANNOTATION}', which other tools ignore: they run it with their own algorithm and no input "
+          f"derivatives)")
+    return 0
+
+
+def run_system(path: Path, out: Path, settings: list[str], duration: float | None) -> int:
+    from .engine import RunFailed, SettingsError
+    from .engine.command import run_ssp
+    from .engine.ssp import SspError
+    overrides = {}
+    for item in settings:
+        if "=" not in item:
+            print(f"error: --set {item!r}: expected NAME=VALUE", file=sys.stderr)
+            return 2
+        name, value = item.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    try:
+        _, report = run_ssp(path, out, overrides, duration)
+    except (SspError, SettingsError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except RunFailed as failed:
+        print(failed.report.text(), file=sys.stderr)
+        print(f"partial results written to {out}/", file=sys.stderr)
+        return 1
+    print(report.text())
+    print(f"results: {out}/{path.stem}.csv and .mat")
     return 0
 
 

@@ -5,4 +5,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 .venv/bin/python -m cosim run scenes/meng_eq35.toml --out out "$@"
-.venv/bin/python -m cosim.drive_demo --out out
+.venv/bin/python examples/drive_demo.py --out out

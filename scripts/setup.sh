@@ -12,5 +12,5 @@ fi
 .venv/bin/python -m pip install --quiet --no-deps -e .
 .venv/bin/cmake -S . -B build -DPython3_EXECUTABLE="$PWD/.venv/bin/python" > build.log 2>&1 || { cat build.log; exit 1; }
 .venv/bin/cmake --build build -j 2 >> build.log 2>&1 || { cat build.log; exit 1; }
-touch build/built.stamp  # cosim.fmus: the build is current
+touch build/built.stamp  # cosim.engine.artifacts: the build is current
 echo "FMUs built:" build/fmus/*.fmu

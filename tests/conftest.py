@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from fmpy import extract
 
-from cosim.fmu_instance import FmuInstance
-from cosim.fmus import ROOT, fmu_path
+from cosim.engine.fmi import FmuInstance
+from cosim.engine.artifacts import ROOT, fmu_path
 
 
 @pytest.fixture(scope="session")

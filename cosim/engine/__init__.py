@@ -1,0 +1,18 @@
+"""A generic FMI 2.0 co-simulation engine: any system of co-simulation FMUs, described as SSP.
+
+It knows FMU instances (fmi), system structures (structure, ssp), the coupling algorithms and step
+controllers (settings; implemented once, in the C step kernel: kernel), one run loop (execution)
+and observers (observers). It knows nothing of any particular system.
+"""
+
+from .artifacts import ArtifactMissing, fmu_path
+from .execution import Execution, RunFailed
+from .fmi import FmuError, FmuInstance
+from .observers import DivergenceMonitor, Diverged, Observer, Progress, Recorder
+from .settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
+from .structure import Bond, Component, Connection, Experiment, SystemStructure
+
+__all__ = ["Algorithm", "ArtifactMissing", "Bond", "Component", "Connection", "DivergenceMonitor", "Diverged",
+           "EnergyControl", "Execution", "Experiment", "FixedStep", "FmuError", "FmuInstance", "Observer",
+           "Progress", "Recorder", "RunFailed", "SettingsError", "StepControl", "StepDoubling", "SystemStructure",
+           "fmu_path"]

@@ -1,0 +1,70 @@
+"""The wiring of a system resolved onto its live instances: per instance one group of coupled
+outputs and one of inputs (one FMI call each per macro step), each input's source and index, the
+power bonds as indices, and which instances take input derivatives or give output derivatives.
+
+Both the step kernel (cosim/engine/kernel.py) and the tests' Python oracle read this resolution.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .fmi import FmuInstance
+from .structure import Bond, Connection
+
+
+class Coupling:
+    """Instances and their connections, resolved into one output group and one input group per
+    instance, so that each macro step makes one get and one set call per instance."""
+
+    def __init__(self, instances: Mapping[str, FmuInstance], connections: Sequence[Connection],
+                 bonds: Sequence[Bond] = (), interpolating: Mapping[str, bool] | None = None):
+        """interpolating: per instance, whether it takes input derivatives (default: what its
+        modelDescription declares, canInterpolateInputs)."""
+        self.instances = dict(instances)
+        self.names = list(self.instances)
+        for c in connections:
+            for name, variable in (c.source, c.target):
+                if name not in self.instances:
+                    raise KeyError(f"connection {c.source} -> {c.target}: no instance '{name}'")
+                self.instances[name].vr(variable)  # raises with the instance and variable named
+        self.sources = {n: sorted({c.source[1] for c in connections if c.source[0] == n}) for n in self.names}
+        self.outputs = {n: self.instances[n].real_group(v) for n, v in self.sources.items() if v}
+        targets = {n: [c for c in connections if c.target[0] == n] for n in self.names}
+        self.inputs = {n: self.instances[n].real_group([c.target[1] for c in cs]) for n, cs in targets.items() if cs}
+        self.input_names = {n: [c.target[1] for c in cs] for n, cs in targets.items() if cs}
+        # for each target instance: (source instance, index in the source's output group) per input
+        self.feeds = {n: [(c.source[0], self.sources[c.source[0]].index(c.source[1])) for c in cs]
+                      for n, cs in targets.items() if cs}
+        # each bond as (source, index) and (target, index) of its effort and of its flow
+        def ends(c: Connection):
+            return ((c.source[0], self.sources[c.source[0]].index(c.source[1])),
+                    (c.target[0], self.input_names[c.target[0]].index(c.target[1])))
+        for bond in bonds:
+            if bond.effort not in connections or bond.flow not in connections:
+                raise KeyError(f"bond {bond}: both of its connections must be among the coupling's connections")
+        self.bonds = [(ends(b.effort), ends(b.flow)) for b in bonds]
+        self.interpolating = {n: (interpolating or {}).get(n, self.instances[n].can_interpolate_inputs)
+                              for n in self.names}
+        # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order
+        self.rate_orders = {n: min(2, self.instances[n].max_output_derivative_order) for n in self.outputs
+                            if self.instances[n].max_output_derivative_order > 0}
+
+    def read(self) -> dict[str, np.ndarray]:
+        return {n: group.read().copy() for n, group in self.outputs.items()}
+
+    def read_rates(self, names=None) -> dict[str, list[np.ndarray]]:
+        """The output derivatives (orders 1.., as far as provided) of the rate-giving sources."""
+        return {n: [self.outputs[n].read_derivatives(k) for k in range(1, self.rate_orders[n] + 1)]
+                for n in (self.rate_orders if names is None else names) if n in self.rate_orders}
+
+    def bond_names(self) -> list[str]:
+        """'source.effort -> target.input' for each bond."""
+        names = []
+        for (effort_out, effort_in), _ in self.bonds:
+            source, target = effort_out[0], effort_in[0]
+            names.append(f"{source}.{self.sources[source][effort_out[1]]} -> "
+                         f"{target}.{self.input_names[target][effort_in[1]]}")
+        return names

@@ -1,0 +1,146 @@
+"""The run loop: one for every algorithm and step control.
+
+An `Execution` instantiates a `SystemStructure`, resolves its wiring, hands it to the step kernel
+and runs it to a stop time in batches; after each batch the observers see the new rows (recorder,
+divergence monitor, progress). The kernel advances the system; the execution only loops; the
+observers only watch (libcosim's split of algorithm, execution and observers).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .coupling import Coupling
+from .fmi import FmuError, FmuInstance, LogMessage
+from .kernel import Kernel
+from .observers import Diverged, Observer, Recorder
+from .settings import Algorithm, FixedStep, StepControl, control_name
+from .structure import SystemStructure
+
+
+class RunFailed(RuntimeError):
+    """An FMU failed mid-run (`error` an FmuError: which instance, call and time), an observer
+    stopped the run (`error` e.g. a Diverged: when, how much, where, what to try) or the run could
+    not take a step; `result` holds the rows computed up to then."""
+
+    def __init__(self, error: Exception, result: np.ndarray):
+        super().__init__(str(error))
+        self.error, self.result = error, result
+
+
+class Execution:
+    """`structure` instantiated and run by `algorithm` under `control`, recording `record`
+    ((component, variable) pairs) as columns `names` (default 'component.variable') after every
+    accepted step. The time column is that of component `clock` (default the first).
+    `interpolating` overrides per component whether it takes input derivatives (default: its
+    modelDescription's canInterpolateInputs)."""
+
+    def __init__(self, structure: SystemStructure, algorithm: Algorithm, control: StepControl,
+                 record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None,
+                 clock: str | None = None, logging_on: bool = False,
+                 interpolating: Mapping[str, bool] | None = None):
+        self.structure, self.algorithm, self.control = structure, algorithm, control
+        self.control_name = control_name(control)
+        if algorithm.sequence and sorted(algorithm.sequence) != sorted(c.name for c in structure.components):
+            raise ValueError(f"the Gauss-Seidel sequence {list(algorithm.sequence)} must name every component "
+                             f"once: {[c.name for c in structure.components]}")
+        self.instances: dict[str, FmuInstance] = structure.instantiate(logging_on)
+        try:
+            self.coupling = Coupling(self.instances, structure.connections, structure.bonds, interpolating)
+            self.kernel = Kernel(self.coupling, algorithm, list(record), clock or structure.components[0].name)
+        except BaseException:
+            self.free()
+            raise
+        self.names = ["time", *(names if names is not None else [f"{c}.{v}" for c, v in record])]
+        self.bond_names = self.coupling.bond_names()
+        self.energy_residuals = np.zeros(0)  # per macro step, the largest |energy residual| of a bond [J]
+        self.steps = np.zeros(0)              # the accepted macro steps [s]
+        self.start_time = self.stop_time = structure.experiment.start
+
+    @property
+    def rejected(self) -> int:
+        return self.kernel.rejected
+
+    @property
+    def time(self) -> float:
+        return self.kernel.time
+
+    @property
+    def fmi_seconds(self) -> float:
+        return sum(i.fmi_seconds for i in self.instances.values())
+
+    def messages(self, status: str | None = None) -> list[tuple[str, LogMessage]]:
+        """(instance, message) of everything the FMUs logged, or only of one status."""
+        return [(n, m) for n, i in self.instances.items() for m in i.messages if status in (None, m.status)]
+
+    def run(self, stop_time: float, observers: Sequence[Observer] = ()) -> np.ndarray:
+        """Runs from the start to stop_time; returns the recorded results (structured array).
+        Raises RunFailed with the results up to the last good step when an FMU fails, an observer
+        stops the run, or not a single step fits before stop_time."""
+        recorder = Recorder(self.names)
+        observers = [recorder, *observers]
+        self.start_time, self.stop_time = self.time, stop_time
+        parts_residuals, parts_steps = [], []
+        try:
+            recorder.add(self.kernel.initialize())
+            for observer in observers:
+                observer.start(self)
+            if isinstance(self.control, FixedStep):
+                batches = self._fixed_batches(stop_time)
+            else:
+                self.kernel.start_controller(self.control)
+                batches = self._controlled_batches(stop_time)
+            for batch in batches:
+                parts_residuals.append(batch.residuals)
+                parts_steps.append(batch.steps)
+                for observer in observers:
+                    observer.batch(self, batch)
+                for observer in observers:
+                    if observer.stop is not None:
+                        raise observer.stop
+        except FmuError as error:
+            batch = getattr(error, "batch", None)
+            if batch is not None:
+                recorder.batch(self, batch)
+                parts_residuals.append(batch.residuals)
+                parts_steps.append(batch.steps)
+            raise RunFailed(error, recorder.result()) from error
+        except (Diverged, _NoStep) as error:
+            raise RunFailed(error, recorder.result()) from error
+        finally:
+            self.energy_residuals = np.concatenate([self.energy_residuals, *parts_residuals])
+            self.steps = np.concatenate([self.steps, *parts_steps])
+            for observer in observers:
+                if hasattr(observer, "finish"):
+                    observer.finish()
+        return recorder.result()
+
+    def _fixed_batches(self, stop_time: float):
+        h = self.control.step
+        n = int(round((stop_time - self.time) / h))
+        if n < 1:
+            raise _NoStep(f"the macro step {h:g} s does not fit once between t = {self.time:g} s and the stop "
+                          f"time {stop_time:g} s")
+        done, size = 0, 100  # small batches first: a divergence shows early
+        while done < n:
+            take = min(size, n - done)
+            size = min(2 * size, 1000)
+            yield self.kernel.run_fixed(h, take)
+            done += take
+
+    def _controlled_batches(self, stop_time: float):
+        if stop_time - self.time <= 1e-12 * max(1.0, abs(stop_time)):
+            raise _NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
+        while stop_time - self.kernel.controller_time > 1e-12 * max(1.0, abs(stop_time)):
+            yield self.kernel.run_controlled(stop_time, 500)
+
+    def free(self) -> None:
+        for instance in self.instances.values():
+            instance.free()
+        self.instances = {}
+
+
+class _NoStep(ValueError):
+    pass

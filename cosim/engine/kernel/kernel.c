@@ -1,0 +1,548 @@
+/* The engine's step kernel: the one implementation of the coupling algorithms and step controllers.
+ *
+ * Coupling (cosim/engine/coupling.py resolves the wiring; cosim/engine/kernel.py hands it over):
+ *   - Jacobi: every instance steps from t with inputs extrapolated from its sources' last k + 1
+ *     output samples (extrapolation order k = 0, 1, 2), global error O(h^(k+1));
+ *   - Gauss-Seidel: instances step in sequence; an input whose source has already stepped is
+ *     interpolated through that source's new sample at t + h.
+ *   A source that gives its outputs' time derivatives (fmi2GetRealOutputDerivatives) feeds its
+ *   Taylor polynomial at t instead. Input derivatives go to the FMU through
+ *   fmi2SetRealInputDerivatives; an FMU that cannot interpolate gets each input held at its
+ *   polynomial's value at the step's midpoint and no derivatives.
+ *   Start: the outputs are made consistent with the connected inputs (fixed-point sweeps), and the
+ *   first macro step, which has no history, is iterated to a fixed point with inputs interpolated
+ *   between t and the latest guess at t + h (FMU states restored between sweeps).
+ *   Every macro step measures the energy residual of each power bond (ECCO, Sadjina et al. 2017).
+ * Step control:
+ *   - fixed: n macro steps of h;
+ *   - step doubling: each H once whole and once as two halves from the saved FMU states; the
+ *     scaled difference is the error; a step too large is rolled back (fmi2SetFMUstate);
+ *   - energy: the bonds' energy residual against rtol |E| + atol sets the next step (PI law).
+ *
+ * tests/oracle.py is a plain Python transcription of this file that the tests hold it to, bit for
+ * bit; it is never used to run anything.
+ */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime */
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+#include <time.h>
+
+typedef int (*SetRealFn)(void *, const unsigned *, size_t, const double *);
+typedef int (*GetRealFn)(void *, const unsigned *, size_t, double *);
+typedef int (*SetDerivativesFn)(void *, const unsigned *, size_t, const int *, const double *);
+typedef int (*GetDerivativesFn)(void *, const unsigned *, size_t, const int *, double *);
+typedef int (*DoStepFn)(void *, double, double, int);
+typedef int (*GetStateFn)(void *, void **);
+typedef int (*SetStateFn)(void *, void *);
+typedef int (*FreeStateFn)(void *, void **);
+
+enum { FMI2_ERROR = 3 };
+enum { CALL_SET_REAL = 1, CALL_SET_INPUT_DERIVATIVES, CALL_DO_STEP, CALL_GET_REAL, CALL_GET_OUTPUT_DERIVATIVES,
+       CALL_GET_STATE, CALL_SET_STATE, CALL_FREE_STATE };
+
+typedef struct {
+    void *component;
+    SetRealFn set_real;
+    GetRealFn get_real;
+    SetDerivativesFn set_input_derivatives;
+    GetDerivativesFn get_output_derivatives;
+    DoStepFn do_step;
+    GetStateFn get_state;
+    SetStateFn set_state;
+    FreeStateFn free_state;
+    int n_outputs, output_offset;     /* its coupled outputs, at output_offset in a sample */
+    const unsigned *output_vrs;
+    int n_inputs, input_offset;       /* its coupled inputs, at input_offset in the input arrays */
+    const unsigned *input_vrs;
+    const int *feed_source;           /* per input: the source instance */
+    const int *feed_index;            /* per input: the index in the source's outputs */
+    int rate_order;                   /* output derivatives it provides (0: none; at most 2) */
+    int interpolating;                /* takes input derivatives (canInterpolateInputs) */
+    int n_record, record_offset;      /* outputs recorded each step, at record_offset in the scratch */
+    const unsigned *record_vrs;
+} KernelInstance;
+
+typedef struct {
+    int n_instances;
+    KernelInstance *instances;
+    const int *sequence;              /* stepping order (n_instances entries) */
+    int gauss_seidel, order;
+    /* history: n_samples (<= keep) samples, oldest first; each holds every instance's outputs */
+    int keep, n_samples;
+    double *sample_time;              /* [3] */
+    double *samples;                  /* [3][n_sample_values] */
+    int n_sample_values;
+    double *exact_rates;              /* [2][n_sample_values]: output derivatives at the latest sample */
+    double *new_values;               /* [n_sample_values] scratch: outputs at t + h */
+    int *stepped;                     /* [n_instances] scratch */
+    int n_inputs_total;
+    double *input_values, *input_rates, *input_curvatures; /* as set over the current step */
+    int n_bonds;
+    const int *bonds;                 /* per bond 8 ints: effort (source, index), (target, index); flow (same) */
+    int n_columns;
+    const int *column_of;             /* per recorded column: index in the record scratch */
+    double *record_scratch;
+    double *instance_time;            /* [n_instances] each instance's time */
+    double *fmi_seconds;              /* [n_instances] accumulated time inside its FMI calls */
+    const int *order_one, *order_two; /* arrays of 1s and 2s, long enough for any call */
+    void **states;                    /* [n_instances] saved FMU states of the step controller */
+    void **startup_states;            /* [n_instances] saved FMU states of the start-up iteration */
+    double *guess, *saved_time;       /* scratch: [n_sample_values], [n_instances] (start-up) */
+    int failed_instance, failed_call; /* set when a call fails */
+} Kernel;
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+#define FMI_CALL(s, k, code, expression)                                                          \
+    do {                                                                                           \
+        const double started_ = now();                                                             \
+        const int status_ = (expression);                                                          \
+        (s)->fmi_seconds[k] += now() - started_;                                                   \
+        if (status_ >= FMI2_ERROR) {                                                               \
+            (s)->failed_instance = (k);                                                            \
+            (s)->failed_call = (code);                                                             \
+            return 0;                                                                              \
+        }                                                                                          \
+    } while (0)
+
+/* Value, rate and curvature at t of the polynomial through the n samples (times[i], y[i]), by
+ * Newton's divided differences, truncated to `order`. */
+static void polynomial_at(int n, const double *times, const double *y, double t, int order, double out[3]) {
+    out[1] = out[2] = 0.0;
+    if (n == 1 || order == 0) { out[0] = y[n - 1]; return; }
+    if (n == 2 || order == 1) {
+        const double slope = (y[n - 1] - y[n - 2]) / (times[n - 1] - times[n - 2]);
+        out[0] = y[n - 1] + slope * (t - times[n - 1]);
+        out[1] = slope;
+        return;
+    }
+    const double d1_0 = (y[1] - y[0]) / (times[1] - times[0]), d1_1 = (y[2] - y[1]) / (times[2] - times[1]);
+    const double d2 = (d1_1 - d1_0) / (times[2] - times[0]);
+    out[0] = y[0] + d1_0 * (t - times[0]) + d2 * (t - times[0]) * (t - times[1]);
+    out[1] = d1_0 + d2 * ((t - times[0]) + (t - times[1]));
+    out[2] = 2.0 * d2;
+}
+
+/* Instance k's inputs over [t, t_new] at extrapolation order `order`: from the polynomial through
+ * its sources' samples (with the new sample at t_new where a source has stepped), evaluated at t. */
+static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
+    const KernelInstance *in = &s->instances[k];
+    const int latest = s->n_samples - 1;
+    for (int i = 0; i < in->n_inputs; i++) {
+        const int source = in->feed_source[i];
+        const int at = s->instances[source].output_offset + in->feed_index[i];
+        double p[3];
+        if (s->instances[source].rate_order > 0) { /* Taylor polynomial at t with the exact derivatives */
+            const int given = order < s->instances[source].rate_order ? order : s->instances[source].rate_order;
+            p[0] = s->samples[latest * s->n_sample_values + at];
+            p[1] = given >= 1 ? s->exact_rates[at] : 0.0;
+            p[2] = given >= 2 ? s->exact_rates[s->n_sample_values + at] : 0.0;
+        } else {
+            double times[4], y[4];
+            int n = 0;
+            for (int j = 0; j < s->n_samples; j++) {
+                times[n] = s->sample_time[j];
+                y[n++] = s->samples[j * s->n_sample_values + at];
+            }
+            if (s->stepped[source]) { times[n] = t_new; y[n++] = s->new_values[at]; }
+            const int count = order + 1 < n ? order + 1 : n;
+            polynomial_at(count, times + (n - count), y + (n - count), t, order, p);
+        }
+        if (order >= 1 && !in->interpolating) { /* held at the polynomial's midpoint value */
+            const double half = 0.5 * (t_new - t);
+            p[0] = p[0] + p[1] * half + 0.5 * p[2] * half * half;
+            p[1] = p[2] = 0.0;
+        }
+        s->input_values[in->input_offset + i] = p[0];
+        s->input_rates[in->input_offset + i] = p[1];
+        s->input_curvatures[in->input_offset + i] = p[2];
+    }
+    FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
+                                               s->input_values + in->input_offset));
+    if (!in->interpolating) return 1;
+    if (order >= 1)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
+                                           s->input_rates + in->input_offset));
+    if (order >= 2)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_two,
+                                           s->input_curvatures + in->input_offset));
+    return 1;
+}
+
+static int do_step(Kernel *s, int k, double h) {
+    const KernelInstance *in = &s->instances[k];
+    FMI_CALL(s, k, CALL_DO_STEP, in->do_step(in->component, s->instance_time[k], h, 0));
+    s->instance_time[k] += h;
+    return 1;
+}
+
+static int read_outputs(Kernel *s, int k) {
+    const KernelInstance *in = &s->instances[k];
+    if (in->n_outputs == 0) return 1;
+    FMI_CALL(s, k, CALL_GET_REAL, in->get_real(in->component, in->output_vrs, (size_t)in->n_outputs,
+                                               s->new_values + in->output_offset));
+    s->stepped[k] = 1;
+    return 1;
+}
+
+static int read_all_outputs(Kernel *s) {
+    for (int k = 0; k < s->n_instances; k++)
+        if (!read_outputs(s, k)) return 0;
+    return 1;
+}
+
+/* The exact output derivatives of the sources that give them, at their current time. */
+static int read_rates(Kernel *s) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const KernelInstance *in = &s->instances[k];
+        for (int order = 1; order <= in->rate_order; order++)
+            FMI_CALL(s, k, CALL_GET_OUTPUT_DERIVATIVES,
+                     in->get_output_derivatives(in->component, in->output_vrs, (size_t)in->n_outputs,
+                                                order == 1 ? s->order_one : s->order_two,
+                                                s->exact_rates + (order - 1) * s->n_sample_values + in->output_offset));
+    }
+    return 1;
+}
+
+/* The history's new sample: new_values at t_new, and the exact rates there. */
+static int push_sample(Kernel *s, double t_new) {
+    if (s->n_samples == s->keep) {
+        memmove(s->sample_time, s->sample_time + 1, (size_t)(s->keep - 1) * sizeof(double));
+        memmove(s->samples, s->samples + s->n_sample_values,
+                (size_t)(s->keep - 1) * (size_t)s->n_sample_values * sizeof(double));
+        s->n_samples--;
+    }
+    s->sample_time[s->n_samples] = t_new;
+    memcpy(s->samples + s->n_samples * s->n_sample_values, s->new_values, (size_t)s->n_sample_values * sizeof(double));
+    s->n_samples++;
+    return read_rates(s);
+}
+
+/* Makes the outputs at t consistent with the connected inputs (outputs that feed through from
+ * inputs depend on them): up to `sweeps` rounds of setting every input from its source and reading
+ * the outputs again, until they stop changing; then starts the history with that sample. */
+int kernel_initialize(Kernel *s, double t, int sweeps) {
+    s->failed_instance = s->failed_call = -1;
+    s->n_samples = 0;
+    if (!read_all_outputs(s)) return 0;
+    for (int sweep = 0; sweep < sweeps; sweep++) {
+        for (int k = 0; k < s->n_instances; k++) {
+            const KernelInstance *in = &s->instances[k];
+            if (in->n_inputs == 0) continue;
+            for (int i = 0; i < in->n_inputs; i++)
+                s->input_values[in->input_offset + i] =
+                    s->new_values[s->instances[in->feed_source[i]].output_offset + in->feed_index[i]];
+            FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
+                                                       s->input_values + in->input_offset));
+        }
+        memcpy(s->guess, s->new_values, (size_t)s->n_sample_values * sizeof(double)); /* the old outputs */
+        if (!read_all_outputs(s)) return 0;
+        int settled = 1;
+        for (int i = 0; i < s->n_sample_values; i++)
+            if (s->guess[i] != s->new_values[i]) settled = 0;
+        if (settled) break;
+    }
+    return push_sample(s, t);
+}
+
+/* _energy_residual: the largest |energy residual| of the bonds over the step just taken; per bond,
+ * the residual and the energy transferred into bond_energy (2 per bond) if it is not NULL. Each
+ * side's power is taken as it saw it: the outputs at t and t + h against the inputs as set over
+ * the step, integrated by the trapezoidal rule. */
+static double energy_residual(const Kernel *s, double h, double *bond_energy) {
+    const double *before = s->samples + (s->n_samples - 2) * s->n_sample_values;
+    const double *after = s->samples + (s->n_samples - 1) * s->n_sample_values;
+    double largest = 0.0;
+    for (int b = 0; b < s->n_bonds; b++) {
+        const int *bond = s->bonds + 8 * b;
+        const int effort_out = s->instances[bond[0]].output_offset + bond[1];
+        const int effort_in = s->instances[bond[2]].input_offset + bond[3];
+        const int flow_out = s->instances[bond[4]].output_offset + bond[5];
+        const int flow_in = s->instances[bond[6]].input_offset + bond[7];
+#define SEEN(i, dt) (s->input_values[i] + s->input_rates[i] * (dt) + 0.5 * s->input_curvatures[i] * (dt) * (dt))
+        const double given = 0.5 * h * (before[effort_out] * SEEN(flow_in, 0.0) + after[effort_out] * SEEN(flow_in, h));
+        const double taken = 0.5 * h * (SEEN(effort_in, 0.0) * before[flow_out] + SEEN(effort_in, h) * after[flow_out]);
+#undef SEEN
+        const double residual = fabs(given - taken);
+        if (residual > largest || isnan(residual)) largest = residual;
+        if (bond_energy) {
+            bond_energy[2 * b] = given - taken;
+            bond_energy[2 * b + 1] = 0.5 * (fabs(given) + fabs(taken));
+        }
+    }
+    return largest;
+}
+
+static int record(Kernel *s, double *row, double t) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const KernelInstance *in = &s->instances[k];
+        if (in->n_record > 0)
+            FMI_CALL(s, k, CALL_GET_REAL, in->get_real(in->component, in->record_vrs, (size_t)in->n_record,
+                                                       s->record_scratch + in->record_offset));
+    }
+    row[0] = t;
+    for (int c = 0; c < s->n_columns; c++) row[1 + c] = s->record_scratch[s->column_of[c]];
+    return 1;
+}
+
+/* Records the row at the current time of instance `clock` (the first row of a run). */
+int kernel_record(Kernel *s, int clock, double *row) {
+    s->failed_instance = s->failed_call = -1;
+    return record(s, row, s->instance_time[clock]);
+}
+
+static int save_states(Kernel *s, void **states) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const KernelInstance *in = &s->instances[k];
+        states[k] = NULL;
+        FMI_CALL(s, k, CALL_GET_STATE, in->get_state(in->component, &states[k]));
+    }
+    return 1;
+}
+
+static int restore_states(Kernel *s, void **states, const double *saved_instance_time) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const KernelInstance *in = &s->instances[k];
+        FMI_CALL(s, k, CALL_SET_STATE, in->set_state(in->component, states[k]));
+    }
+    memcpy(s->instance_time, saved_instance_time, (size_t)s->n_instances * sizeof(double));
+    return 1;
+}
+
+static void free_states(Kernel *s, void **states) {
+    for (int k = 0; k < s->n_instances; k++) {
+        const KernelInstance *in = &s->instances[k];
+        if (states[k]) in->free_state(in->component, &states[k]);
+        states[k] = NULL;
+    }
+}
+
+/* The first macro step, which has no history: iterated with inputs interpolated linearly between
+ * the outputs at t and the latest guess of the outputs at t + h until the guess changes by less
+ * than 1e-13 (relative) or 50 sweeps were made; the instances stay at t + h. */
+static int start_up(Kernel *s, double t, double h) {
+    enum { SWEEPS = 50 };
+    const double tolerance = 1e-13;
+    double *guess = s->guess, *saved_instance_time = s->saved_time;
+    memcpy(saved_instance_time, s->instance_time, (size_t)s->n_instances * sizeof(double));
+    if (!save_states(s, s->startup_states)) { free_states(s, s->startup_states); return 0; }
+    /* the guess at t + h starts as the outputs at t */
+    memcpy(s->new_values, s->samples + (s->n_samples - 1) * s->n_sample_values,
+           (size_t)s->n_sample_values * sizeof(double));
+    for (int k = 0; k < s->n_instances; k++) s->stepped[k] = s->instances[k].n_outputs > 0;
+    for (int sweep = 0; sweep < SWEEPS; sweep++) {
+        memcpy(guess, s->new_values, (size_t)s->n_sample_values * sizeof(double));
+        for (int k = 0; k < s->n_instances; k++) {
+            if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t + h, 1)) { free_states(s, s->startup_states); return 0; }
+            if (!do_step(s, k, h)) { free_states(s, s->startup_states); return 0; }
+        }
+        /* the new outputs: read into new_values only after every instance stepped (set_inputs
+         * reads the guess from new_values) */
+        if (!read_all_outputs(s)) { free_states(s, s->startup_states); return 0; }
+        double change = 0.0;
+        for (int i = 0; i < s->n_sample_values; i++) {
+            const double c = fabs(s->new_values[i] - guess[i]) / (1.0 + fabs(s->new_values[i]));
+            if (c > change || isnan(c)) change = c;
+        }
+        if (change < tolerance || sweep == SWEEPS - 1) break;
+        if (!restore_states(s, s->startup_states, saved_instance_time)) { free_states(s, s->startup_states); return 0; }
+    }
+    free_states(s, s->startup_states);
+    return push_sample(s, t + h);
+}
+
+/* One macro step from t (the master's time) to t + h: the start-up iteration if there is no
+ * history yet, otherwise one sweep; the new history sample; the bonds' energy residual (largest
+ * into *residual, per bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
+static int macro_step(Kernel *s, double t, double h, double *residual, double *bond_energy) {
+    const double t_new = t + h;
+    if (s->n_samples == 1 && s->order > 0) {
+        if (!start_up(s, t, h)) return 0;
+    } else {
+        memset(s->stepped, 0, (size_t)s->n_instances * sizeof(int));
+        if (s->gauss_seidel) {
+            for (int j = 0; j < s->n_instances; j++) {
+                const int k = s->sequence[j];
+                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
+                if (!do_step(s, k, h) || !read_outputs(s, k)) return 0;
+            }
+        } else {
+            for (int j = 0; j < s->n_instances; j++) {
+                const int k = s->sequence[j];
+                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
+            }
+            for (int j = 0; j < s->n_instances; j++)
+                if (!do_step(s, s->sequence[j], h)) return 0;
+            for (int j = 0; j < s->n_instances; j++)
+                if (!read_outputs(s, s->sequence[j])) return 0;
+        }
+        if (!push_sample(s, t_new)) return 0;
+    }
+    *residual = s->n_bonds > 0 && s->n_samples >= 2 ? energy_residual(s, h, bond_energy) : 0.0;
+    return 1;
+}
+
+/* ---- fixed step ---- */
+
+/* Takes n_steps macro steps of h from the time of instance `clock` (whose time the rows carry).
+ * Returns the number of steps completed; fewer than n_steps when an FMI call failed (then
+ * failed_instance and failed_call say which). rows: n_steps x (1 + n_columns); residuals: n_steps;
+ * bond_energy: n_steps x n_bonds x (residual, transferred). */
+int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, double *residuals,
+                     double *bond_energy) {
+    s->failed_instance = s->failed_call = -1;
+    for (int step = 0; step < n_steps; step++) {
+        double *bonds = bond_energy + (size_t)step * 2 * (size_t)s->n_bonds;
+        if (!macro_step(s, s->instance_time[clock], h, &residuals[step], bonds)) return step;
+        if (!record(s, rows + (size_t)step * (size_t)(1 + s->n_columns), s->instance_time[clock])) return step;
+    }
+    return n_steps;
+}
+
+/* ---- step control: step doubling and energy ---- */
+
+typedef struct {
+    double h, h_min, h_max, rtol;
+    const double *atol;     /* step doubling: per sample value, +inf where the error is not measured */
+    double atol_energy;     /* energy control [J] */
+    double k_i, k_p, previous; /* energy control: PI gains and the previous scaled residual */
+    double t;               /* the controller's time, advanced by each accepted H */
+    int rejected;           /* added to */
+    int accepted_count;     /* accepted steps so far (over batches) */
+    int *force_reject; int n_force_reject; /* test hook: reject the first try of these accepted-step indices */
+    /* scratch, sized by Python: */
+    double *saved_time, *saved_samples, *saved_rates, *saved_inputs, *saved_instance_time, *full;
+} Controller;
+
+static void save_memory(Kernel *s, Controller *a, int *n_samples) {
+    const size_t n = (size_t)s->n_sample_values, m = (size_t)s->n_inputs_total;
+    memcpy(a->saved_time, s->sample_time, 3 * sizeof(double));
+    memcpy(a->saved_samples, s->samples, 3 * n * sizeof(double));
+    memcpy(a->saved_rates, s->exact_rates, 2 * n * sizeof(double));
+    memcpy(a->saved_inputs, s->input_values, m * sizeof(double));
+    memcpy(a->saved_inputs + m, s->input_rates, m * sizeof(double));
+    memcpy(a->saved_inputs + 2 * m, s->input_curvatures, m * sizeof(double));
+    memcpy(a->saved_instance_time, s->instance_time, (size_t)s->n_instances * sizeof(double));
+    *n_samples = s->n_samples;
+}
+
+static void restore_memory(Kernel *s, Controller *a, int n_samples) {
+    const size_t n = (size_t)s->n_sample_values, m = (size_t)s->n_inputs_total;
+    memcpy(s->sample_time, a->saved_time, 3 * sizeof(double));
+    memcpy(s->samples, a->saved_samples, 3 * n * sizeof(double));
+    memcpy(s->exact_rates, a->saved_rates, 2 * n * sizeof(double));
+    memcpy(s->input_values, a->saved_inputs, m * sizeof(double));
+    memcpy(s->input_rates, a->saved_inputs + m, m * sizeof(double));
+    memcpy(s->input_curvatures, a->saved_inputs + 2 * m, m * sizeof(double));
+    s->n_samples = n_samples;
+}
+
+static int forced(const Controller *a) {
+    for (int i = 0; i < a->n_force_reject; i++)
+        if (a->force_reject[i] == a->accepted_count) return 1;
+    return 0;
+}
+
+/* Step doubling from a->t towards t_end: each macro step H once whole and once as two halves from
+ * the saved states; accepted when err = max |y_half - y_full| / (atol + rtol |y_half|) <= 1 (or
+ * H <= h_min), then a row is recorded (time of instance `clock`), H into accepted_h and the
+ * halves' energy residuals into residuals and bond_energy (2 per row). Otherwise every FMU is
+ * rolled back. H_next = H min(2, max(0.2, 0.9 err^(-1/(k+2)))) within [h_min, h_max]. Stops at
+ * t_end or after max_rows rows. Returns the rows written, or -1 - rows when an FMI call failed. */
+int kernel_run_doubling(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
+                        double *accepted_h, double *residuals, double *bond_energy) {
+    s->failed_instance = s->failed_call = -1;
+    const size_t n = (size_t)s->n_sample_values, nb = 2 * (size_t)s->n_bonds;
+    int written = 0;
+    while (written < max_rows && t_end - a->t > 1e-12 * (fabs(t_end) > 1.0 ? fabs(t_end) : 1.0)) {
+        const double t = a->t, h = a->h < t_end - t ? a->h : t_end - t;
+        int n_samples, ok;
+        double r_full, r_half_1, r_half_2;
+        double *bonds_1 = bond_energy + 2 * (size_t)written * nb, *bonds_2 = bonds_1 + nb;
+        save_memory(s, a, &n_samples);
+        if (!save_states(s, s->states)) { free_states(s, s->states); return -1 - written; }
+        ok = macro_step(s, t, h, &r_full, NULL);
+        if (ok) {
+            memcpy(a->full, s->samples + (size_t)(s->n_samples - 1) * n, n * sizeof(double));
+            restore_memory(s, a, n_samples);
+            ok = restore_states(s, s->states, a->saved_instance_time) && macro_step(s, t, h / 2, &r_half_1, bonds_1) &&
+                 macro_step(s, t + h / 2, h / 2, &r_half_2, bonds_2);
+        }
+        if (!ok) { free_states(s, s->states); return -1 - written; }
+        const double *half = s->samples + (size_t)(s->n_samples - 1) * n;
+        double error = 0.0;
+        int first = 1;
+        for (size_t i = 0; i < n; i++) {
+            if (isinf(a->atol[i])) continue;
+            const double scaled = fabs(half[i] - a->full[i]) / (a->atol[i] + a->rtol * fabs(half[i]));
+            if (first || scaled > error || isnan(scaled)) error = scaled;
+            first = 0;
+        }
+        const int force = forced(a);
+        double factor = error == 0.0 ? 2.0 : fmin(2.0, fmax(0.2, 0.9 * pow(error, -1.0 / (s->order + 2))));
+        if ((error <= 1.0 || h <= a->h_min) && !force) {
+            a->t = t + h;
+            accepted_h[written] = h;
+            residuals[2 * written] = r_half_1;
+            residuals[2 * written + 1] = r_half_2;
+            if (!record(s, rows + (size_t)written * (size_t)(1 + s->n_columns), s->instance_time[clock])) {
+                free_states(s, s->states);
+                return -1 - written;
+            }
+            written++;
+            a->accepted_count++;
+        } else {
+            restore_memory(s, a, n_samples);
+            if (!restore_states(s, s->states, a->saved_instance_time)) { free_states(s, s->states); return -1 - written; }
+            a->rejected++;
+            if (force) { /* the forced retry takes the same step again */
+                factor = 1.0;
+                for (int i = 0; i < a->n_force_reject; i++)
+                    if (a->force_reject[i] == a->accepted_count) a->force_reject[i] = -1;
+            }
+        }
+        const double next = h * factor;
+        a->h = fmin(a->h_max, fmax(a->h_min, next));
+        free_states(s, s->states);
+    }
+    return written;
+}
+
+/* Energy control (ECCO) from a->t towards t_end: after each step of H, eps = max over the bonds of
+ * |dE| / (atol + rtol |E|) (at least 1e-10), and H_next = H (1/eps)^k_I (eps_prev/eps)^k_P,
+ * limited to [0.2 H, 2 H] and [h_min, h_max]. No rollback. Returns rows written as
+ * kernel_run_doubling (one residual and one bond_energy block per row). */
+int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
+                      double *accepted_h, double *residuals, double *bond_energy) {
+    s->failed_instance = s->failed_call = -1;
+    const size_t nb = 2 * (size_t)s->n_bonds;
+    int written = 0;
+    while (written < max_rows && t_end - a->t > 1e-12 * (fabs(t_end) > 1.0 ? fabs(t_end) : 1.0)) {
+        const double h = a->h < t_end - a->t ? a->h : t_end - a->t;
+        double *bonds = bond_energy + (size_t)written * nb;
+        if (!macro_step(s, a->t, h, &residuals[written], bonds)) return -1 - written;
+        a->t += h;
+        accepted_h[written] = h;
+        if (!record(s, rows + (size_t)written * (size_t)(1 + s->n_columns), s->instance_time[clock]))
+            return -1 - written;
+        written++;
+        a->accepted_count++;
+        double eps = 0.0;
+        for (int b = 0; b < s->n_bonds; b++) {
+            const double e = fabs(bonds[2 * b]) / (a->atol_energy + a->rtol * bonds[2 * b + 1]);
+            if (b == 0 || e > eps || isnan(e)) eps = e;
+        }
+        eps = fmax(eps, 1e-10);
+        const double factor = pow(1.0 / eps, a->k_i) * pow(a->previous / eps, a->k_p);
+        a->previous = eps;
+        a->h = fmin(a->h_max, fmax(a->h_min, h * fmin(2.0, fmax(0.2, factor))));
+    }
+    return written;
+}

@@ -1,0 +1,42 @@
+"""Results in fmpy's convention (a numpy structured array with `time` and named float columns),
+written as CSV and as MATLAB .mat (one variable per column)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def thin(result: np.ndarray, interval: float | None) -> np.ndarray:
+    """The rows nearest to every `interval` seconds (and the last), or all rows."""
+    if not interval or len(result) < 2:
+        return result
+    t = result["time"]
+    grid = np.arange(t[0], t[-1] + 1e-9, interval)
+    keep = np.unique(np.minimum(np.searchsorted(t, grid - 1e-9), len(t) - 1))
+    return result[np.union1d(keep, [len(t) - 1])]
+
+
+def write_csv(result: np.ndarray, path: Path) -> None:
+    """Every value with 17 significant digits (a float's round trip), one header line of names."""
+    columns = np.column_stack([result[n] for n in result.dtype.names]) if len(result) else np.zeros((0, 1))
+    np.savetxt(path, columns, delimiter=",", fmt="%.17g", header=",".join(result.dtype.names), comments="")
+
+
+def mat_name(name: str) -> str:
+    """A MATLAB-safe variable name (pose.x -> pose_x, torque[1] -> torque_1)."""
+    return name.replace(".", "_").replace("[", "_").replace("]", "")
+
+
+def write_mat(result: np.ndarray, path: Path) -> None:
+    from scipy.io import savemat
+    savemat(path, {mat_name(n): result[n] for n in result.dtype.names})
+
+
+def write(result: np.ndarray, out: Path, stem: str) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / f"{stem}.csv", out / f"{stem}.mat"]
+    write_csv(result, paths[0])
+    write_mat(result, paths[1])
+    return paths

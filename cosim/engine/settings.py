@@ -1,0 +1,143 @@
+"""How a system is run: the coupling algorithm and the macro-step control, as plain settings.
+
+The step kernel (cosim/engine/kernel/kernel.c) implements each of them once; these classes only
+choose and parameterise. They convert to and from flat string dictionaries, the form an SSP
+annotation and the command line carry.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+from typing import Mapping
+
+ALGORITHMS = ("jacobi", "gauss-seidel")
+
+
+class SettingsError(ValueError):
+    """A setting with a wrong name or value; the message names it."""
+
+
+@dataclass(frozen=True)
+class Algorithm:
+    """Jacobi or Gauss-Seidel with input extrapolation of order 0, 1 or 2. `sequence`: the
+    Gauss-Seidel stepping order (default: the components' order). `initial_sweeps`: fixed-point
+    sweeps that make the outputs at the start consistent with the connected inputs (0: the outputs
+    as the FMUs initialized them, as tools without such a sweep do)."""
+    kind: str = "gauss-seidel"
+    order: int = 1
+    sequence: tuple[str, ...] | None = None
+    initial_sweeps: int = 20
+
+    def __post_init__(self):
+        if self.kind not in ALGORITHMS:
+            raise SettingsError(f"algorithm '{self.kind}': one of {', '.join(ALGORITHMS)}")
+        if self.order not in (0, 1, 2):
+            raise SettingsError(f"extrapolation order {self.order}: 0, 1 and 2 are supported")
+        if not (isinstance(self.initial_sweeps, int) and self.initial_sweeps >= 0):
+            raise SettingsError(f"initial_sweeps {self.initial_sweeps!r}: a whole number >= 0")
+
+
+def _positive(name: str, value: float) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise SettingsError(f"{name} = {value!r}: must be a positive finite number")
+
+
+@dataclass(frozen=True)
+class FixedStep:
+    step: float
+
+    def __post_init__(self):
+        _positive("step", self.step)
+
+
+@dataclass(frozen=True)
+class StepDoubling:
+    """Step doubling with rollback: each macro step H once whole and once as two halves; the scaled
+    difference of the outputs of the components named in `atol` (all, for one number) is the
+    error against atol + rtol |y|. `force_reject`: a test hook, accepted-step indices whose first
+    try is rejected."""
+    step: float
+    rtol: float = 1e-4
+    atol: float | Mapping[str, float] = 1e-6
+    h_min: float = 1e-6
+    h_max: float = 1e-2
+    force_reject: tuple[int, ...] = ()
+
+    def __post_init__(self):
+        for name in ("step", "rtol", "h_min", "h_max"):
+            _positive(name, getattr(self, name))
+        for value in (self.atol.values() if isinstance(self.atol, Mapping) else [self.atol]):
+            _positive("atol", value)
+
+
+@dataclass(frozen=True)
+class EnergyControl:
+    """ECCO (Sadjina et al. 2017): the power bonds' energy residual |dE| against atol [J] +
+    rtol |E| sets the next step by a PI law with gains k_i, k_p; no rollback."""
+    step: float
+    rtol: float = 1e-3
+    atol: float = 1e-4
+    h_min: float = 1e-6
+    h_max: float = 1e-2
+    k_i: float = 0.15
+    k_p: float = 0.2
+
+    def __post_init__(self):
+        for name in ("step", "rtol", "atol", "h_min", "h_max"):
+            _positive(name, getattr(self, name))
+
+
+StepControl = FixedStep | StepDoubling | EnergyControl
+CONTROLS = {"fixed": FixedStep, "doubling": StepDoubling, "energy": EnergyControl}
+
+
+def control_name(control: StepControl) -> str:
+    return {FixedStep: "fixed", StepDoubling: "doubling", EnergyControl: "energy"}[type(control)]
+
+
+def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
+    """The settings as name -> text (for an SSP annotation)."""
+    out = {"algorithm": algorithm.kind, "order": str(algorithm.order),
+           "initial_sweeps": str(algorithm.initial_sweeps), "step_control": control_name(control)}
+    if algorithm.sequence:
+        out["sequence"] = " ".join(algorithm.sequence)
+    for name, value in asdict(control).items():
+        if name == "force_reject":
+            continue
+        if isinstance(value, Mapping):
+            value = " ".join(f"{k}={v!r}" for k, v in value.items())
+        out[name] = repr(value) if isinstance(value, float) else str(value)
+    return out
+
+
+def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algorithm, StepControl]:
+    """The settings from name -> text (an SSP annotation, command-line options); unknown names
+    and bad values raise SettingsError naming them."""
+    values = dict(values)
+    try:
+        kind = values.pop("algorithm", "gauss-seidel")
+        order = int(values.pop("order", "1"))
+        sweeps = int(values.pop("initial_sweeps", "20"))
+        sequence = tuple(values.pop("sequence").split()) if "sequence" in values else None
+        algorithm = Algorithm(kind, order, sequence, sweeps)
+        name = values.pop("step_control", "fixed")
+        if name not in CONTROLS:
+            raise SettingsError(f"step_control '{name}': one of {', '.join(CONTROLS)}")
+        cls = CONTROLS[name]
+        known = {f.name for f in fields(cls)} - {"force_reject"}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise SettingsError(f"unknown setting '{unknown[0]}' for {name} step control (known: "
+                                f"{', '.join(sorted(known))})")
+        args: dict = {"step": float(values.pop("step", default_step))}
+        for key, text in values.items():
+            if key == "atol" and "=" in text:
+                args[key] = {k: float(v) for k, v in (item.split("=", 1) for item in text.split())}
+            else:
+                args[key] = float(text)
+        return algorithm, cls(**args)
+    except ValueError as error:
+        if isinstance(error, SettingsError):
+            raise
+        raise SettingsError(f"bad setting value: {error}") from None

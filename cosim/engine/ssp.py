@@ -1,0 +1,261 @@
+"""SSP 1.0 in and out (Modelica Association, System Structure and Parameterization).
+
+An archive (.ssp, a zip) holds SystemStructure.ssd (the system: components with their connectors
+and units, connections, the default experiment), the FMUs under resources/, and one parameter set
+per component as SSV (resources/<component>.ssv, bound to it by a ParameterBinding). What SSP has
+no element for, the power bonds and how we run the system (coupling algorithm, extrapolation
+order, step control, macro step, recorded outputs), travels in an annotation of the default
+experiment (type ANNOTATION); other tools ignore it and run the system with their own algorithm.
+A folder with SystemStructure.ssd (an unpacked archive) reads the same way.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+
+from fmpy import read_model_description
+from lxml import etree
+
+from .structure import Bond, Component, Connection, Experiment, SystemStructure, Value
+
+SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+COSIM = "https://github.com/stewart-cosim/ssp-annotation/1.0"
+ANNOTATION = "io.github.stewart-cosim.run"
+NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM}
+_SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "schema"
+
+
+class SspError(ValueError):
+    """An SSP file that cannot be read or run: the message names the file, and the line where known."""
+
+
+def _q(ns: str, tag: str) -> str:
+    return f"{{{ns}}}{tag}"
+
+
+def validate(root: etree._Element, schema: str, where: str) -> None:
+    """Validates against the SSP 1.0 schema (as fmpy ships it); raises SspError with the line."""
+    xsd = etree.XMLSchema(file=str(_SCHEMAS / schema))
+    if not xsd.validate(root):
+        error = xsd.error_log[0]
+        raise SspError(f"{where}:{error.line}: not valid SSP ({schema}): {error.message}")
+
+
+def _ssv_value(parent: etree._Element, value: Value, kind: str) -> None:
+    element = etree.SubElement(parent, _q(SSV, kind))
+    if kind == "Boolean":
+        element.set("value", "true" if value else "false")
+    elif kind == "Real":
+        element.set("value", repr(float(value)))
+    else:
+        element.set("value", str(int(value)) if kind == "Integer" else str(value))
+
+
+def _parameter_set(component: Component, kinds: dict[str, str]) -> etree._Element:
+    root = etree.Element(_q(SSV, "ParameterSet"), nsmap={"ssv": SSV}, version="1.0", name=component.name)
+    parameters = etree.SubElement(root, _q(SSV, "Parameters"))
+    for name, value in component.parameters.items():
+        if name not in kinds:
+            raise SspError(f"component '{component.name}': {component.fmu.name} has no variable '{name}'")
+        parameter = etree.SubElement(parameters, _q(SSV, "Parameter"), name=name)
+        _ssv_value(parameter, value, "Integer" if kinds[name] == "Enumeration" else kinds[name])
+    return root
+
+
+def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._Element, dict[str, etree._Element]]:
+    """The SSD tree and the SSV tree of each component; `sources` maps components to their FMU's
+    path inside the archive."""
+    root = etree.Element(_q(SSD, "SystemStructureDescription"), nsmap={"ssd": SSD, "ssc": SSC},
+                         version="1.0", name=structure.name)
+    system = etree.SubElement(root, _q(SSD, "System"), name=structure.name)
+    elements = etree.SubElement(system, _q(SSD, "Elements"))
+    units: dict[str, dict] = {}
+    parameter_sets = {}
+    for component in structure.components:
+        description = read_model_description(str(component.fmu))
+        variables = {v.name: v for v in description.modelVariables}
+        for unit in description.unitDefinitions:
+            base = unit.baseUnit
+            exponents = {k: getattr(base, k) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")} if base else {}
+            if base and base.factor not in (None, 1, 1.0):
+                exponents["factor"] = base.factor
+            if base and base.offset not in (None, 0, 0.0):
+                exponents["offset"] = base.offset
+            units.setdefault(unit.name, {k: v for k, v in exponents.items() if v})
+        element = etree.SubElement(elements, _q(SSD, "Component"), name=component.name,
+                                   type="application/x-fmu-sharedlibrary", source=sources[component.name])
+        connectors = etree.SubElement(element, _q(SSD, "Connectors"))
+        for name, variable in variables.items():  # every input and output, connected or not
+            if variable.causality not in ("input", "output"):
+                continue
+            connector = etree.SubElement(connectors, _q(SSD, "Connector"), name=name, kind=variable.causality)
+            kind = etree.SubElement(connector, _q(SSC, "Integer" if variable.type == "Enumeration" else variable.type))
+            if variable.type == "Real" and (variable.unit or (variable.declaredType and variable.declaredType.unit)):
+                kind.set("unit", variable.unit or variable.declaredType.unit)
+        if component.parameters:
+            bindings = etree.SubElement(element, _q(SSD, "ParameterBindings"))
+            etree.SubElement(bindings, _q(SSD, "ParameterBinding"), source=f"resources/{component.name}.ssv")
+            parameter_sets[component.name] = _parameter_set(component, {n: v.type for n, v in variables.items()})
+    connections = etree.SubElement(system, _q(SSD, "Connections"))
+    for c in structure.connections:
+        etree.SubElement(connections, _q(SSD, "Connection"), startElement=c.source[0], startConnector=c.source[1],
+                         endElement=c.target[0], endConnector=c.target[1])
+    used = {u.get("unit") for u in root.iter(_q(SSC, "Real")) if u.get("unit")}
+    if used:
+        unit_list = etree.SubElement(root, _q(SSD, "Units"))
+        for name in sorted(used):
+            unit = etree.SubElement(unit_list, _q(SSC, "Unit"), name=name)
+            etree.SubElement(unit, _q(SSC, "BaseUnit"), **{k: repr(v) if isinstance(v, float) else str(v)
+                                                           for k, v in units.get(name, {}).items()})
+    experiment = etree.SubElement(root, _q(SSD, "DefaultExperiment"), startTime=repr(structure.experiment.start),
+                                  stopTime=repr(structure.experiment.stop))
+    annotations = etree.SubElement(experiment, _q(SSD, "Annotations"))
+    annotation = etree.SubElement(annotations, _q(SSC, "Annotation"), type=ANNOTATION)
+    run = etree.SubElement(annotation, _q(COSIM, "Run"), nsmap={"cosim": COSIM}, step=repr(structure.experiment.step))
+    for name, value in structure.settings.items():
+        etree.SubElement(run, _q(COSIM, "Setting"), name=name, value=str(value))
+    for bond in structure.bonds:
+        etree.SubElement(run, _q(COSIM, "PowerBond"), effort=str(bond.effort), flow=str(bond.flow))
+    return root, parameter_sets
+
+
+def write_ssp(structure: SystemStructure, path: Path) -> Path:
+    """Writes `structure` as an SSP 1.0 archive at `path` (each FMU file once under resources/);
+    the SSD and every SSV are validated against the schemas first."""
+    sources, files = {}, {}
+    for component in structure.components:
+        inner = f"resources/{component.fmu.name}"
+        if files.get(inner, component.fmu) != component.fmu:
+            raise SspError(f"two different FMUs named {component.fmu.name}")
+        files[inner], sources[component.name] = component.fmu, inner
+    root, parameter_sets = to_xml(structure, sources)
+    validate(root, "SystemStructureDescription.xsd", "SystemStructure.ssd")
+    for name, tree in parameter_sets.items():
+        validate(tree, "SystemStructureParameterValues.xsd", f"resources/{name}.ssv")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("SystemStructure.ssd", etree.tostring(root, pretty_print=True, xml_declaration=True,
+                                                                encoding="UTF-8"))
+        for name, tree in parameter_sets.items():
+            archive.writestr(f"resources/{name}.ssv", etree.tostring(tree, pretty_print=True, xml_declaration=True,
+                                                                      encoding="UTF-8"))
+        for inner, fmu in files.items():
+            archive.write(fmu, inner)
+    return path
+
+
+def _typed(element: etree._Element, where: str) -> Value:
+    kind, text = etree.QName(element).localname, element.get("value")
+    try:
+        if kind == "Real":
+            return float(text)
+        if kind in ("Integer", "Enumeration"):
+            return int(text)
+        if kind == "Boolean":
+            if text not in ("true", "false", "1", "0"):
+                raise ValueError(f"'{text}' is not true or false")
+            return text in ("true", "1")
+        if kind == "String":
+            return text or ""
+    except (TypeError, ValueError) as error:
+        raise SspError(f"{where}:{element.sourceline}: {kind} value {text!r}: {error}") from None
+    raise SspError(f"{where}:{element.sourceline}: parameter type {kind} is not supported")
+
+
+def _parse(path: Path, where: str) -> etree._Element:
+    try:
+        return etree.parse(str(path)).getroot()
+    except (OSError, etree.XMLSyntaxError) as error:
+        raise SspError(f"{where}: {error}") from None
+
+
+def _connection(text: str, where: str) -> Connection:
+    try:
+        source, target = (side.strip() for side in text.split("->"))
+        s_component, s_variable = source.split(".", 1)
+        t_component, t_variable = target.split(".", 1)
+    except ValueError:
+        raise SspError(f"{where}: power bond connection '{text}' is not 'a.out -> b.in'") from None
+    return Connection((s_component, s_variable), (t_component, t_variable))
+
+
+def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructure:
+    """The system of an SSP archive (.ssp) or of an SSD file in an unpacked one. An archive is
+    unpacked to `extract_to` (default: a new temporary folder). Raises SspError naming the file
+    and line of what is wrong."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "SystemStructure.ssd"
+    if not path.is_file():
+        raise SspError(f"{path}: no such file")
+    if path.suffix.lower() == ".ssp":
+        try:
+            with zipfile.ZipFile(path) as archive:
+                folder = Path(extract_to or tempfile.mkdtemp(prefix="ssp_"))
+                archive.extractall(folder)
+        except zipfile.BadZipFile:
+            raise SspError(f"{path}: not an SSP archive (not a zip file)") from None
+        ssd, where = folder / "SystemStructure.ssd", f"{path}!SystemStructure.ssd"
+        if not ssd.exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            raise SspError(f"{path}: the archive holds no SystemStructure.ssd")
+    else:
+        ssd, where, folder = path, str(path), path.parent
+    root = _parse(ssd, where)
+    validate(root, "SystemStructureDescription.xsd", where)
+    system = root.find("ssd:System", NS)
+    if system.find("ssd:Elements/ssd:System", NS) is not None:
+        raise SspError(f"{where}: nested systems are not supported")
+    components = []
+    for element in system.findall("ssd:Elements/ssd:Component", NS):
+        source = folder / element.get("source")
+        if not source.exists():
+            raise SspError(f"{where}:{element.sourceline}: component '{element.get('name')}': "
+                           f"{element.get('source')} is not in the archive")
+        parameters: dict[str, Value] = {}
+        for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+            prefix = binding.get("prefix", "")
+            if binding.get("source"):
+                ssv_where = f"{where.rsplit('SystemStructure.ssd', 1)[0]}{binding.get('source')}"
+                ssv_root = _parse(folder / binding.get("source"), ssv_where)
+                validate(ssv_root, "SystemStructureParameterValues.xsd", ssv_where)
+                sets = [ssv_root]
+            else:
+                ssv_where = where
+                sets = binding.findall("ssd:ParameterValues/ssv:ParameterSet", NS)
+            for parameter_set in sets:
+                for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
+                    name = parameter.get("name")
+                    if prefix and name.startswith(prefix):
+                        name = name[len(prefix):]
+                    parameters[name] = _typed(parameter[0], ssv_where)
+        components.append(Component(element.get("name"), source, parameters))
+    connections = [Connection((c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector")))
+                   for c in system.findall("ssd:Connections/ssd:Connection", NS)]
+    experiment, settings, bonds = Experiment(), {}, []
+    default = root.find("ssd:DefaultExperiment", NS)
+    if default is not None:
+        experiment.start = float(default.get("startTime", "0"))
+        experiment.stop = float(default.get("stopTime", "1"))
+        run = default.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/cosim:Run", NS)
+        if run is not None:
+            experiment.step = float(run.get("step", experiment.step))
+            settings = {s.get("name"): s.get("value") for s in run.findall("cosim:Setting", NS)}
+            for b in run.findall("cosim:PowerBond", NS):
+                effort, flow = (_connection(b.get(k, ""), f"{where}:{b.sourceline}") for k in ("effort", "flow"))
+                if effort not in connections or flow not in connections:
+                    raise SspError(f"{where}:{b.sourceline}: power bond of connections that the system lacks")
+                bonds.append(Bond(effort, flow))
+    names = [c.name for c in components]
+    for c in connections:
+        for component, _ in (c.source, c.target):
+            if component not in names:
+                raise SspError(f"{where}: connection {c} names no component '{component}'")
+    return SystemStructure(root.get("name") or system.get("name"), components, connections, bonds, experiment,
+                           settings)

@@ -1,0 +1,180 @@
+"""The project's parameter sets (params/*.toml) as FMU start values.
+
+The mechanics FMU's defaults are the Meng platform (params/meng2010.toml), so that set maps to the
+same values the FMU already has; the Sumnu platform (params/sumnu2015.toml) loads as explicit
+joint coordinates (geometry.layout = 2) with one of the thesis' mass sets.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+
+from ..engine.artifacts import ROOT
+
+PARAMS = ROOT / "params"
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def load(name: str) -> dict:
+    path = PARAMS / f"{name}.toml"
+    if not path.exists():
+        known = ", ".join(p.stem for p in sorted(PARAMS.glob("*.toml")))
+        raise FileNotFoundError(f"no parameter set '{name}' in {PARAMS} (known: {known})")
+    with open(path, "rb") as f:
+        return tomllib.load(f)
+
+
+def meng_mechanics(c: dict) -> dict[str, float]:
+    g, act, ms = c["geometry"], c["actuator"], c["motor_system"]
+    values = {
+        "geometry.layout": 1,
+        "geometry.upper_joint_radius": g["upper_joint_radius"], "geometry.lower_joint_radius": g["lower_joint_radius"],
+        "geometry.upper_joint_spacing": g["upper_joint_spacing"],
+        "geometry.lower_joint_spacing": g["lower_joint_spacing"],
+        "geometry.middle_leg_length": g["middle_leg_length"],
+        "limit.leg_length_min": g["leg_length_min"], "limit.leg_length_max": g["leg_length_max"],
+        "platform.mass": c["platform"]["mass"],
+        "actuator.moving_mass": act["moving_part_mass"], "actuator.moving_inertia": act["moving_part_inertia"],
+        "actuator.moving_com": act["moving_part_com_from_upper_joint"],
+        "actuator.rotating_mass": act["rotating_part_mass"], "actuator.rotating_inertia": act["rotating_part_inertia"],
+        "actuator.rotating_com": act["rotating_part_com_from_lower_joint"],
+        "motor_system.mass": ms["mass"], "motor_system.inertia": ms["transverse_inertia"],
+        "motor_system.com": ms["com_from_lower_joint"], "motor_system.rotor_inertia": ms["rotor_screw_inertia"],
+        "transmission.screw_ratio": c["transmission"]["screw_ratio"],
+        "transmission.force_torque": c["transmission"]["force_torque_coefficient"],
+        "motor.viscous_friction": c["motor"]["viscous_friction"],
+    }
+    for axis, value in zip(("xx", "yy", "zz"), c["platform"]["inertia_diag"]):
+        values[f"platform.inertia_{axis}"] = value
+    for axis, value in zip("xyz", c["environment"]["gravity"]):
+        values[f"environment.gravity_{axis}"] = value
+    for k, centre in enumerate(g["lower_pair_centres_deg"]):
+        values[f"geometry.lower_pair_centre_{k + 1}"] = math.radians(centre)
+    for k, centre in enumerate(g["upper_pair_centres_deg"]):
+        values[f"geometry.upper_pair_centre_{k + 1}"] = math.radians(centre)
+    return values
+
+
+def sumnu_mechanics(c: dict, mass_set: str = "heavy") -> dict[str, float]:
+    """The Sumnu platform driven by direct (linear-motor) forces: no screw, no motor systems on the
+    legs (the forcer and stator masses belong to the legs' parts; see the linear-motor FMU), no
+    motor friction. The thesis gives no stroke: the limits are set at half the shortest and one
+    and a half times the longest home leg, so only gross excursions are reported."""
+    g, legs, masses = c["geometry"], c["legs"], c["mass_sets"][mass_set]
+    values: dict[str, float] = {"geometry.layout": 2}
+    for i, (b, q) in enumerate(zip(g["base_joints"], g["platform_joints"]), start=1):
+        for axis, bv, qv in zip("xyz", b, q):
+            values[f"geometry.base_joint[{i}].{axis}"] = bv
+            values[f"geometry.platform_joint[{i}].{axis}"] = qv
+    for axis, value in zip(POSE, g["home_pose"]):
+        values[f"geometry.neutral.{axis}"] = value
+        values[f"initial.pose.{axis}"] = value
+        values[f"pose_ref.{axis}"] = value
+    values.update({
+        "platform.mass": masses["platform_mass"],
+        "actuator.moving_mass": masses["moving_part_mass"],
+        "actuator.moving_inertia": masses["moving_part_inertia_diag"][0],
+        "actuator.moving_com": legs["moving_part_com_from_platform_joint"],
+        "actuator.rotating_mass": masses["rotating_part_mass"],
+        "actuator.rotating_inertia": masses["rotating_part_inertia_diag"][0],
+        "actuator.rotating_com": legs["rotating_part_com_from_base_joint"],
+        "effects.motor_inertia": False,
+        "effects.friction": False,
+    })
+    for axis, value in zip(("xx", "yy", "zz"), masses["platform_inertia_diag"]):
+        values[f"platform.inertia_{axis}"] = value
+    home = home_leg_lengths(g)
+    values["limit.leg_length_min"] = 0.5 * min(home)
+    values["limit.leg_length_max"] = 1.5 * max(home)
+    return values
+
+
+def home_leg_lengths(geometry: dict) -> list[float]:
+    x, y, z, roll, pitch, yaw = geometry["home_pose"]
+    cr, sr, cp, sp, cy, sy = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw), math.sin(yaw)
+    R = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+         [-sp, cp * sr, cp * cr]]
+    lengths = []
+    for b, q in zip(geometry["base_joints"], geometry["platform_joints"]):
+        top = [(x, y, z)[k] + sum(R[k][j] * q[j] for j in range(3)) for k in range(3)]
+        lengths.append(math.dist(top, b))
+    return lengths
+
+
+def halder_joints(c: dict) -> tuple[list[list[float]], list[list[float]], list[float]]:
+    """Halder's Eqs 1-4: the lower (spherical) joints B_i in the base frame, the upper (universal)
+    joints T_i in the payload frame (origin at the payload's centre of mass p), and the neutral pose.
+    Each joint lies on the line from the stub's end on the base circle, b_i, to its end on the disc,
+    t_i, a stub length from it (the stubs and the leg are collinear at the neutral, Eq 3)."""
+    g = c["geometry"]
+    theta_s = math.radians(g["half_pair_angle_deg"])
+    theta_b = {1: theta_s - math.pi / 3, 2: math.pi / 3 - theta_s}
+    theta_t = {1: -theta_s, 2: theta_s}
+    for i in range(3, 7):  # odd legs from leg 1, even legs from leg 2 (see params/halder2013.toml)
+        first = 1 if i % 2 else 2
+        theta_b[i] = theta_b[first] + (i - first) * math.pi / 3
+        theta_t[i] = theta_t[first] + (i - first) * math.pi / 3
+    z_disc, z_com = g["disc_height"], g["disc_height"] + g["payload_com_above_disc"]
+    lower, upper = [], []
+    for i in range(1, 7):
+        b = [g["base_radius"] * math.cos(theta_b[i]), g["base_radius"] * math.sin(theta_b[i]), 0.0]
+        t = [g["top_radius"] * math.cos(theta_t[i]), g["top_radius"] * math.sin(theta_t[i]), z_disc]
+        length = math.dist(b, t)
+        lower.append([bk + (tk - bk) * g["bottom_stub"] / length for bk, tk in zip(b, t)])
+        top = [tk - (tk - bk) * g["top_stub"] / length for bk, tk in zip(b, t)]
+        upper.append([top[0], top[1], top[2] - z_com])
+    return lower, upper, [0.0, 0.0, z_com, 0.0, 0.0, 0.0]
+
+
+def halder_mechanics(c: dict) -> dict[str, float]:
+    """Halder's 6-SBU platform: explicit joints, the payload, legs as upper part (slides with the top
+    joint), lower part and motor (swing about the bottom joint), leg spin and joint friction."""
+    lower, upper, neutral = halder_joints(c)
+    legs, friction, payload = c["legs"], c["friction"], c["payload"]
+    values: dict[str, float] = {"geometry.layout": 2}
+    for i, (b, a) in enumerate(zip(lower, upper), start=1):
+        for axis, bv, av in zip("xyz", b, a):
+            values[f"geometry.base_joint[{i}].{axis}"] = bv
+            values[f"geometry.platform_joint[{i}].{axis}"] = av
+    for axis, value in zip(POSE, neutral):
+        values[f"geometry.neutral.{axis}"] = value
+        values[f"initial.pose.{axis}"] = value
+        values[f"pose_ref.{axis}"] = value
+    l_u, l_l, l_m = legs["upper_part_length"], legs["lower_part_length"], legs["motor_length"]
+    stubs = c["geometry"]["top_stub"] + c["geometry"]["bottom_stub"]
+    values.update({
+        "platform.mass": payload["mass"],
+        "actuator.moving_mass": legs["upper_part_mass"], "actuator.moving_com": l_u / 2,
+        "actuator.moving_inertia": legs["upper_part_mass"] * l_u ** 2 / 12,
+        "actuator.rotating_mass": legs["lower_part_mass"], "actuator.rotating_com": l_m + l_l / 2,
+        "actuator.rotating_inertia": legs["lower_part_mass"] * l_l ** 2 / 12,
+        "motor_system.mass": legs["motor_mass"], "motor_system.com": l_m / 2,
+        "motor_system.inertia": legs["motor_mass"] * l_m ** 2 / 12,
+        "motor_system.rotor_inertia": legs["rotor_inertia"],
+        "actuator.spin_inertia": legs["spin_inertia"],
+        "transmission.screw_ratio": 2 * math.pi / legs["screw_lead"],
+        "transmission.force_torque": 2 * math.pi / legs["screw_lead"],
+        "motor.viscous_friction": friction["ball_screw"],
+        "joint.friction_lower": friction["spherical"], "joint.friction_upper": friction["universal"],
+        "limit.leg_length_min": c["geometry"]["running_length_min"] - stubs,
+        "limit.leg_length_max": c["geometry"]["running_length_max"] - stubs,
+    })
+    for axis, value in zip(("xx", "yy", "zz"), payload["inertia_diag"]):
+        values[f"platform.inertia_{axis}"] = value
+    for axis, value in zip("xyz", c["environment"]["gravity"]):
+        values[f"environment.gravity_{axis}"] = value
+    return values
+
+
+def mechanics_start_values(name: str, mass_set: str = "heavy") -> dict[str, float]:
+    """Start values of the mechanics FMU for parameter set `name` (meng2010, sumnu2015, halder2013)."""
+    c = load(name)
+    if name == "meng2010":
+        return meng_mechanics(c)
+    if name == "sumnu2015":
+        return sumnu_mechanics(c, mass_set)
+    if name == "halder2013":
+        return halder_mechanics(c)
+    raise ValueError(f"parameter set '{name}' has no mapping to the mechanics FMU")

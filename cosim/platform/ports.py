@@ -1,0 +1,32 @@
+"""The platform's ports as ../shared/INTERFACES.md names them: the pose and wrench signals and, per
+drive kind, which mechanics outputs feed a drive and which drive output feeds the mechanics. Pure
+data: the scene parser checks names against it without importing the runtime.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
+LEGS = range(1, 7)
+
+
+@dataclass(frozen=True)
+class DriveWiring:
+    """Which mechanics outputs feed a drive and which drive output feeds the mechanics, per leg."""
+    fmu: str
+    reference: tuple[str, str]  # (mechanics output, drive input)
+    position: tuple[str, str]
+    velocity: tuple[str, str]
+    effort: tuple[str, str]     # (drive output, mechanics input)
+    outputs: tuple[str, ...]    # recorded per drive by default: effort, speed or velocity, current
+
+
+DRIVES = {
+    "pmsm": DriveWiring("pmsm_drive", ("leg[{i}].angle_ref", "angle_ref"), ("leg[{i}].angle", "angle"),
+                        ("leg[{i}].speed", "speed"), ("torque", "leg[{i}].torque"), ("torque", "speed", "current.q")),
+    "linear": DriveWiring("linear_motor", ("leg[{i}].length_ref", "position_ref"), ("leg[{i}].length", "position"),
+                          ("leg[{i}].velocity", "velocity"), ("force", "leg[{i}].force"),
+                          ("force", "velocity", "current")),
+}

@@ -1,0 +1,246 @@
+"""Scenes: one TOML file describes a run (see scenes/ for the shipped ones).
+
+    [scene]       name, duration [s], step [s]
+    [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives); [drive.parameters]
+    [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
+    [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2,
+                  step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
+                  step doubling, with rollback) | "energy" (ECCO: the power bonds' energy residual),
+                  rtol, atol, h_min, h_max (of the adaptive controls; atol in m and rad of the legs'
+                  outputs for doubling, in J for energy)
+    [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
+                  pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
+    [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset, sines = [{amplitude, frequency [Hz],
+                  phase [rad]}] (up to 3), steps = [{time, height}] (2), ramps = [{start, end, slope}] (2)
+    [load]        pulses = [{component = "force.z" | ..., value, start, end}] (2 per component)
+    [outputs]     mechanics = [...] (mechanics outputs recorded besides pose and pose_ref),
+                  drive = [...] (per drive; default: effort, speed or velocity, current),
+                  interval [s] (write results every interval; default: every macro step)
+
+The signals become parameters of the trajectory FMU (fmu/trajectory/), so a scene is FMUs and
+connections only.
+
+A wrong key or value is reported with its name and the line it stands on.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .ports import DRIVES, POSE
+
+WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be run: the message names the file, the key and its line."""
+
+
+@dataclass
+class Sine:
+    amplitude: float
+    frequency: float
+    phase: float = 0.0
+
+
+@dataclass
+class Step:
+    time: float
+    height: float
+
+
+@dataclass
+class Ramp:
+    start: float
+    end: float
+    slope: float
+
+
+@dataclass
+class Signal:
+    offset: float = 0.0
+    sines: list[Sine] = field(default_factory=list)
+    steps: list[Step] = field(default_factory=list)
+    ramps: list[Ramp] = field(default_factory=list)
+
+
+@dataclass
+class Pulse:
+    component: str
+    value: float
+    start: float
+    end: float
+
+
+@dataclass
+class Scene:
+    path: Path
+    name: str
+    duration: float
+    step: float
+    drive: str
+    drive_parameters: dict[str, Any]
+    parameter_set: str
+    mass_set: str
+    mechanics_parameters: dict[str, Any]
+    algorithm: str
+    order: int
+    trajectory: dict[str, Signal]
+    pulses: list[Pulse]
+    table: Path | None = None
+    interpolation: str = "cubic"
+    step_control: str = "fixed"
+    rtol: float = 1e-3
+    atol: float | None = None  # the controller's default if None
+    h_min: float = 1e-6
+    h_max: float = 1e-2
+    outputs_mechanics: list[str] = field(default_factory=list)
+    outputs_drive: list[str] | None = None  # None: the drive kind's default
+    output_interval: float | None = None
+
+
+SCHEMA: dict[str, set[str]] = {
+    "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"},
+    "scene": {"name", "duration", "step"},
+    "drive": {"kind", "parameters"},
+    "mechanics": {"parameter_set", "mass_set", "parameters"},
+    "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max"},
+    "trajectory": {*POSE, "table", "interpolation"},
+    "trajectory.*": {"offset", "sines", "steps", "ramps"},
+    "load": {"pulses"},
+    "outputs": {"mechanics", "drive", "interval"},
+}
+ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "height"},
+             "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end"}}
+CAPACITY = {"sines": 3, "steps": 2, "ramps": 2, "pulses": 2}  # what the trajectory FMU holds
+STEP_CONTROLS = ("fixed", "doubling", "energy")
+
+
+def line_of(text: str, table: str, key: str) -> int:
+    """The line (1-based) on which `key` stands inside [table] (or its header; also inside an
+    inline table there), the first line naming it anywhere else, or 0."""
+    assignment = re.compile(r'(^|[{,\s])"?' + re.escape(key) + r'"?\s*=')
+    current, found = "", 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if line.startswith("["):
+            current = line.strip("[]").strip()
+            if current == (f"{table}.{key}" if table else key):
+                return number
+            continue
+        if assignment.search(line):
+            if current == table:
+                return number
+            found = found or number
+    return found
+
+
+def load_scene(path: str | Path) -> Scene:
+    path = Path(path)
+    if not path.exists():
+        raise SceneError(f"{path}: no such scene file")
+    text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise SceneError(f"{path}: not valid TOML: {error}") from None
+
+    def fail(table: str, key: str, problem: str) -> SceneError:
+        where = f"{table}.{key}" if table else key
+        return SceneError(f"{path}:{line_of(text, table, key)}: '{where}' {problem}")
+
+    def check_keys(table: str, values: dict, allowed: set[str]) -> None:
+        for key in values:
+            if key not in allowed:
+                raise fail(table, key, f"is not a known key (known here: {', '.join(sorted(allowed))})")
+
+    def number(table: str, values: dict, key: str, default: float | None = None, positive: bool = False) -> float:
+        if key not in values:
+            if default is None:
+                raise SceneError(f"{path}: '{table}.{key}' is missing")
+            return default
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and not value > 0):
+            raise fail(table, key, f"= {value!r} must be a {'positive ' if positive else ''}number")
+        return float(value)
+
+    def items(table: str, values: dict, key: str, kind) -> list:
+        out = []
+        if key != "pulses" and len(values.get(key, [])) > CAPACITY[key]:
+            raise fail(table, key, f"has {len(values[key])} entries; the trajectory FMU holds {CAPACITY[key]}")
+        for entry in values.get(key, []):
+            if not isinstance(entry, dict):
+                raise fail(table, key, "must be a list of inline tables")
+            check_keys(table, entry, ITEM_KEYS[key])
+            try:
+                out.append(kind(**entry))
+            except TypeError:
+                raise fail(table, key, f"entries need {', '.join(sorted(ITEM_KEYS[key]))}") from None
+        return out
+
+    check_keys("", data, SCHEMA[""])
+    for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"):
+        check_keys(table, data.get(table, {}), SCHEMA[table])
+    scene, drive, mechanics = data.get("scene", {}), data.get("drive", {}), data.get("mechanics", {})
+    coupling = data.get("coupling", {})
+    kind = drive.get("kind", "pmsm")
+    if kind not in DRIVES:
+        raise fail("drive", "kind", f"= {kind!r} is not a drive kind ({', '.join(DRIVES)})")
+    algorithm = coupling.get("algorithm", "gauss-seidel")
+    if algorithm not in ("gauss-seidel", "jacobi"):
+        raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")
+    order = coupling.get("order", 1)
+    if order not in (0, 1, 2):
+        raise fail("coupling", "order", f"= {order!r}: use 0, 1 or 2")
+    parameter_set = mechanics.get("parameter_set", "meng2010")
+    if parameter_set not in ("meng2010", "sumnu2015"):
+        raise fail("mechanics", "parameter_set", f"= {parameter_set!r}: use 'meng2010' or 'sumnu2015'")
+
+    step_control = coupling.get("step_control", "fixed")
+    if step_control not in STEP_CONTROLS:
+        raise fail("coupling", "step_control", f"= {step_control!r}: use {', '.join(map(repr, STEP_CONTROLS))}")
+    tolerances = {key: number("coupling", coupling, key, default, positive=True)
+                  for key, default in (("rtol", 1e-3), ("h_min", 1e-6), ("h_max", 1e-2))}
+    atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
+
+    trajectory = {}
+    signals = dict(data.get("trajectory", {}))
+    table_file, interpolation = signals.pop("table", None), signals.pop("interpolation", "cubic")
+    if table_file is not None:
+        if not isinstance(table_file, str) or not (path.parent / table_file).is_file():
+            raise fail("trajectory", "table", f"= {table_file!r}: no such file (relative to the scene's folder)")
+        table_file = (path.parent / table_file).resolve()
+    if interpolation not in ("cubic", "linear"):
+        raise fail("trajectory", "interpolation", f"= {interpolation!r}: use 'cubic' or 'linear'")
+    for dof, spec in signals.items():
+        table = f"trajectory.{dof}"
+        check_keys(table, spec, SCHEMA["trajectory.*"])
+        offset = number(table, spec, "offset", 0.0)
+        trajectory[dof] = Signal(offset, items(table, spec, "sines", Sine), items(table, spec, "steps", Step),
+                                 items(table, spec, "ramps", Ramp))
+    pulses = items("load", data.get("load", {}), "pulses", Pulse)
+    for pulse in pulses:
+        if pulse.component not in WRENCH_COMPONENTS:
+            raise fail("load", "pulses", f"component {pulse.component!r} is not one of {', '.join(WRENCH_COMPONENTS)}")
+        if sum(p.component == pulse.component for p in pulses) > CAPACITY["pulses"]:
+            raise fail("load", "pulses", f"has more than {CAPACITY['pulses']} pulses on {pulse.component}; the "
+                       "trajectory FMU holds that many per component")
+    outputs = data.get("outputs", {})
+    names = {}
+    for key in ("mechanics", "drive"):
+        value = outputs.get(key)
+        if value is not None and (not isinstance(value, list) or not all(isinstance(v, str) for v in value)):
+            raise fail("outputs", key, "must be a list of variable names")
+        names[key] = value
+    interval = number("outputs", outputs, "interval", positive=True) if "interval" in outputs else None
+    return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
+                 step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
+                 drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
+                 mass_set=mechanics.get("mass_set", "heavy"), mechanics_parameters=dict(mechanics.get("parameters", {})),
+                 algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
+                 interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
+                 outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval)

@@ -1,0 +1,124 @@
+"""The platform as a system of FMUs: the trajectory FMU (reference pose and external wrench), the
+mechanics FMU and six drive FMUs, wired as ../shared/INTERFACES.md says. This is the one wiring
+table: the master, the SSP export and the other tools' runs all take it from `platform_structure`.
+
+DRIVES holds what differs between drive kinds: swapping the kind changes those connections and
+nothing else. Each drive's effort (torque, force) and its flow (speed, velocity) form a power bond.
+The default coupling is Gauss-Seidel with first-order extrapolation: the trajectory steps first
+(its outputs' exact derivatives feed the mechanics), then the drives from the mechanics' last two
+samples, then the mechanics with each effort interpolated between t and t + h.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Execution, Experiment, Observer,
+                      RunFailed, StepControl, SystemStructure, fmu_path)
+from ..engine.fmi import LogMessage
+from .ports import DRIVES, LEGS, POSE, WRENCH, DriveWiring  # noqa: F401 (re-exported)
+
+
+def drive_names(drive: str) -> list[str]:
+    return [f"{drive}{i}" for i in LEGS]
+
+
+def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None = None,
+                       drive_values: Mapping[str, object] | None = None,
+                       trajectory_values: Mapping[str, object] | None = None,
+                       leg_values: Sequence[Mapping[str, object]] | None = None, name: str = "platform",
+                       experiment: Experiment | None = None) -> SystemStructure:
+    """Trajectory, mechanics and six drives of one kind with these parameter values (leg_values:
+    per drive, on top of drive_values, e.g. each leg's force feedforward)."""
+    if drive not in DRIVES:
+        raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
+    wiring = DRIVES[drive]
+    components = [Component("trajectory", fmu_path("trajectory"), dict(trajectory_values or {})),
+                  Component("mechanics", fmu_path("mechanics"), dict(mechanics_values or {}))]
+    drive_fmu = fmu_path(wiring.fmu)
+    for k, instance in enumerate(drive_names(drive)):
+        components.append(Component(instance, drive_fmu, {**(drive_values or {}), **(leg_values[k] if leg_values else {})}))
+    connections = [Connection(("trajectory", n), ("mechanics", n)) for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH]]
+    bonds = []
+    for i, instance in zip(LEGS, drive_names(drive)):
+        for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
+            connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
+        connections.append(Connection((instance, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
+        bonds.append(Bond(effort=connections[-1], flow=connections[-2]))  # torque x speed, force x velocity
+    return SystemStructure(name, components, connections, bonds, experiment or Experiment())
+
+
+def default_algorithm(drive: str, kind: str = "gauss-seidel", order: int = 1) -> Algorithm:
+    """The platform's coupling: Gauss-Seidel steps the trajectory, the drives, then the mechanics."""
+    sequence = ("trajectory", *drive_names(drive), "mechanics") if kind == "gauss-seidel" else None
+    return Algorithm(kind, order, sequence)
+
+
+def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = ()
+            ) -> tuple[list[tuple[str, str]], list[str]]:
+    """What a platform run records and how the columns are named: pose_ref.<dof> (trajectory),
+    pose.<dof> and the chosen mechanics outputs (mechanics), <output>[i] for each drive output."""
+    record = [*[("trajectory", f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
+              *[("mechanics", n) for n in mechanics_outputs],
+              *[(instance, n) for n in drive_outputs for instance in drive_names(drive)]]
+    names = [*[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *mechanics_outputs,
+             *[f"{n}[{i}]" for n in drive_outputs for i in LEGS]]
+    return record, names
+
+
+@dataclass
+class Run:
+    """A finished (or failed) platform run: the results and what the engine measured."""
+    result: np.ndarray
+    energy_residuals: np.ndarray
+    steps: np.ndarray
+    rejected: int
+    wall: float
+    fmi_seconds: float
+    messages: list[tuple[str, LogMessage]] = field(default_factory=list)
+    monitor: DivergenceMonitor | None = None
+
+    @property
+    def warnings(self) -> list[str]:
+        return [m.text for _, m in self.messages if m.status == "warning"]
+
+
+def run(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
+        record: tuple[list[tuple[str, str]], list[str]], divergence_ratio: float | None = 0.05,
+        observers: Sequence[Observer] = ()) -> Run:
+    """Runs the platform system; returns the Run. A fixed-step run is watched by a divergence
+    monitor (threshold divergence_ratio; None: off). Raises RunFailed (with .run, the partial Run)
+    when an FMU fails or the coupling diverges."""
+    execution = Execution(structure, algorithm, control, record[0], record[1], clock="mechanics")
+    monitor = DivergenceMonitor(ratio=divergence_ratio) if divergence_ratio else None
+    start = time.perf_counter()
+    failure = None
+    try:
+        result = execution.run(stop_time, [*([monitor] if monitor else []), *observers])
+    except RunFailed as failed:
+        result, failure = failed.result, failed
+    wall = time.perf_counter() - start
+    outcome = Run(result, execution.energy_residuals, execution.steps, execution.rejected, wall,
+                  execution.fmi_seconds, execution.messages(), monitor)
+    execution.free()
+    if failure is not None:
+        failure.run = outcome
+        raise failure
+    return outcome
+
+
+def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mapping[str, object] | None = None,
+             drive_values: Mapping[str, object] | None = None,
+             trajectory_values: Mapping[str, object] | None = None, mechanics_outputs: Sequence[str] = (),
+             drive_outputs: Sequence[str] = (), order: int = 1, algorithm: str = "gauss-seidel",
+             divergence_ratio: float | None = 0.05) -> Run:
+    """A platform run at a fixed step in one call (for studies and tests): the pose and reference
+    and the chosen outputs recorded."""
+    from ..engine import FixedStep
+    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values)
+    return run(structure, default_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
+               columns(drive, mechanics_outputs, drive_outputs), divergence_ratio)

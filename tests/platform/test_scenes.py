@@ -1,0 +1,174 @@
+"""Scenes and the command line: shipped scenes load, wrong keys and values are named with their
+line, the drive swaps by one line, and a run that fails mid-way says where and keeps its results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.io import loadmat
+
+from cosim.__main__ import main
+from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.platform.runner import SceneFailed, run_scene
+from cosim.platform.scene import SceneError, load_scene
+from cosim.platform.runner import scene_structure
+from cosim.platform.system import DRIVES
+
+SCENES = sorted((ROOT / "scenes").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_shipped_scenes_load(path):
+    scene = load_scene(path)
+    assert scene.duration > 0 and scene.drive in DRIVES and scene.trajectory
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return path
+
+
+BASE = """[scene]
+duration = 1.0
+[drive]
+kind = "pmsm"
+[coupling]
+order = 1
+"""
+
+
+@pytest.mark.parametrize("extra,message", [
+    ('algoritm = "jacobi"\n', "scene.toml:7: 'coupling.algoritm' is not a known key"),
+    ("[trajectory.surge]\n", "scene.toml:7: 'trajectory.surge' is not a known key"),
+    ("[trajectory.x]\nsines = [{amplitude = 1.0, frequncy = 2.0}]\n", "scene.toml:8: 'trajectory.x.frequncy' is not a known key"),
+])
+def test_a_wrong_key_is_named_with_its_line(tmp_path, extra, message):
+    with pytest.raises(SceneError) as error:
+        load_scene(write(tmp_path, BASE + extra))
+    assert message.split(": ", 1)[0] in str(error.value)
+    assert message.split(": ", 1)[1].split(" is")[0] in str(error.value)
+
+
+@pytest.mark.parametrize("text,message", [
+    (BASE.replace("order = 1", "order = 3"), ":6: 'coupling.order' = 3"),
+    (BASE.replace('kind = "pmsm"', 'kind = "hydraulic"'), ":4: 'drive.kind' = 'hydraulic' is not a drive kind"),
+    (BASE.replace("duration = 1.0", "duration = -1"), ":2: 'scene.duration' = -1 must be a positive number"),
+    (BASE.replace("duration = 1.0", 'duration = "long"'), ":2: 'scene.duration' = 'long'"),
+])
+def test_a_wrong_value_is_named_with_its_line(tmp_path, text, message):
+    with pytest.raises(SceneError) as error:
+        load_scene(write(tmp_path, text))
+    assert message in str(error.value)
+
+
+def test_cli_reports_a_bad_scene_and_exits_2(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "missing.toml")]) == 2
+    assert "missing.toml: no such scene file" in capsys.readouterr().err
+
+
+def test_a_missing_fmu_is_named_with_the_command_that_builds_it():
+    with pytest.raises(FileNotFoundError, match=r"FMU 'hydraulic_drive' is not built .* run `bash scripts/setup.sh`"):
+        fmu_path("hydraulic_drive")
+
+
+def test_a_stale_build_is_refused_with_the_command_that_builds_it(monkeypatch, tmp_path):
+    """The package never builds: a build stamp older than a C source is one line naming the command."""
+    from cosim.engine import artifacts
+    stamp = tmp_path / "built.stamp"
+    stamp.touch()
+    import os
+    os.utime(stamp, (0, 0))
+    monkeypatch.setattr(artifacts, "BUILD_STAMP", stamp)
+    with pytest.raises(artifacts.ArtifactMissing, match=r"is older than .*: run `bash scripts/setup.sh`"):
+        fmu_path("mechanics")
+
+
+def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
+    """sumnu_case_1 with kind = "pmsm" instead of "linear": the two scene files differ in that line,
+    the loaded scenes only in the drive kind, and the systems only in the drive connections."""
+    original = (ROOT / "scenes" / "sumnu_case_1.toml").read_text()
+    swapped = original.replace('kind = "linear"', 'kind = "pmsm"')
+    differing = [(a, b) for a, b in zip(original.splitlines(), swapped.splitlines()) if a != b]
+    assert differing == [('kind = "linear"', 'kind = "pmsm"')]
+    a, b = load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), load_scene(write(tmp_path, swapped))
+    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path"}
+    for scene in (a, b):
+        wiring = DRIVES[scene.drive]
+        from_drives = [c.target[1] for c in scene_structure(scene).connections
+                       if c.target[0] == "mechanics" and c.target[1].startswith("leg[")]
+        assert from_drives == [wiring.effort[1].format(i=i) for i in range(1, 7)]
+
+
+def test_a_run_that_fails_names_the_fmu_and_keeps_its_results(tmp_path, capsys):
+    """The Meng platform (950 kg) on six linear motors (610 N peak each) cannot be held: it sinks
+    until its legs lie nearly flat and the leg Jacobian turns singular; the mechanics stops the run
+    with an error, and the CLI
+    names the instance, the call and the time, exits 1, and the CSV and .mat files hold the
+    results up to the last good step."""
+    scene_file = write(tmp_path, BASE.replace('kind = "pmsm"', 'kind = "linear"').replace("duration = 1.0", "duration = 3.0")
+                       + "[trajectory.z]\noffset = 1.689527733348906\n")
+    out = tmp_path / "out"
+    assert main(["run", str(scene_file), "--out", str(out), "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    assert "FAILED: mechanics: fmi2DoStep failed at t = " in err and "near-singular" in err
+    saved = np.genfromtxt(out / "scene.csv", delimiter=",", names=True)
+    assert 0.1 < saved["time"][-1] < 3.0
+    assert saved["posez"][-1] < 1.0  # it was sinking
+    mat = loadmat(out / "scene.mat")
+    assert mat["pose_z"].size == saved.size
+    with pytest.raises(SceneFailed) as failed:
+        run_scene(load_scene(scene_file))
+    assert failed.value.report.failure.startswith("mechanics: fmi2DoStep failed at t = ")
+
+
+def test_a_scene_table_drives_the_platform_like_the_signal_it_samples(tmp_path):
+    """Sumnu case I's heave sine written as a CSV table (every 10 ms, cubic interpolation) and
+    given as [trajectory] table: the run follows the run with the sine within 1e-6 m and rad (the
+    table's interpolation error is ~1e-7 m; measured pose difference 7e-8 m). This caught a table
+    giving a zero rate at its first row, which the drives' feedforward then missed."""
+    original = (ROOT / "scenes" / "sumnu_case_1.toml").read_text().replace("duration = 5.0", "duration = 1.0")
+    times = np.arange(0.0, 1.2, 0.01)
+    np.savetxt(tmp_path / "heave.csv", np.c_[times, 0.2 * np.sin(3.0 * times)], delimiter=",",
+               header="time,z", comments="# heave of Sumnu case I\n")
+    tabled = original.replace("[trajectory.x]", '[trajectory]\ntable = "heave.csv"\n[trajectory.x]', 1)
+    tabled = tabled.replace("offset = 1.0\nsines = [{amplitude = 0.2, frequency = 0.477464829275686}]", "offset = 1.0")
+    assert tabled.count("sines") == original.count("sines") - 1
+    with_sine, _ = run_scene(load_scene(write(tmp_path, original)))
+    path = tmp_path / "tabled.toml"
+    path.write_text(tabled)
+    with_table, _ = run_scene(load_scene(path))
+    for a in ("x", "y", "z", "roll", "pitch", "yaw"):
+        np.testing.assert_allclose(with_table[f"pose.{a}"], with_sine[f"pose.{a}"], atol=1e-6)
+
+
+@pytest.mark.parametrize("extra,message", [
+    ('[trajectory]\ntable = "missing.csv"\n', ":8: 'trajectory.table' = 'missing.csv': no such file"),
+    ("[trajectory.x]\nsines = [" + ", ".join(["{amplitude = 1.0, frequency = 1.0}"] * 4) + "]\n",
+     ":8: 'trajectory.x.sines' has 4 entries; the trajectory FMU holds 3"),
+    ("[load]\npulses = [" + ", ".join(['{component = "force.z", value = 1.0, start = 0.0, end = 1.0}'] * 3) + "]\n",
+     ":8: 'load.pulses' has more than 2 pulses on force.z"),
+])
+def test_what_the_trajectory_fmu_cannot_hold_is_named_with_its_line(tmp_path, extra, message):
+    with pytest.raises(SceneError) as error:
+        load_scene(write(tmp_path, BASE + extra))
+    assert message in str(error.value)
+
+
+def test_outputs_choose_what_is_recorded_and_how_often(tmp_path):
+    """[outputs]: mechanics energy accounts and the drives' voltage recorded, every 10 ms."""
+    text = BASE + "[trajectory.z]\noffset = 1.689527733348906\n" + \
+        '[outputs]\nmechanics = ["energy.kinetic", "power.drive"]\ndrive = ["torque", "voltage.q"]\ninterval = 0.01\n'
+    result, _ = run_scene(load_scene(write(tmp_path, text).parent / "scene.toml"))
+    assert {"energy.kinetic", "power.drive", "torque[1]", "voltage.q[6]"} <= set(result.dtype.names)
+    assert "speed[1]" not in result.dtype.names
+    np.testing.assert_allclose(np.diff(result["time"]), 0.01, atol=1e-9)
+
+
+def test_an_unknown_output_is_named_with_its_line(tmp_path, capsys):
+    text = BASE + '[outputs]\ndrive = ["torque", "torqe"]\n'
+    with pytest.raises(SceneError) as error:
+        run_scene(load_scene(write(tmp_path, text)))
+    assert "scene.toml:8: 'outputs.drive'" in str(error.value) and "no variable 'torqe'" in str(error.value)
+    assert main(["run", str(tmp_path / "scene.toml"), "--no-plots", "--out", str(tmp_path)]) == 2
+    assert "no variable 'torqe'" in capsys.readouterr().err

@@ -1,0 +1,76 @@
+"""Macro-step control selected from a scene: step doubling meets a tolerance with fewer steps than
+the fixed step, and the energy (ECCO) control tightens the bonds' energy error as asked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cosim.engine.artifacts import ROOT
+from cosim.platform.parameter_sets import mechanics_start_values
+from cosim.platform.runner import run_scene, scene_record, scene_settings, scene_structure
+from cosim.platform.scene import SceneError, load_scene
+from cosim.platform.signals import scene_trajectory
+from cosim.platform.system import POSE, run
+
+
+def pose_difference(result, reference) -> float:
+    """Largest pose difference, the coarser result interpolated onto the reference's times [m, rad]."""
+    return max(np.abs(np.interp(reference["time"], result["time"], result[f"pose.{a}"]) - reference[f"pose.{a}"]).max()
+               for a in POSE)
+
+
+@pytest.fixture(scope="module")
+def sumnu_scene():
+    scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml")
+    scene.duration = 1.0
+    return scene
+
+
+def test_step_doubling_beats_the_fixed_step_with_fewer_steps(sumnu_scene):
+    """Sumnu case I (six linear motors), 1 s. Reference: fixed 0.1 ms steps (their difference to
+    0.2 ms steps is below a tenth of what is compared). The doubling control (rtol = atol = 1e-4)
+    lands closer to the reference than the scene's fixed 1 ms step, with fewer macro steps
+    (measured: 647 + 3 rejected vs 1000; 4e-5 vs 1.1e-4 m)."""
+    scene = sumnu_scene
+    scene.step = 1e-4
+    reference, _ = run_scene(scene)
+    scene.step = 2e-4
+    half, _ = run_scene(scene)
+    scene.step = 1e-3
+    fixed, fixed_report = run_scene(scene)
+    scene.step_control, scene.rtol, scene.atol = "doubling", 1e-4, 1e-4
+    adaptive, report = run_scene(scene)
+    scene.step_control, scene.atol = "fixed", None
+    assert pose_difference(half, reference) < 0.1 * pose_difference(fixed, reference)
+    assert pose_difference(adaptive, reference) < 0.6 * pose_difference(fixed, reference)
+    assert report.macro_steps + report.rejected_steps < 0.8 * fixed_report.macro_steps
+    assert report.step_control == "doubling" and "doubling step control" in report.text()
+
+
+def test_energy_control_tightens_the_energy_error_with_its_tolerance(sumnu_scene):
+    """ECCO's controller on the same scene: each tenfold tighter tolerance takes more steps and
+    lowers the run's total |energy residual| over the six power bonds (measured 0.41, 0.085, 0.050 J
+    for rtol 1e-2, 1e-3, 1e-4)."""
+    scene = sumnu_scene
+    totals, steps = [], []
+    for rtol in (1e-2, 1e-3, 1e-4):
+        scene.step_control, scene.rtol, scene.atol = "energy", rtol, rtol / 10
+        outcome = run(scene_structure(scene), *scene_settings(scene), scene.duration, scene_record(scene))
+        totals.append(outcome.energy_residuals.sum())
+        steps.append(len(outcome.steps))
+    scene.step_control, scene.atol = "fixed", None
+    assert totals[0] > totals[1] > totals[2], totals
+    assert steps[0] < steps[1] < steps[2], steps
+
+
+@pytest.mark.parametrize("line,message", [
+    ('step_control = "pid"', "'coupling.step_control' = 'pid'"),
+    ("rtol = -1.0", "'coupling.rtol' = -1.0 must be a positive number"),
+])
+def test_a_bad_step_control_is_named_with_its_line(tmp_path, line, message):
+    path = tmp_path / "scene.toml"
+    path.write_text(f"[scene]\nduration = 1.0\n[coupling]\n{line}\n")
+    with pytest.raises(SceneError) as error:
+        load_scene(path)
+    assert f"scene.toml:4: {message}" in str(error.value)
