@@ -10,7 +10,7 @@ from pathlib import Path
 import fmpy
 from fmpy import read_model_description
 
-from cosim.fmus import BUILD_DIR, fmu_path
+from cosim.engine.artifacts import BUILD_DIR, fmu_path
 
 HERE = Path(__file__).resolve().parent
 

@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from cosim.fmus import ROOT  # noqa: E402
-from cosim.libcosim import run_in_libcosim  # noqa: E402
-from cosim.runner import run_scene  # noqa: E402
-from cosim.scene import load_scene  # noqa: E402
-from cosim.system import POSE  # noqa: E402
+from cosim.engine.artifacts import ROOT  # noqa: E402
+from cosim.platform.libcosim import run_in_libcosim  # noqa: E402
+from cosim.platform.runner import run_scene  # noqa: E402
+from cosim.platform.scene import load_scene  # noqa: E402
+from cosim.platform.system import POSE  # noqa: E402
 
 
 def main() -> None:

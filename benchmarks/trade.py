@@ -24,12 +24,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from cosim.fmus import ROOT  # noqa: E402
-from cosim.libcosim import Ecco, run_in_libcosim  # noqa: E402
-from cosim.results import save_figure  # noqa: E402
-from cosim.runner import SceneFailed, run_scene  # noqa: E402
-from cosim.scene import Scene, load_scene  # noqa: E402
-from cosim.system import POSE  # noqa: E402
+from cosim.engine.artifacts import ROOT  # noqa: E402
+from cosim.platform.libcosim import Ecco, run_in_libcosim  # noqa: E402
+from cosim.platform.results import save_figure  # noqa: E402
+from cosim.platform.runner import SceneFailed, run_scene  # noqa: E402
+from cosim.platform.scene import Scene, load_scene  # noqa: E402
+from cosim.platform.system import POSE  # noqa: E402
 
 
 @dataclass
