@@ -4,6 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
+# Ecos (ecospy, one of the tools the SSP tests run the exported system in) links against Intel
+# TBB: Debian's libtbb12.
+if ! ldconfig -p 2>/dev/null | grep -q "libtbb.so.12"; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq libtbb12 >> apt.log 2>&1 \
+    || { cat apt.log; echo "could not install libtbb12 (needed by ecospy)" >&2; exit 1; }
+fi
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi

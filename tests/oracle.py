@@ -78,7 +78,7 @@ class CouplingAlgorithm(ABC):
         # of the last step, per bond: the energy residual and the energy transferred [J]
         self.bond_energies: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0))
 
-    def initialize(self, coupling: Coupling, t: float, sweeps: int = 20) -> None:
+    def initialize(self, coupling: Coupling, t: float, sweeps: int = 20, zero_start: bool = False) -> None:
         """Makes the outputs at t consistent with the connected inputs (outputs that feed through
         from inputs, such as a spring force from a position, depend on them) and starts the history."""
         self.energy_residuals = []
@@ -91,6 +91,8 @@ class CouplingAlgorithm(ABC):
             outputs = new
             if settled:
                 break
+        if zero_start:
+            outputs = {n: np.zeros_like(v) for n, v in outputs.items()}
         self.history = History(keep=max(self.order + 1, 2))
         self.history.push(t, outputs, coupling.read_rates())
 
@@ -364,7 +366,7 @@ def run(structure, settings, control, stop_time: float, record, clock: str, inte
     try:
         coupling = Coupling(instances, structure.connections, structure.bonds, interpolating)
         algorithm = algorithm_of(settings)
-        algorithm.initialize(coupling, instances[clock].time, settings.initial_sweeps)
+        algorithm.initialize(coupling, instances[clock].time, settings.initial_sweeps, settings.zero_start)
 
         def row():
             return [instances[clock].time, *[instances[c].get(v) for c, v in record]]

@@ -66,7 +66,7 @@ def _load() -> ctypes.CDLL:
     if _library is None:
         lib = ctypes.CDLL(str(library_path("libcosim_kernel.so")))
         K, C = ctypes.POINTER(_Kernel), ctypes.POINTER(_Controller)
-        lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int]
+        lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int, ctypes.c_int]
         lib.kernel_record.argtypes = [K, ctypes.c_int, _DOUBLES]
         lib.kernel_run_fixed.argtypes = [K, ctypes.c_int, ctypes.c_double, ctypes.c_int, _DOUBLES, _DOUBLES, _DOUBLES]
         for name in ("kernel_run_doubling", "kernel_run_energy"):
@@ -218,7 +218,8 @@ class Kernel:
 
     def initialize(self) -> np.ndarray:
         """Consistent outputs at the start and the first history sample; returns the first row."""
-        if not self._call(self.library.kernel_initialize, self.time, self.algorithm.initial_sweeps):
+        if not self._call(self.library.kernel_initialize, self.time, self.algorithm.initial_sweeps,
+                          int(self.algorithm.zero_start)):
             self._raise_failure()
         row = np.zeros(1 + self.n_columns)
         if not self._call(self.library.kernel_record, self.clock, _ptr(row, _DOUBLES)):

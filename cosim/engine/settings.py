@@ -23,11 +23,13 @@ class Algorithm:
     """Jacobi or Gauss-Seidel with input extrapolation of order 0, 1 or 2. `sequence`: the
     Gauss-Seidel stepping order (default: the components' order). `initial_sweeps`: fixed-point
     sweeps that make the outputs at the start consistent with the connected inputs (0: the outputs
-    as the FMUs initialized them, as tools without such a sweep do)."""
+    as the FMUs initialized them, as tools without such a sweep do). `zero_start`: every input is 0
+    over the first macro step (the convention of fmpy.ssp, which starts its connections at 0)."""
     kind: str = "gauss-seidel"
     order: int = 1
     sequence: tuple[str, ...] | None = None
     initial_sweeps: int = 20
+    zero_start: bool = False
 
     def __post_init__(self):
         if self.kind not in ALGORITHMS:
@@ -100,6 +102,8 @@ def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
     """The settings as name -> text (for an SSP annotation)."""
     out = {"algorithm": algorithm.kind, "order": str(algorithm.order),
            "initial_sweeps": str(algorithm.initial_sweeps), "step_control": control_name(control)}
+    if algorithm.zero_start:
+        out["zero_start"] = "true"
     if algorithm.sequence:
         out["sequence"] = " ".join(algorithm.sequence)
     for name, value in asdict(control).items():
@@ -120,7 +124,10 @@ def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algori
         order = int(values.pop("order", "1"))
         sweeps = int(values.pop("initial_sweeps", "20"))
         sequence = tuple(values.pop("sequence").split()) if "sequence" in values else None
-        algorithm = Algorithm(kind, order, sequence, sweeps)
+        zero_start = values.pop("zero_start", "false")
+        if zero_start not in ("true", "false"):
+            raise SettingsError(f"zero_start '{zero_start}': true or false")
+        algorithm = Algorithm(kind, order, sequence, sweeps, zero_start == "true")
         name = values.pop("step_control", "fixed")
         if name not in CONTROLS:
             raise SettingsError(f"step_control '{name}': one of {', '.join(CONTROLS)}")

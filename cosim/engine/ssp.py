@@ -26,6 +26,7 @@ SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 COSIM = "https://github.com/stewart-cosim/ssp-annotation/1.0"
 ANNOTATION = "io.github.stewart-cosim.run"
+PARAMETER_SET = "parameters"
 NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM}
 _SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "schema"
 
@@ -57,7 +58,8 @@ def _ssv_value(parent: etree._Element, value: Value, kind: str) -> None:
 
 
 def _parameter_set(component: Component, kinds: dict[str, str]) -> etree._Element:
-    root = etree.Element(_q(SSV, "ParameterSet"), nsmap={"ssv": SSV}, version="1.0", name=component.name)
+    # one name for every component's set: tools that apply parameter sets by name (Ecos) take them all
+    root = etree.Element(_q(SSV, "ParameterSet"), nsmap={"ssv": SSV}, version="1.0", name=PARAMETER_SET)
     parameters = etree.SubElement(root, _q(SSV, "Parameters"))
     for name, value in component.parameters.items():
         if name not in kinds:
@@ -76,6 +78,7 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     elements = etree.SubElement(system, _q(SSD, "Elements"))
     units: dict[str, dict] = {}
     parameter_sets = {}
+    connected = {c.source for c in structure.connections} | {c.target for c in structure.connections}
     for component in structure.components:
         description = read_model_description(str(component.fmu))
         variables = {v.name: v for v in description.modelVariables}
@@ -90,8 +93,8 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
         element = etree.SubElement(elements, _q(SSD, "Component"), name=component.name,
                                    type="application/x-fmu-sharedlibrary", source=sources[component.name])
         connectors = etree.SubElement(element, _q(SSD, "Connectors"))
-        for name, variable in variables.items():  # every input and output, connected or not
-            if variable.causality not in ("input", "output"):
+        for name, variable in variables.items():  # the connected inputs and outputs
+            if (component.name, name) not in connected:
                 continue
             connector = etree.SubElement(connectors, _q(SSD, "Connector"), name=name, kind=variable.causality)
             kind = etree.SubElement(connector, _q(SSC, "Integer" if variable.type == "Enumeration" else variable.type))

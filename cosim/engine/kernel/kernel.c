@@ -227,8 +227,10 @@ static int push_sample(Kernel *s, double t_new) {
 
 /* Makes the outputs at t consistent with the connected inputs (outputs that feed through from
  * inputs depend on them): up to `sweeps` rounds of setting every input from its source and reading
- * the outputs again, until they stop changing; then starts the history with that sample. */
-int kernel_initialize(Kernel *s, double t, int sweeps) {
+ * the outputs again, until they stop changing; then starts the history with that sample. With
+ * zero_start the history starts from outputs of 0 instead, so every input is 0 over the first step
+ * (the convention of tools that start their connections at 0, such as fmpy.ssp). */
+int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start) {
     s->failed_instance = s->failed_call = -1;
     s->n_samples = 0;
     if (!read_all_outputs(s)) return 0;
@@ -249,6 +251,7 @@ int kernel_initialize(Kernel *s, double t, int sweeps) {
             if (s->guess[i] != s->new_values[i]) settled = 0;
         if (settled) break;
     }
+    if (zero_start) memset(s->new_values, 0, (size_t)s->n_sample_values * sizeof(double));
     return push_sample(s, t);
 }
 
