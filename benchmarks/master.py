@@ -36,7 +36,7 @@ def main() -> None:
     peer = run_in_libcosim(scene)
     wall_libcosim, theirs = peer.wall, peer.pose
     print(f"Meng scene, {args.duration:g} s at {scene.step * 1e3:g} ms, 8 FMUs (trajectory, mechanics, six drives)")
-    print(f"  ours (cosim, Gauss-Seidel order 1, native loop): wall {report.wall:.2f} s, real-time factor "
+    print(f"  ours (cosim, Gauss-Seidel order 1, step kernel): wall {report.wall:.2f} s, real-time factor "
           f"{report.real_time_factor:.1f}, master overhead {100 * report.master_share:.0f} % of wall")
     print(f"  libcosim (fixed step):             wall {wall_libcosim:.2f} s, real-time factor "
           f"{args.duration / wall_libcosim:.1f}")
