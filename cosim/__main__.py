@@ -62,17 +62,24 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.duration:
         scene.duration = args.duration
+    return report(lambda: run_scene(scene, args.out, plots=not args.no_plots)[1], (SceneError,), SceneFailed,
+                  f"{args.out}/{scene.path.stem}.csv, .mat" + ("" if args.no_plots else " and plots"), args.out)
+
+
+def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> int:
+    """Runs `run` (which returns a report); prints the report and what was written (exit 0), a
+    user error in one line (exit 2), or a failed run's report with its partial results (exit 1)."""
     try:
-        _, report = run_scene(scene, args.out, plots=not args.no_plots)
-    except SceneError as error:
+        outcome = run()
+    except user_errors as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    except SceneFailed as failed:
+    except failure as failed:
         print(failed.report.text(), file=sys.stderr)
-        print(f"partial results up to t = {failed.report.simulated:g} s written to {args.out}/", file=sys.stderr)
+        print(f"partial results up to t = {failed.report.simulated:g} s written to {out}/", file=sys.stderr)
         return 1
-    print(report.text())
-    print(f"results: {args.out}/{scene.path.stem}.csv, .mat" + ("" if args.no_plots else " and plots"))
+    print(outcome.text())
+    print(f"results: {written}")
     return 0
 
 
@@ -101,18 +108,8 @@ def run_system(path: Path, out: Path, settings: list[str], duration: float | Non
             return 2
         name, value = item.split("=", 1)
         overrides[name.strip()] = value.strip()
-    try:
-        _, report = run_ssp(path, out, overrides, duration)
-    except (SspError, SettingsError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except RunFailed as failed:
-        print(failed.report.text(), file=sys.stderr)
-        print(f"partial results written to {out}/", file=sys.stderr)
-        return 1
-    print(report.text())
-    print(f"results: {out}/{path.stem}.csv and .mat")
-    return 0
+    return report(lambda: run_ssp(path, out, overrides, duration)[1], (SspError, SettingsError), RunFailed,
+                  f"{out}/{path.stem}.csv and .mat", out)
 
 
 if __name__ == "__main__":

@@ -113,8 +113,7 @@ class Execution:
             self.energy_residuals = np.concatenate([self.energy_residuals, *parts_residuals])
             self.steps = np.concatenate([self.steps, *parts_steps])
             for observer in observers:
-                if hasattr(observer, "finish"):
-                    observer.finish()
+                observer.finish(self)
         return recorder.result()
 
     def _fixed_batches(self, stop_time: float):

@@ -27,6 +27,9 @@ class Observer:
     def batch(self, execution: "Execution", batch: "Batch") -> None:
         pass
 
+    def finish(self, execution: "Execution") -> None:
+        """After the run, whether it finished or failed."""
+
 
 class Recorder(Observer):
     """Every accepted step's row (time and the recorded columns) into fmpy's result convention: a
@@ -79,7 +82,7 @@ class Progress(Observer):
             print(f"{self.label}: {100 * fraction:.0f} % (t = {batch.rows[-1, 0]:.4g} s, {now - self._start:.0f} s wall)",
                   file=self.stream, flush=True)
 
-    def finish(self) -> None:
+    def finish(self, execution: "Execution") -> None:
         if self._shown:
             print(file=self.stream, flush=True)
             self._shown = False

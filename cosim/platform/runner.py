@@ -15,7 +15,7 @@ import numpy as np
 from ..engine import (Algorithm, EnergyControl, Experiment, FixedStep, Progress, RunFailed, StepControl,
                       StepDoubling, SystemStructure)
 from ..engine.results import thin, write as write_results
-from ..engine.settings import to_strings
+from ..engine.settings import control_name, to_strings
 from .parameter_sets import mechanics_start_values
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of
@@ -111,9 +111,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
     try:
         outcome = run(structure, algorithm, control, scene.duration, record, observers=[progress])
         failure = None
-    except RunFailed as failed:
-        if not hasattr(failed, "run"):
-            raise
+    except RunFailed as failed:  # system.run attaches the partial run
         outcome, failure = failed.run, str(failed)
     except KeyError as error:  # a recorded output that the FMU does not have
         names = set(scene.outputs_mechanics)
@@ -121,7 +119,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'outputs', key)}: 'outputs.{key}': "
                          f"{error.args[0]}") from None
     result = thin(outcome.result, scene.output_interval)
-    report = scene_report(scene, result, outcome, failure, type(control).__name__)
+    report = scene_report(scene, result, outcome, failure, control_name(control))
     if out is not None:
         write_results(result, out, scene.path.stem)
         effort, speed = DRIVES[scene.drive].outputs[:2]
@@ -139,7 +137,6 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Run, failure: str | 
     late = result["time"] >= 0.1 * scene.duration
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in POSE])
-    name = {"FixedStep": "fixed", "StepDoubling": "doubling", "EnergyControl": "energy"}[control]
     return RunReport(scene.name, len(outcome.steps), float(result["time"][-1]), outcome.wall, outcome.fmi_seconds,
                      errors, float(np.max(outcome.energy_residuals, initial=0.0)), outcome.warnings, failure,
-                     outcome.rejected, name)
+                     outcome.rejected, control)
