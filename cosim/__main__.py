@@ -1,6 +1,7 @@
 """Command line:
     python -m cosim run SCENE|FILE.ssp|FILE.ssd [--out DIR] [--no-plots] [--duration S] [--set NAME=VALUE]
-    python -m cosim export SCENE --ssp FILE.ssp    the scene as a standard SSP 1.0 archive
+    python -m cosim export SCENE [--ssp FILE.ssp] [--osp DIR]    the scene as an SSP 1.0 archive and/or
+                                                                 an OSP configuration (libcosim)
     python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
     python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL"""
 
@@ -28,7 +29,8 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--duration", type=float, help="override the scene's duration [s]")
     export = commands.add_parser("export", help="write a scene as an SSP 1.0 archive (FMUs, parameters, wiring)")
     export.add_argument("scene", type=Path)
-    export.add_argument("--ssp", type=Path, required=True, help="the .ssp file to write")
+    export.add_argument("--ssp", type=Path, help="the .ssp file to write")
+    export.add_argument("--osp", type=Path, help="a folder for OspSystemStructure.xml and the FMUs (libcosim)")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
     validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
                           "(default: this checkout's docs/)")
@@ -52,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"written: {build(args.out)}")
         return 0
     if args.command == "export":
-        return export_scene(args.scene, args.ssp)
+        return export_scene(args.scene, args.ssp, args.osp)
     if args.scene.suffix.lower() in (".ssp", ".ssd"):
         return run_system(args.scene, args.out, args.set, args.duration)
     try:
@@ -83,17 +85,26 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
     return 0
 
 
-def export_scene(path: Path, ssp: Path) -> int:
+def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
+    from .engine.osp import write_osp
     from .engine.ssp import SspError, write_ssp
     from .platform.runner import scene_structure
+    if ssp is None and osp is None:
+        print("error: export: give --ssp FILE.ssp, --osp DIR or both", file=sys.stderr)
+        return 2
     try:
-        written = write_ssp(scene_structure(load_scene(path)), ssp)
+        structure = scene_structure(load_scene(path))
+        if ssp is not None:
+            print(f"written: {write_ssp(structure, ssp)} (SSP 1.0; our coupling and step control in its "
+                  f"annotation '{ANNOTATION}', which other tools ignore: they run it with their own algorithm "
+                  f"and no input derivatives)")
+        if osp is not None:
+            print(f"written: {write_osp(structure, osp)} and the FMUs beside it (OSP; libcosim runs it with its "
+                  f"fixed-step or ECCO algorithm and no input derivatives; libcosimpy 0.0.6 loads a file with "
+                  f"more than one power bond only once its parser is fixed, see cosim.engine.osp)")
     except (SceneError, SspError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    print(f"written: {written} (SSP 1.0; our coupling and step control in its annotation "
-          f"'{ANNOTATION}', which other tools ignore: they run it with their own algorithm and no input "
-          f"derivatives)")
     return 0
 
 

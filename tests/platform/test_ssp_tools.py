@@ -36,7 +36,8 @@ def meng_ssp(tmp_path_factory):
 
 
 def ours(path, zero_start: bool = False) -> dict[str, np.ndarray]:
-    """Our master on the SSP: order-0 Jacobi, no consistency sweep (as the other tools start)."""
+    """Our master on the SSP: order-0 Jacobi without the consistency sweep, as Ecos starts (on this
+    system the sweep changes nothing: the outputs at the start do not feed through from inputs)."""
     record = [("mechanics", "leg[1].angle"), ("mechanics", "leg[4].speed"), *[(d, "torque") for d in LEGS]]
     execution = Execution(read_ssp(path), Algorithm("jacobi", 0, None, 0, zero_start), FixedStep(STEP), record,
                           clock="mechanics")
@@ -114,3 +115,47 @@ def test_libcosim_runs_the_ssp_like_our_master_to_round_off(meng_ssp, tmp_path):
     for d in LEGS:
         assert value(d, "torque") == pytest.approx(reference[f"{d}.torque"][-1], rel=1e-10)
     shutil.rmtree(folder)
+
+
+def run_osp(xml, stop: float) -> dict[str, float]:
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_osp_config_file(str(xml))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    assert execution.simulate_until(int(round(stop * 1e9)))
+    index = {s.name.decode(): s.index for s in execution.slave_infos()}
+    values = {}
+    for instance, name in [("mechanics", "leg[1].angle"), *[(d, "torque") for d in LEGS]]:
+        refs = {v.name.decode(): v.reference for v in execution.slave_variables(index[instance])}
+        values[f"{instance}.{name}"] = observer.last_real_values(index[instance], [refs[name]])[0]
+    return values
+
+
+def test_libcosim_runs_the_osp_configuration_like_our_master_to_round_off(tmp_path):
+    """The Meng scene as OspSystemStructure.xml (python -m cosim export --osp), fixed step: the same
+    agreement as the SSP run in libcosim."""
+    from cosim.engine.osp import write_osp
+    from cosim.platform.runner import scene_structure
+    from cosim.platform.scene import load_scene
+    structure = scene_structure(load_scene(ROOT / "scenes" / "meng_eq35.toml"))
+    theirs = run_osp(write_osp(structure, tmp_path, power_bonds=False), STOP)
+    execution = Execution(structure, Algorithm("jacobi", 0, None, 0), FixedStep(STEP),
+                          [("mechanics", "leg[1].angle"), *[(d, "torque") for d in LEGS]], clock="mechanics")
+    try:
+        reference = execution.run(STOP)
+    finally:
+        execution.free()
+    assert theirs["mechanics.leg[1].angle"] == pytest.approx(reference["mechanics.leg[1].angle"][-1], rel=1e-12)
+    for d in LEGS:
+        assert theirs[f"{d}.torque"] == pytest.approx(reference[f"{d}.torque"][-1], rel=1e-10)
+
+
+@pytest.mark.xfail(strict=True, reason="libcosimpy 0.0.6's configuration parser rejects more than one power bond "
+                   "(libcosim fixed it upstream, see its OspSystemStructure_MultiBond.xml); when a fixed libcosimpy "
+                   "is pinned this passes and the strict xfail fails, so the note can go")
+def test_libcosim_loads_the_osp_configuration_with_its_six_power_bonds(tmp_path):
+    assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--osp", str(tmp_path)]) == 0
+    run_osp(tmp_path / "OspSystemStructure.xml", 0.01)
