@@ -6,6 +6,7 @@ params/meng2010.toml, or from mechanics-FMU start values (Core.use_start_values)
 from __future__ import annotations
 
 import ctypes
+import math
 
 import numpy as np
 
@@ -155,3 +156,21 @@ class Core:
         assert self.dll.platform_inverse_dynamics(ctypes.byref(self.p), arr(pose), arr(rate), arr(acceleration),
                                                   arr(wrench), out) == 0
         return np.array(out[:])
+
+
+def neutral_pose(values: dict) -> np.ndarray:
+    """The pose at which every motor angle is zero for mechanics start values: given with explicit
+    joints (layout 2), solved by the core from the radii, spacings and the middle leg length l_0
+    otherwise (layout 1; the mechanics FMU solves the same)."""
+    pose_names = ("x", "y", "z", "roll", "pitch", "yaw")
+    if values.get("geometry.layout", 1) == 2:
+        return np.array([values[f"geometry.neutral.{a}"] for a in pose_names])
+    p = Platform()
+    centres = {side: [math.degrees(values[f"geometry.{side}_pair_centre_{k}"]) for k in (1, 2, 3)]
+               for side in ("lower", "upper")}
+    if load().platform_layout_from_radii(
+            ctypes.byref(p), values["geometry.upper_joint_radius"], values["geometry.lower_joint_radius"],
+            values["geometry.upper_joint_spacing"], values["geometry.lower_joint_spacing"],
+            values["geometry.middle_leg_length"], arr(centres["lower"]), arr(centres["upper"])) != 0:
+        raise ValueError("the joint radii and spacings give no platform (spacing wider than a circle)")
+    return np.array(p.neutral_pose[:])

@@ -10,7 +10,8 @@
                   outputs for doubling, in J for energy)
     [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
                   pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
-    [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset, sines = [{amplitude, frequency [Hz],
+    [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
+                  platform's neutral pose, computed from its geometry), sines = [{amplitude, frequency [Hz],
                   phase [rad]}] (up to 3), steps = [{time, height}] (2), ramps = [{start, end, slope}] (2)
     [load]        pulses = [{component = "force.z" | ..., value, start, end}] (2 per component)
     [outputs]     mechanics = [...] (mechanics outputs recorded besides pose and pose_ref),
@@ -216,10 +217,14 @@ def load_scene(path: str | Path) -> Scene:
         table_file = (path.parent / table_file).resolve()
     if interpolation not in ("cubic", "linear"):
         raise fail("trajectory", "interpolation", f"= {interpolation!r}: use 'cubic' or 'linear'")
+    at_neutral: list[str] = []
     for dof, spec in signals.items():
         table = f"trajectory.{dof}"
         check_keys(table, spec, SCHEMA["trajectory.*"])
-        offset = number(table, spec, "offset", 0.0)
+        neutral = spec.get("offset") == "neutral"  # the platform's neutral pose, computed below
+        offset = 0.0 if neutral else number(table, spec, "offset", 0.0)
+        if neutral:
+            at_neutral.append(dof)
         trajectory[dof] = Signal(offset, items(table, spec, "sines", Sine), items(table, spec, "steps", Step),
                                  items(table, spec, "ramps", Ramp))
     pulses = items("load", data.get("load", {}), "pulses", Pulse)
@@ -237,10 +242,20 @@ def load_scene(path: str | Path) -> Scene:
             raise fail("outputs", key, "must be a list of variable names")
         names[key] = value
     interval = number("outputs", outputs, "interval", positive=True) if "interval" in outputs else None
+    mass_set, mechanics_parameters = mechanics.get("mass_set", "heavy"), dict(mechanics.get("parameters", {}))
+    if at_neutral:
+        from .parameter_sets import mechanics_start_values
+        from .platform_core import neutral_pose
+        try:
+            pose = neutral_pose({**mechanics_start_values(parameter_set, mass_set), **mechanics_parameters})
+        except (KeyError, ValueError) as error:
+            raise fail(f"trajectory.{at_neutral[0]}", "offset", f"= 'neutral': no neutral pose ({error})") from None
+        for dof in at_neutral:
+            trajectory[dof].offset = float(pose[POSE.index(dof)])
     return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
                  step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
                  drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
-                 mass_set=mechanics.get("mass_set", "heavy"), mechanics_parameters=dict(mechanics.get("parameters", {})),
+                 mass_set=mass_set, mechanics_parameters=mechanics_parameters,
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                  outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval)

@@ -172,3 +172,22 @@ def test_an_unknown_output_is_named_with_its_line(tmp_path, capsys):
     assert "scene.toml:8: 'outputs.drive'" in str(error.value) and "no variable 'torqe'" in str(error.value)
     assert main(["run", str(tmp_path / "scene.toml"), "--no-plots", "--out", str(tmp_path)]) == 2
     assert "no variable 'torqe'" in capsys.readouterr().err
+
+
+def test_a_neutral_offset_is_the_pose_the_mechanics_starts_at(tmp_path):
+    """offset = "neutral" is solved from the geometry: for the Meng scene it is the height at which
+    the mechanics FMU starts (its own solve, bit for bit), and with a longer middle leg it rises so
+    that every leg is again l_0 long."""
+    from cosim.engine.fmi import FmuInstance
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
+    mechanics = FmuInstance(fmu_path("mechanics"), "mechanics")
+    try:
+        mechanics.initialize()
+        assert scene.trajectory["z"].offset == mechanics.get("pose.z")
+        legs = [mechanics.get(f"leg[{i}].length") for i in range(1, 7)]
+    finally:
+        mechanics.free()
+    assert np.allclose(legs, 1.86, atol=1e-12)
+    longer = load_scene(write(tmp_path, "[scene]\nduration = 1.0\n[mechanics.parameters]\n"
+                                        '"geometry.middle_leg_length" = 1.96\n[trajectory.z]\noffset = "neutral"\n'))
+    assert longer.trajectory["z"].offset > scene.trajectory["z"].offset + 0.05
