@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import pytest
 from fmpy import extract
 
+from cosim.platform.parameter_sets import load as load_parameter_set
 from cosim.engine.fmi import FmuInstance
-from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.artifacts import fmu_path
 
 
 @pytest.fixture(scope="session")
@@ -24,8 +24,7 @@ def pmsm_unzip_dir(pmsm_fmu, tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def meng_params() -> dict:
-    with open(ROOT / "params" / "meng2010.toml", "rb") as f:
-        return tomllib.load(f)
+    return load_parameter_set("meng2010")
 
 
 @pytest.fixture

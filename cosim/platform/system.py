@@ -20,7 +20,7 @@ import numpy as np
 from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Execution, Experiment, Observer,
                       RunFailed, StepControl, SystemStructure, fmu_path)
 from ..engine.fmi import LogMessage
-from .ports import DRIVES, LEGS, POSE, WRENCH, DriveWiring  # noqa: F401 (re-exported)
+from .ports import DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE, WRENCH re-exported)
 
 
 def drive_names(drive: str) -> list[str]:

@@ -4,7 +4,6 @@ platform and the thesis' case studies with linear motors."""
 
 from __future__ import annotations
 
-import tomllib
 import zipfile
 
 import numpy as np
@@ -14,15 +13,15 @@ from fmpy.validation import validate_fmu
 
 from drive_bench import LINEAR, run_on_inertia
 from cosim.engine.fmi import FmuError, FmuInstance
-from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.artifacts import fmu_path
 from drive_bench import RigidInertia
 from cosim.platform.parameter_sets import mechanics_start_values
+from cosim.platform.parameter_sets import load as load_parameter_set
 from cosim.platform.scene import Signal, Sine
 from cosim.platform.signals import trajectory_parameters
 from cosim.platform.system import POSE, simulate
 
-with open(ROOT / "params" / "sumnu2015.toml", "rb") as _f:
-    MOTOR = tomllib.load(_f)["linear_motor"]
+MOTOR = load_parameter_set("sumnu2015")["linear_motor"]
 
 
 @pytest.fixture(scope="module")

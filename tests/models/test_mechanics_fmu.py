@@ -3,15 +3,15 @@ inverse model, the effect switches against Table 5 of Meng et al. (2010), limits
 
 from __future__ import annotations
 
-import tomllib
 
 import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
+from cosim.platform.parameter_sets import load as load_parameter_set
 from cosim.engine.fmi import FmuError, FmuInstance
-from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.artifacts import fmu_path
 from cosim.platform.parameter_sets import mechanics_start_values
 from cosim.platform.platform_core import Core, load
 from scipy.spatial.transform import Rotation
@@ -87,8 +87,7 @@ def test_sumnu_platform_loads_as_a_second_set(make_mechanics, dll):
     leg at the length an independent computation gives and motor angles zero; the forces of the
     inverse model hold it there for 1 s."""
     values = mechanics_start_values("sumnu2015")
-    with open(ROOT / "params" / "sumnu2015.toml", "rb") as f:
-        geometry = tomllib.load(f)["geometry"]
+    geometry = load_parameter_set("sumnu2015")["geometry"]
     home = np.array(geometry["home_pose"])
     R = Rotation.from_euler("xyz", home[3:]).as_matrix()
     expected = np.linalg.norm(home[:3] + np.array(geometry["platform_joints"]) @ R.T - np.array(geometry["base_joints"]),

@@ -7,10 +7,8 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.parameter_sets import mechanics_start_values
 from cosim.platform.runner import run_scene, scene_record, scene_settings, scene_structure
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.signals import scene_trajectory
 from cosim.platform.system import POSE, run
 
 
