@@ -7,6 +7,10 @@ no element for, the power bonds and how we run the system (coupling algorithm, e
 order, step control, macro step, recorded outputs), travels in an annotation of the default
 experiment (type ANNOTATION); other tools ignore it and run the system with their own algorithm.
 A folder with SystemStructure.ssd (an unpacked archive) reads the same way.
+A parameter whose value is a file (a `pathlib.Path`, such as a trajectory table) is copied into the
+archive as resources/<component>/<file name> and its value written as that relative path; reading
+resolves it to the unpacked file again. Tools that run the archive unpacked, from its folder, find
+it there too.
 """
 
 from __future__ import annotations
@@ -57,6 +61,10 @@ def _ssv_value(parent: etree._Element, value: Value, kind: str) -> None:
         element.set("value", str(int(value)) if kind == "Integer" else str(value))
 
 
+def file_resource(component: str, path: Path) -> str:
+    return f"resources/{component}/{path.name}"
+
+
 def _parameter_set(component: Component, kinds: dict[str, str]) -> etree._Element:
     # one name for every component's set: tools that apply parameter sets by name (Ecos) take them all
     root = etree.Element(_q(SSV, "ParameterSet"), nsmap={"ssv": SSV}, version="1.0", name=PARAMETER_SET)
@@ -65,6 +73,8 @@ def _parameter_set(component: Component, kinds: dict[str, str]) -> etree._Elemen
         if name not in kinds:
             raise SspError(f"component '{component.name}': {component.fmu.name} has no variable '{name}'")
         parameter = etree.SubElement(parameters, _q(SSV, "Parameter"), name=name)
+        if isinstance(value, Path):
+            value = file_resource(component.name, value)
         _ssv_value(parameter, value, "Integer" if kinds[name] == "Enumeration" else kinds[name])
     return root
 
@@ -150,6 +160,10 @@ def write_ssp(structure: SystemStructure, path: Path) -> Path:
                                                                       encoding="UTF-8"))
         for inner, fmu in files.items():
             archive.write(fmu, inner)
+        for component in structure.components:
+            for value in component.parameters.values():
+                if isinstance(value, Path):
+                    archive.write(value, file_resource(component.name, value))
     return path
 
 
@@ -237,7 +251,10 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                     name = parameter.get("name")
                     if prefix and name.startswith(prefix):
                         name = name[len(prefix):]
-                    parameters[name] = _typed(parameter[0], ssv_where)
+                    value = _typed(parameter[0], ssv_where)
+                    if isinstance(value, str) and value.startswith("resources/") and (folder / value).is_file():
+                        value = folder / value  # a file that travelled with the archive
+                    parameters[name] = value
         components.append(Component(element.get("name"), source, parameters))
     connections = [Connection((c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector")))
                    for c in system.findall("ssd:Connections/ssd:Connection", NS)]

@@ -16,7 +16,7 @@ from fmpy import extract
 
 from .fmi import FmuInstance
 
-Value = float | int | bool | str
+Value = float | int | bool | str | Path  # a Path: a String parameter naming a file
 
 
 @dataclass(frozen=True)

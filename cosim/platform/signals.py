@@ -41,7 +41,7 @@ def trajectory_parameters(trajectory: Mapping[str, Signal], pulses: Iterable[Pul
         prefix = f"load.{pulse.component}.pulse[{k}]"
         values.update({f"{prefix}.value": pulse.value, f"{prefix}.start": pulse.start, f"{prefix}.end": pulse.end})
     if table:
-        values["table.file"] = str(Path(table).resolve())
+        values["table.file"] = Path(table).resolve()  # a file: an SSP export carries it along
         values["table.interpolation"] = {"linear": 1, "cubic": 2}[interpolation]
     return values
 

@@ -140,6 +140,12 @@ def test_a_scene_table_drives_the_platform_like_the_signal_it_samples(tmp_path):
     with_table, _ = run_scene(load_scene(path))
     for a in ("x", "y", "z", "roll", "pitch", "yaw"):
         np.testing.assert_allclose(with_table[f"pose.{a}"], with_sine[f"pose.{a}"], atol=1e-6)
+    # the table travels in the SSP archive: exported, its source deleted, the archive runs the same
+    assert main(["export", str(path), "--ssp", str(tmp_path / "tabled.ssp")]) == 0
+    (tmp_path / "heave.csv").unlink()
+    from cosim.engine.command import run_ssp
+    from_archive, _ = run_ssp(tmp_path / "tabled.ssp", None)
+    assert np.array_equal(from_archive["pose.z"], with_table["pose.z"])
 
 
 @pytest.mark.parametrize("extra,message", [
