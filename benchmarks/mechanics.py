@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -24,9 +23,9 @@ from scipy.integrate import solve_ivp
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE.parent))
 from common import run_stepping  # noqa: E402
-from platform_core import Core, build  # noqa: E402
+from cosim.platform.platform_core import Core  # noqa: E402
 
 POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
 TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]
@@ -43,7 +42,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=5.0)
     args = parser.parse_args()
-    core = Core(build(Path(tempfile.mkdtemp())))
+    core = Core()
     pose = core.neutral_pose + np.array([0.05, -0.03, 0.1, 0.04, -0.03, 0.08])
     twist = np.array([0.02, -0.01, 0.015, 0.01, 0.02, -0.015])
     duty = {f"initial.pose.{a}": pose[k] for k, a in enumerate(POSE)}

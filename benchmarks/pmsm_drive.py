@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
 from common import run_native  # noqa: E402
 
-from drive_bench import run_on_inertia  # noqa: E402
+from drive_bench import RigidInertia, run_on_inertia  # noqa: E402
 from cosim.engine.fmi import FmuInstance  # noqa: E402
 from cosim.engine.artifacts import fmu_path  # noqa: E402
-from drive_bench import RigidInertia  # noqa: E402
 
 J_EQ, AMPLITUDE, FREQUENCY, STEP = 0.0209, 10.0, 2.0, 1e-3
 PORTS = ("angle_ref", "angle", "speed", "torque")
