@@ -87,7 +87,7 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
 
 def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
     from .engine.osp import write_osp
-    from .engine.ssp import SspError, write_ssp
+    from .engine.ssp import SspError, not_portable, write_ssp
     from .platform.runner import scene_structure
     if ssp is None and osp is None:
         print("error: export: give --ssp FILE.ssp, --osp DIR or both", file=sys.stderr)
@@ -95,9 +95,10 @@ def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
     try:
         structure = scene_structure(load_scene(path))
         if ssp is not None:
-            print(f"written: {write_ssp(structure, ssp)} (SSP 1.0; our coupling and step control in its "
-                  f"annotation '{ANNOTATION}', which other tools ignore: they run it with their own algorithm "
-                  f"and no input derivatives)")
+            print(f"written: {write_ssp(structure, ssp)} (SSP 1.0; our run settings in its annotation "
+                  f"'{ANNOTATION}', which other tools ignore)")
+        for note in not_portable(structure.settings):
+            print(f"note: other tools run this system without {note}")
         if osp is not None:
             print(f"written: {write_osp(structure, osp)} and the FMUs beside it (OSP; libcosim runs it with its "
                   f"fixed-step or ECCO algorithm and no input derivatives; libcosimpy 0.0.6 loads a file with "

@@ -39,6 +39,26 @@ class SspError(ValueError):
     """An SSP file that cannot be read or run: the message names the file, and the line where known."""
 
 
+def not_portable(settings: dict) -> list[str]:
+    """What of these run settings other SSP tools do not do (they run their own algorithm)."""
+    notes = []
+    order = int(settings.get("order", 1))
+    if order > 0:
+        notes.append(f"input extrapolation of order {order} through fmi2SetRealInputDerivatives (other tools hold "
+                     f"inputs over a step: order 0)")
+    if settings.get("algorithm", "gauss-seidel") == "gauss-seidel":
+        notes.append("Gauss-Seidel stepping in the order " + str(settings.get("sequence", "of the components")) +
+                     " (libcosim, Ecos and fmpy.ssp step every component from the same time: Jacobi)")
+    control = settings.get("step_control", "fixed")
+    if control == "doubling":
+        notes.append("step doubling with rollback through FMU state")
+    elif control == "energy":
+        notes.append("our energy step control (libcosim's ECCO, from an OSP export, is the nearest)")
+    if int(settings.get("initial_sweeps", 20)) > 0:
+        notes.append("the consistency sweeps at the start (libcosim does the like; Ecos and fmpy.ssp do not)")
+    return notes
+
+
 def _q(ns: str, tag: str) -> str:
     return f"{{{ns}}}{tag}"
 

@@ -159,3 +159,9 @@ def test_libcosim_runs_the_osp_configuration_like_our_master_to_round_off(tmp_pa
 def test_libcosim_loads_the_osp_configuration_with_its_six_power_bonds(tmp_path):
     assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--osp", str(tmp_path)]) == 0
     run_osp(tmp_path / "OspSystemStructure.xml", 0.01)
+
+
+def test_the_export_says_what_other_tools_will_not_do(tmp_path, capsys):
+    assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(tmp_path / "m.ssp")]) == 0
+    out = capsys.readouterr().out
+    assert "without input extrapolation of order 1" in out and "without Gauss-Seidel stepping" in out
