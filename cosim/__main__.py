@@ -8,6 +8,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import traceback
 import sys
 from pathlib import Path
 
@@ -18,6 +20,25 @@ from .platform.scene import SceneError, load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit codes: 0 done, 1 the run failed (partial results written), 2 a user error (one line),
+    3 a bug in this program (its traceback, and a line that says so)."""
+    from .engine import ArtifactMissing
+    try:
+        return _main(argv)
+    except ArtifactMissing as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except Exception:  # anything else is ours to fix, not the user's
+        traceback.print_exc()
+        print("internal error: the traceback above is a bug in cosim, not a mistake in your input; please "
+              "report it with the command you ran", file=sys.stderr)
+        return 3
+
+
+def _main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m cosim", description="Stewart platform co-simulation")
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
@@ -26,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
                      help="an SSP system's run setting (algorithm, order, step_control, step, rtol, atol, ...)")
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
-    run.add_argument("--duration", type=float, help="override the scene's duration [s]")
+    run.add_argument("--duration", type=str, help="override the scene's duration [s]")
     export = commands.add_parser("export", help="write a scene as an SSP 1.0 archive (FMUs, parameters, wiring)")
     export.add_argument("scene", type=Path)
     export.add_argument("--ssp", type=Path, help="the .ssp file to write")
@@ -53,17 +74,26 @@ def main(argv: list[str] | None = None) -> int:
         from .platform.validation.report import build
         print(f"written: {build(args.out)}")
         return 0
+    duration = None
+    if getattr(args, "duration", None) is not None:
+        try:
+            duration = float(args.duration)
+        except ValueError:
+            duration = float("nan")
+        if not (math.isfinite(duration) and duration > 0):
+            print(f"error: --duration {args.duration}: must be a positive finite number of seconds", file=sys.stderr)
+            return 2
     if args.command == "export":
         return export_scene(args.scene, args.ssp, args.osp)
     if args.scene.suffix.lower() in (".ssp", ".ssd"):
-        return run_system(args.scene, args.out, args.set, args.duration)
+        return run_system(args.scene, args.out, args.set, duration)
     try:
         scene = load_scene(args.scene)
     except SceneError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    if args.duration:
-        scene.duration = args.duration
+    if duration is not None:
+        scene.duration = duration
     return report(lambda: run_scene(scene, args.out, plots=not args.no_plots)[1], (SceneError,), SceneFailed,
                   f"{args.out}/{scene.path.stem}.csv, .mat" + ("" if args.no_plots else " and plots"), args.out)
 
@@ -92,8 +122,16 @@ def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
     if ssp is None and osp is None:
         print("error: export: give --ssp FILE.ssp, --osp DIR or both", file=sys.stderr)
         return 2
+    from .engine import ParameterError
+    from .engine.checks import check_parameters
+    from .platform.runner import scene_error
     try:
-        structure = scene_structure(load_scene(path))
+        scene = load_scene(path)
+        structure = scene_structure(scene)
+        try:
+            check_parameters(structure)
+        except ParameterError as error:
+            raise scene_error(scene, error) from None
         if ssp is not None:
             print(f"written: {write_ssp(structure, ssp)} (SSP 1.0; our run settings in its annotation "
                   f"'{ANNOTATION}', which other tools ignore)")

@@ -8,7 +8,7 @@ from the annotation's `record` setting, else every connected output as `componen
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
@@ -16,7 +16,7 @@ import numpy as np
 
 from .execution import Execution, RunFailed
 from .observers import DivergenceMonitor, Progress
-from .results import thin, write
+from .results import message_kinds, thin, write, write_log
 from .settings import from_strings
 from .structure import SystemStructure
 
@@ -32,6 +32,7 @@ class SystemReport:
     largest_energy_residual: float
     warnings: int
     failure: str | None = None
+    messages: list = field(default_factory=list)  # (instance, LogMessage) of everything logged
 
     def text(self) -> str:
         rtf = self.simulated / self.wall if self.wall > 0 else float("inf")
@@ -41,7 +42,8 @@ class SystemReport:
                  f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
                  f"{self.largest_energy_residual:.2e} J"]
         if self.warnings:
-            lines.append(f"{self.warnings} warnings from the FMUs")
+            kinds = "; ".join(f"{n} x {kind}" for n, kind in message_kinds(self.messages)[:3])
+            lines.append(f"{self.warnings} warnings from the FMUs ({kinds})")
         if self.failure:
             lines.append(f"FAILED: {self.failure}")
         return "\n".join(lines)
@@ -78,7 +80,8 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
     report = SystemReport(structure.name, len(execution.steps), execution.rejected,
                           float(result["time"][-1] - result["time"][0]) if len(result) else 0.0, wall,
                           execution.fmi_seconds, float(np.max(execution.energy_residuals, initial=0.0)),
-                          len(execution.messages("warning")), str(failure) if failure else None)
+                          len(execution.messages("warning")), str(failure) if failure else None,
+                          execution.messages())
     execution.free()
     interval = structure.settings.get("output_interval")
     result = thin(result, float(interval) if interval else None)
@@ -91,14 +94,23 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
 def run_ssp(path: Path, out: Path | None, overrides: Mapping[str, str] | None = None,
             stop_time: float | None = None) -> tuple[np.ndarray, SystemReport]:
     """Reads and runs an SSP system; writes <stem>.csv and .mat to `out` (also when it fails)."""
-    from .ssp import read_ssp
+    from .checks import ParameterError
+    from .execution import NoStep
+    from .fmi import FmuError
+    from .ssp import SspError, read_ssp
     structure = read_ssp(path)
     try:
         result, report = run_structure(structure, overrides, stop_time)
+    except (ParameterError, NoStep) as error:  # the SSP's values or times, before a single step
+        raise SspError(f"{path}: {error}") from None
+    except FmuError as error:  # an FMU that rejects the SSP's values when it is set up
+        raise SspError(f"{path}: {error}") from None
     except RunFailed as failed:
         if out is not None:
             write(failed.result, out, Path(path).stem)
+            write_log(failed.report.messages, out / f"{Path(path).stem}.log")
         raise
     if out is not None:
         write(result, out, Path(path).stem)
+        write_log(report.messages, out / f"{Path(path).stem}.log")
     return result, report

@@ -8,10 +8,12 @@ observers only watch (libcosim's split of algorithm, execution and observers).
 
 from __future__ import annotations
 
+import math
 from typing import Mapping, Sequence
 
 import numpy as np
 
+from .checks import check_parameters
 from .coupling import Coupling
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
@@ -41,6 +43,7 @@ class Execution:
                  record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None,
                  clock: str | None = None, logging_on: bool = False,
                  interpolating: Mapping[str, bool] | None = None):
+        check_parameters(structure)  # before any FMU is instantiated
         self.structure, self.algorithm, self.control = structure, algorithm, control
         self.control_name = control_name(control)
         if algorithm.sequence and sorted(algorithm.sequence) != sorted(c.name for c in structure.components):
@@ -79,6 +82,7 @@ class Execution:
         """Runs from the start to stop_time; returns the recorded results (structured array).
         Raises RunFailed with the results up to the last good step when an FMU fails, an observer
         stops the run, or not a single step fits before stop_time."""
+        self._check_stop(stop_time)
         recorder = Recorder(self.names)
         observers = [recorder, *observers]
         self.start_time, self.stop_time = self.time, stop_time
@@ -107,7 +111,7 @@ class Execution:
                 parts_residuals.append(batch.residuals)
                 parts_steps.append(batch.steps)
             raise RunFailed(error, recorder.result()) from error
-        except (Diverged, _NoStep) as error:
+        except Diverged as error:
             raise RunFailed(error, recorder.result()) from error
         finally:
             self.energy_residuals = np.concatenate([self.energy_residuals, *parts_residuals])
@@ -116,12 +120,19 @@ class Execution:
                 observer.finish(self)
         return recorder.result()
 
+    def _check_stop(self, stop_time: float) -> None:
+        if not (isinstance(stop_time, (int, float)) and math.isfinite(stop_time)):
+            raise NoStep(f"the stop time {stop_time!r} is not a finite number")
+        if isinstance(self.control, FixedStep):
+            if int(round((stop_time - self.time) / self.control.step)) < 1:
+                raise NoStep(f"the macro step {self.control.step:g} s does not fit once between t = {self.time:g} s "
+                             f"and the stop time {stop_time:g} s")
+        elif stop_time - self.time <= 1e-12 * max(1.0, abs(stop_time)):
+            raise NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
+
     def _fixed_batches(self, stop_time: float):
         h = self.control.step
         n = int(round((stop_time - self.time) / h))
-        if n < 1:
-            raise _NoStep(f"the macro step {h:g} s does not fit once between t = {self.time:g} s and the stop "
-                          f"time {stop_time:g} s")
         done, size = 0, 100  # small batches first: a divergence shows early
         while done < n:
             take = min(size, n - done)
@@ -130,8 +141,6 @@ class Execution:
             done += take
 
     def _controlled_batches(self, stop_time: float):
-        if stop_time - self.time <= 1e-12 * max(1.0, abs(stop_time)):
-            raise _NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
         while stop_time - self.kernel.controller_time > 1e-12 * max(1.0, abs(stop_time)):
             yield self.kernel.run_controlled(stop_time, 500)
 
@@ -141,5 +150,6 @@ class Execution:
         self.instances = {}
 
 
-class _NoStep(ValueError):
-    pass
+class NoStep(ValueError):
+    """A run that cannot take a single step (stop time not after the start, step longer than the
+    run): a user error, raised before anything is stepped or recorded."""

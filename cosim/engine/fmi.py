@@ -40,6 +40,7 @@ class LogMessage:
     status: str
     category: str
     text: str
+    time: float = float("nan")  # the instance's time when it logged [s]
 
 
 class FmuError(RuntimeError):
@@ -56,7 +57,9 @@ class FmuInstance:
     """An instantiated co-simulation FMU. `unzip_dir` lets several instances share one extraction."""
 
     def __init__(self, fmu_path: str | Path, instance_name: str, unzip_dir: str | Path | None = None,
-                 logging_on: bool = False):
+                 logging_on: bool = False, warnings: bool = True):
+        """logging_on: the FMU's debug logging (every category); warnings: at least its warnings
+        (category logStatusWarning); errors are always reported."""
         self.path = Path(fmu_path)
         self.name = instance_name
         self.model_description = read_model_description(str(self.path))
@@ -73,13 +76,17 @@ class FmuInstance:
         self.fmu = FMU2Slave(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
                              modelIdentifier=self.model_description.coSimulation.modelIdentifier,
                              instanceName=instance_name)
+        self.clock = None  # a function giving the instance's time while a native loop runs it
         self._call("fmi2Instantiate", self.fmu.instantiate, callbacks=self._callbacks, loggingOn=logging_on)
+        if warnings and not logging_on and "logStatusWarning" in self.log_categories:
+            self._call("fmi2SetDebugLogging", self.fmu.setDebugLogging, True, ["logStatusWarning"])
 
     # -- plumbing --------------------------------------------------------------------------------
 
     def _on_log(self, env, instance_name, status, category, message) -> None:
         self.messages.append(LogMessage(_STATUS[status] if 0 <= status < 6 else str(status),
-                                        (category or b"").decode(), (message or b"").decode()))
+                                        (category or b"").decode(), (message or b"").decode(),
+                                        self.clock() if self.clock else self.time))
 
     def _call(self, call: str, function, *args, **kwargs):
         logged_before = len(self.messages)
@@ -118,6 +125,10 @@ class FmuInstance:
                 self._call(f"fmi2SetString({name})", self.fmu.setString, vr, [str(value)])
             else:
                 raise TypeError(f"{self.name}: cannot set '{name}' of type {kind}")
+
+    @property
+    def log_categories(self) -> list[str]:
+        return [c.name if hasattr(c, "name") else str(c) for c in (self.model_description.logCategories or [])]
 
     @property
     def can_interpolate_inputs(self) -> bool:

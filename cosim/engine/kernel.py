@@ -168,6 +168,8 @@ class Kernel:
         self.inputs = np.zeros((3, m))
         self.record_scratch = np.zeros(max(record_offset, 1))
         self.instance_time = np.array([coupling.instances[n].time for n in names])
+        for k, name in enumerate(names):  # what an FMU logs inside a kernel call carries its time then
+            coupling.instances[name].clock = (lambda k=k: float(self.instance_time[k]))
         self.fmi_seconds, self.saved_time = np.zeros(len(names)), np.zeros(len(names))
         self.order_one, self.order_two = _ints(np.ones(max(n, m))), _ints(np.full(max(n, m), 2))
         self.states = (ctypes.c_void_p * len(names))()

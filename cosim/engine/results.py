@@ -40,3 +40,28 @@ def write(result: np.ndarray, out: Path, stem: str) -> list[Path]:
     write_csv(result, paths[0])
     write_mat(result, paths[1])
     return paths
+
+
+def write_log(messages, path: Path) -> None:
+    """Everything the FMUs logged, as CSV: step_start (the communication point at which the call
+    that logged it began) [s], instance, status, category, message."""
+    import csv
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["step_start", "instance", "status", "category", "message"])
+        for instance, m in messages:
+            writer.writerow([repr(m.time), instance, m.status, m.category, m.text])
+
+
+def message_kinds(messages, status: str = "warning") -> list[tuple[int, str]]:
+    """(count, kind) of the messages of one status, most frequent first; a kind is the message
+    with its numbers and leading time taken out, per FMU (instances numbered alike count together)."""
+    import re
+    from collections import Counter
+    number = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+    counts = Counter()
+    for instance, m in messages:
+        if m.status == status:
+            text = re.sub(r"^t = [^:]*: ", "", m.text)
+            counts[f"{re.sub(r'[0-9]+$', '', instance)}: {number.sub('#', text)}"] += 1
+    return [(n, kind) for kind, n in counts.most_common()]

@@ -7,14 +7,16 @@ results up to the last good communication point are written all the same.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..engine import (Algorithm, EnergyControl, Experiment, FixedStep, Progress, RunFailed, StepControl,
                       StepDoubling, SystemStructure)
-from ..engine.results import thin, write as write_results
+from ..engine import FmuError, NoStep, ParameterError
+from ..engine.results import message_kinds, thin, write as write_results, write_log
 from ..engine.settings import control_name, to_strings
 from .parameter_sets import mechanics_start_values
 from .ports import DRIVES, POSE
@@ -36,6 +38,8 @@ class RunReport:
     failure: str | None = None
     rejected_steps: int = 0
     step_control: str = "fixed"
+    warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
+    log: Path | None = None  # where every FMU message was written
 
     @property
     def real_time_factor(self) -> float:
@@ -56,7 +60,10 @@ class RunReport:
             lines.append("largest tracking error after the first tenth: " + ", ".join(
                 f"{a} {e:.2e}" for a, e in zip(("x", "y", "z", "roll", "pitch", "yaw"), self.largest_error)))
         if self.warnings:
-            lines.append(f"{len(self.warnings)} warnings from the FMUs, first: {self.warnings[0]}")
+            kinds = "; ".join(f"{n} x {kind}" for n, kind in self.warning_kinds[:3])
+            more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""
+            lines.append(f"{len(self.warnings)} warnings from the FMUs ({kinds}{more}), first: {self.warnings[0]}"
+                         + (f"; all in {self.log}" if self.log else ""))
         if self.failure:
             lines.append(f"FAILED: {self.failure}")
         return "\n".join(lines)
@@ -100,6 +107,59 @@ def scene_structure(scene: Scene) -> SystemStructure:
     return structure
 
 
+def scene_key(component: str, variable: str) -> tuple[str, str]:
+    """The scene table and key that a component's parameter comes from."""
+    if component == "mechanics":
+        return "mechanics.parameters", variable
+    if component == "trajectory":
+        if variable.startswith("load."):
+            return "load", "pulses"
+        if variable.startswith("table."):
+            return "trajectory", "table"
+        dof, rest = variable.split(".", 1)
+        return f"trajectory.{dof}", {"sine": "sines", "step": "steps", "ramp": "ramps"}.get(rest.split("[")[0], rest)
+    return "drive.parameters", variable
+
+
+def located(scene: Scene, component: str, variable: str) -> str:
+    """'file:line: table.key' for a component's parameter (file:0 when the scene does not set it,
+    the value then comes from the parameter set or the FMU's default)."""
+    table, key = scene_key(component, variable)
+    line = line_of(scene.path.read_text(), table, key)
+    if table.endswith(".parameters"):
+        shown = f'{table}."{key}"'
+    elif table == "load":
+        shown = f"load.pulses ({variable})"
+    else:  # x.sine[1].amplitude -> trajectory.x.sines[1].amplitude
+        rest = variable.split(".", 1)[1]
+        item = re.match(r"(sine|step|ramp)\[(\d+)\]\.(\w+)$", rest)
+        shown = f"{table}.{item.group(1)}s[{item.group(2)}].{item.group(3)}" if item else f"{table}.{rest}"
+    return f"{scene.path}:{line}: {shown}" + ("" if line else f" (from parameter set {scene.parameter_set})")
+
+
+def scene_error(scene: Scene, error: Exception) -> SceneError | None:
+    """A one-line SceneError with the scene's file and line for a user error found when the
+    system is built or started, or None for anything else (a bug)."""
+    if isinstance(error, ParameterError):
+        return SceneError(f"{located(scene, error.component, error.variable)} = {error.value!r}: {error.reason} "
+                          f"({error.fmu})")
+    if isinstance(error, FmuError) and error.call.startswith(("fmi2Instantiate", "fmi2Set", "fmi2Enter", "fmi2Exit",
+                                                             "fmi2Setup")):
+        detail = "; ".join(m.text for m in error.messages) or "the FMU logged no reason"
+        named = re.search(r"'([^']+)'", detail)
+        where = located(scene, error.instance, named.group(1)) if named else f"{scene.path}"
+        return SceneError(f"{where}: rejected by {error.instance}: {detail}")
+    if isinstance(error, NoStep):
+        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'scene', 'step')}: scene.step = "
+                          f"{scene.step:g} s, duration {scene.duration:g} s: {error}")
+    if isinstance(error, KeyError) and "no variable" in str(error):  # a recorded output the FMU lacks
+        names = set(scene.outputs_mechanics)
+        key = "mechanics" if any(f"'{n}'" in str(error) for n in names) else "drive"
+        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'outputs', key)}: 'outputs.{key}': "
+                          f"{error.args[0]}")
+    return None
+
+
 def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat and
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
@@ -113,15 +173,17 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         failure = None
     except RunFailed as failed:  # system.run attaches the partial run
         outcome, failure = failed.run, str(failed)
-    except KeyError as error:  # a recorded output that the FMU does not have
-        names = set(scene.outputs_mechanics)
-        key = "mechanics" if any(f"'{n}'" in str(error) for n in names) else "drive"
-        raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'outputs', key)}: 'outputs.{key}': "
-                         f"{error.args[0]}") from None
+    except (ParameterError, FmuError, NoStep, KeyError) as error:  # found before a single step
+        mapped = scene_error(scene, error)
+        if mapped is None:
+            raise
+        raise mapped from None
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, failure, control_name(control))
     if out is not None:
         write_results(result, out, scene.path.stem)
+        report.log = out / f"{scene.path.stem}.log"
+        write_log(outcome.messages, report.log)
         effort, speed = DRIVES[scene.drive].outputs[:2]
         if plots and len(result) > 1:
             from . import results
@@ -139,4 +201,4 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Run, failure: str | 
                        for a in POSE])
     return RunReport(scene.name, len(outcome.steps), float(result["time"][-1]), outcome.wall, outcome.fmi_seconds,
                      errors, float(np.max(outcome.energy_residuals, initial=0.0)), outcome.warnings, failure,
-                     outcome.rejected, control)
+                     outcome.rejected, control, message_kinds(outcome.messages))

@@ -144,7 +144,12 @@ def load_scene(path: str | Path) -> Scene:
     path = Path(path)
     if not path.exists():
         raise SceneError(f"{path}: no such scene file")
-    text = path.read_text()
+    if path.is_dir():
+        raise SceneError(f"{path}: is a folder, not a scene file (the shipped scenes are scenes/*.toml)")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise SceneError(f"{path}: cannot be read: {error}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -17,7 +17,11 @@
 /* Logging                                                                                     */
 
 void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, const char *format, ...) {
-    if (!fmu || !fmu->callbacks.logger) return;
+    if (!fmu) return;
+    /* a warning makes the call that raised it return fmi2Warning, logged or not (the instance
+     * itself is never const: models only get read access to it) */
+    if (status == fmi2Warning) ((FmuInstance *)fmu)->warned = 1;
+    if (!fmu->callbacks.logger) return;
     int enabled = fmu->log_all || (status >= fmi2Error && fmu->log_errors) ||
                   (status == fmi2Warning && fmu->log_warnings) ||
                   (strcmp(category, "logEvents") == 0 && fmu->log_events);
@@ -231,7 +235,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         if (!cat) { LOG_ERROR(fmu, "fmi2SetDebugLogging: category %zu is NULL", i); return fmi2Error; }
         if (strcmp(cat, "logEvents") == 0) fmu->log_events = loggingOn;
         else if (strcmp(cat, "logStatusWarning") == 0) fmu->log_warnings = loggingOn;
-        else if (strcmp(cat, "logStatusError") == 0) fmu->log_errors = loggingOn;
+        else if (strcmp(cat, "logStatusError") == 0) fmu->log_errors = 1; /* errors are always reported */
         else if (strcmp(cat, "logAll") == 0) fmu->log_all = loggingOn;
         else {
             LOG_ERROR(fmu, "fmi2SetDebugLogging: unknown log category '%s'", cat);
@@ -282,9 +286,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!fmu->instance_name) { functions->freeMemory(fmu); return NULL; }
     strcpy(fmu->instance_name, instanceName);
     fmu->logging_on = loggingOn;
-    fmu->log_errors = 1;
-    fmu->log_warnings = 1;
-    fmu->log_events = fmu->log_all = loggingOn;
+    fmu->log_errors = 1; /* errors are always reported; the rest only with logging on (FMI 2.0) */
+    fmu->log_warnings = fmu->log_events = fmu->log_all = loggingOn;
     reset_to_start(fmu);
     return fmu;
 }
@@ -635,6 +638,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     FmuInstance *fmu = (FmuInstance *)c;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!allowed(fmu, "fmi2DoStep", PHASE_STEP_COMPLETE)) return fmi2Error;
+    fmu->warned = 0;
     double t0 = fmu->s.time, h = communicationStepSize;
     if (!(h > 0.0) || !isfinite(h)) {
         LOG_ERROR(fmu, "fmi2DoStep: communication step size %g must be positive and finite", h);
@@ -670,7 +674,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
             return fmi2Error;
         }
     }
-    return fmi2OK;
+    return fmu->warned ? fmi2Warning : fmi2OK;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {

@@ -39,6 +39,7 @@ typedef struct FmuInstance {
     fmi2CallbackFunctions callbacks;
     int logging_on;
     int log_events, log_warnings, log_errors, log_all; /* categories */
+    int warned;                            /* a warning was raised in the current fmi2DoStep */
     int outputs_stale;                     /* inputs or parameters changed since outputs were computed */
     /* Read-only data a model derives from its fixed parameters (e.g. a table read from a file):
      * kept outside the snapshot, so FMU states stay small; released with fmu_set_model_data. */

@@ -181,3 +181,36 @@ def test_diverging_solver_fails_the_step_and_keeps_the_last_good_state(make_driv
     assert last_good is not None
     assert np.isfinite(drive.get("current.q"))
     assert drive.get("current.q") == last_good[1]
+
+
+def test_warnings_follow_logging_on_and_make_do_step_return_warning():
+    """FMI 2.0 logging: with loggingOn false and no category enabled the FMU reports only errors;
+    the master enables logStatusWarning and then gets each warning. A DoStep that raised a warning
+    returns fmi2Warning (1) either way; the next quiet step returns fmi2OK again."""
+    from cosim.engine.fmi import FmuInstance
+    from cosim.engine.artifacts import fmu_path
+    statuses = {}
+    for warnings in (False, True):
+        mechanics = FmuInstance(fmu_path("mechanics"), "mechanics", warnings=warnings)
+        try:
+            mechanics.initialize({"limit.leg_length_max": 1.85})  # every leg (1.86 m) is past the stroke
+            raw = mechanics.fmu
+            statuses[warnings] = raw.fmi2DoStep(raw.component, 0.0, 1e-3, 0)
+            delivered = [m for m in mechanics.messages if m.status == "warning"]
+            assert bool(delivered) == warnings, delivered
+        finally:
+            mechanics.free()
+    assert statuses == {False: 1, True: 1}
+    mechanics = FmuInstance(fmu_path("mechanics"), "mechanics")
+    try:
+        mechanics.initialize()
+        raw = mechanics.fmu
+        assert raw.fmi2DoStep(raw.component, 0.0, 1e-3, 0) == 0
+        mechanics.time = 1e-3
+        raw.fmi2SetDebugLogging(raw.component, 0, 0, None)  # all debug logging off: errors still come
+        from fmpy.fmi1 import FMICallException
+        with pytest.raises(FMICallException, match="status 3"):
+            raw.fmi2DoStep(raw.component, 1e-3, -1.0, 0)
+        assert any(m.status == "error" and "step size" in m.text for m in mechanics.messages)
+    finally:
+        mechanics.free()

@@ -1,0 +1,98 @@
+"""Parameter values checked against each FMU's modelDescription before anything is instantiated:
+the variable exists and may be set before initialization, and the value has the variable's type
+(a Boolean only true or false, an Integer only a whole number, a Real only a finite number, a
+String only text) and lies within its declared min and max. The first problem is a
+`ParameterError` naming the component, variable, value and reason, so that a system never starts
+from a value that Python silently converted (bool("false") is True, int(4.7) is 4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from fmpy import read_model_description
+
+from .structure import SystemStructure, Value
+
+SETTABLE = {"parameter", "input"}
+
+
+@dataclass
+class ParameterError(ValueError):
+    component: str
+    variable: str
+    value: object
+    reason: str
+    fmu: str
+
+    def __str__(self) -> str:
+        return f"{self.component}.{self.variable} = {self.value!r}: {self.reason} ({self.fmu})"
+
+
+@lru_cache(maxsize=32)
+def _variables(path: Path, mtime: float) -> dict:
+    return {v.name: v for v in read_model_description(str(path)).modelVariables}
+
+
+def variables(path: Path) -> dict:
+    """The FMU's variables by name (cached per file and modification time)."""
+    return _variables(Path(path), Path(path).stat().st_mtime)
+
+
+def _bound(text) -> float | None:
+    return None if text in (None, "") else float(text)
+
+
+def problem(variable, value: Value) -> str | None:
+    """Why `value` cannot be given to `variable`, or None."""
+    if variable.causality not in SETTABLE or variable.variability == "constant":
+        return f"is {variable.causality} ({variable.variability}), not a parameter that can be set"
+    kind = variable.type
+    if kind == "Boolean":
+        return None if isinstance(value, bool) else "must be true or false"
+    if kind in ("Integer", "Enumeration"):
+        whole = (isinstance(value, int) and not isinstance(value, bool)) or \
+            (isinstance(value, float) and math.isfinite(value) and value.is_integer())
+        if not whole:
+            return "must be a whole number"
+    elif kind == "Real":
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            return "must be a finite number"
+    elif kind == "String":
+        return None if isinstance(value, (str, Path)) else "must be text"
+    else:
+        return f"has type {kind}, which cannot be set"
+    low = _bound(variable.min) if variable.min is not None else _bound(getattr(variable.declaredType, "min", None))
+    high = _bound(variable.max) if variable.max is not None else _bound(getattr(variable.declaredType, "max", None))
+    if (low is not None and value < low) or (high is not None and value > high):
+        unit = variable.unit or getattr(variable.declaredType, "unit", None) or ""
+        return (f"outside [{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}]"
+                + (f" {unit}" if unit else ""))
+    return None
+
+
+def check_parameters(structure: SystemStructure) -> None:
+    """Raises ParameterError for the first parameter value its FMU cannot take."""
+    for component in structure.components:
+        known = variables(component.fmu)
+        for name, value in component.parameters.items():
+            if name not in known:
+                close = [n for n in known if n.lower() == name.lower() or _near(n, name)]
+                hint = f" (did you mean '{close[0]}'?)" if close else ""
+                raise ParameterError(component.name, name, value, f"no such variable{hint}", component.fmu.stem)
+            reason = problem(known[name], value)
+            if reason:
+                raise ParameterError(component.name, name, value, reason, component.fmu.stem)
+
+
+def _near(a: str, b: str) -> bool:
+    """One edit apart (a typo), for the hint."""
+    if abs(len(a) - len(b)) > 1 or a == b:
+        return False
+    if len(a) == len(b):
+        return sum(x != y for x, y in zip(a, b)) == 1
+    short, long_ = sorted((a, b), key=len)
+    return any(long_[:i] + long_[i + 1:] == short for i in range(len(long_)))

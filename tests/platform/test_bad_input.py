@@ -1,0 +1,111 @@
+"""Bad input gets one clear line and loses nothing: every mistake below is reported by
+`python -m cosim run` as one line naming the file, the line, the key, the value and the reason,
+with exit code 2, before any FMU is instantiated or stepped, and the results of an earlier run in
+the output folder stay as they were. A failure that is not the user's prints its traceback and
+says that it is a bug (exit 3)."""
+
+from __future__ import annotations
+
+import pytest
+
+from cosim.__main__ import main
+from cosim.engine.artifacts import ROOT
+
+MENG = (ROOT / "scenes" / "meng_eq35.toml").read_text()
+
+
+def drive_parameter(line: str) -> str:
+    return MENG.replace("[drive.parameters]\n", f"[drive.parameters]\n{line}\n", 1)
+
+
+CASES = {
+    "boolean as text": ('[scene]\nduration = 1.0\n[mechanics.parameters]\n"limit.hard_stop" = "false"\n',
+                        ':4: mechanics.parameters."limit.hard_stop" = \'false\': must be true or false (mechanics)'),
+    "integer with a fraction": (drive_parameter('"motor.pole_pairs" = 4.7'),
+                                ':10: drive.parameters."motor.pole_pairs" = 4.7: must be a whole number (pmsm_drive)'),
+    "value outside its bounds": (drive_parameter('"motor.resistance" = -0.7'),
+                                 ':10: drive.parameters."motor.resistance" = -0.7: outside [0, inf] Ohm (pmsm_drive)'),
+    "misspelt parameter": (drive_parameter('"motor.resistnce" = 0.7'),
+                           "no such variable (did you mean 'motor.resistance'?) (pmsm_drive)"),
+    "NaN amplitude": ("[scene]\nduration = 1.0\n[trajectory.x]\nsines = [{amplitude = nan, frequency = 1.0}]\n",
+                      ":4: trajectory.x.sines[1].amplitude = nan: must be a finite number (trajectory)"),
+    "pulse that ends before it starts": (
+        '[scene]\nduration = 1.0\n[load]\npulses = [{component = "force.z", value = 1.0, start = 2.0, end = 1.0}]\n',
+        ":4: load.pulses (load.force.z.pulse[1].end): rejected by trajectory:"),
+    "step longer than the run": ("[scene]\nduration = 0.0005\nstep = 0.001\n",
+                                 ":3: scene.step = 0.001 s, duration 0.0005 s: the macro step 0.001 s does not fit once"),
+}
+
+
+@pytest.fixture
+def earlier_results(tmp_path):
+    """An output folder holding the results of an earlier run, which no failed start may touch."""
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("scene.csv", "scene.mat", "scene.log"):
+        (out / name).write_text("earlier run")
+    return out
+
+
+def assert_untouched(out) -> None:
+    assert sorted(p.name for p in out.iterdir()) == ["scene.csv", "scene.log", "scene.mat"]
+    assert all(p.read_text() == "earlier run" for p in out.iterdir())
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_a_bad_scene_value_is_one_line_with_its_place_and_loses_nothing(case, tmp_path, earlier_results, capsys):
+    text, message = CASES[case]
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    assert main(["run", str(path), "--no-plots", "--out", str(earlier_results)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith(f"error: {path}") and message in err, err
+    assert_untouched(earlier_results)
+
+
+@pytest.mark.parametrize("arguments,message", [
+    (["--duration", "-1"], "--duration -1: must be a positive finite number of seconds"),
+    (["--duration", "nan"], "--duration nan: must be a positive finite number of seconds"),
+    (["--duration", "0"], "--duration 0: must be a positive finite number of seconds"),
+    (["--duration", "ten"], "--duration ten: must be a positive finite number of seconds"),
+])
+def test_bad_command_line_arguments_are_one_line(arguments, message, earlier_results, capsys):
+    assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--out", str(earlier_results), *arguments]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+    assert_untouched(earlier_results)
+
+
+def test_a_folder_given_as_the_scene_is_one_line(capsys):
+    assert main(["run", str(ROOT / "scenes")]) == 2
+    assert "is a folder, not a scene file" in capsys.readouterr().err
+
+
+def test_an_unexpected_failure_says_it_is_a_bug(monkeypatch, capsys):
+    import cosim.__main__ as cli
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("deliberately broken for this test")
+
+    monkeypatch.setattr(cli, "run_scene", broken)
+    assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--no-plots"]) == 3
+    err = capsys.readouterr().err
+    assert "Traceback" in err and "is a bug in cosim" in err
+
+
+def test_every_warning_is_in_the_log_beside_the_results(tmp_path, capsys):
+    """The Meng scene's own motion takes legs past the stroke: each warning is a row of
+    <scene>.log with the step in which it was raised, the summary counts them by kind."""
+    import csv
+    assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--no-plots", "--duration", "1.0",
+                 "--out", str(tmp_path)]) == 0
+    with open(tmp_path / "meng_eq35.log") as f:
+        rows = list(csv.DictReader(f))
+    warnings = [r for r in rows if r["status"] == "warning"]
+    assert warnings and all(r["instance"] == "mechanics" for r in warnings)
+    for r in warnings:  # the FMU's own time in the text is the end of the step that raised it
+        t = float(r["message"].split("t = ")[1].split(" s")[0])
+        assert t == pytest.approx(float(r["step_start"]) + 1e-3, abs=1e-9)
+    out = capsys.readouterr().out
+    assert f"{len(warnings)} warnings from the FMUs (" in out and "x mechanics: leg # length # m is outside the stroke" in out
