@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
+BODY_WRENCH = tuple(name.replace("load.", "load.body.") for name in WRENCH)  # the platform frame's
 LEGS = range(1, 7)
 
 

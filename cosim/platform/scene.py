@@ -13,7 +13,8 @@
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
                   platform's neutral pose, computed from its geometry), sines = [{amplitude, frequency [Hz],
                   phase [rad]}] (up to 3), steps = [{time, height}] (2), ramps = [{start, end, slope}] (2)
-    [load]        pulses = [{component = "force.z" | ..., value, start, end}] (2 per component)
+    [load]        pulses = [{component = "force.z" | ..., value, start, end, frame = "base" | "platform"}]
+                  (2 per component; "platform": a follower load along the platform's own axes)
     [outputs]     mechanics = [...] (mechanics outputs recorded besides pose and pose_ref),
                   drive = [...] (per drive; default: effort, speed or velocity, current),
                   interval [s] (write results every interval; default: every macro step)
@@ -34,6 +35,7 @@ from typing import Any
 
 from .ports import DRIVES, POSE
 
+FRAMES = {"base": 1, "platform": 2}  # as the trajectory FMU's pulse[k].frame numbers them
 WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
 
 
@@ -75,6 +77,7 @@ class Pulse:
     value: float
     start: float
     end: float
+    frame: str = "base"  # or "platform": a follower load that turns with the platform
 
 
 @dataclass
@@ -116,7 +119,7 @@ SCHEMA: dict[str, set[str]] = {
     "outputs": {"mechanics", "drive", "interval"},
 }
 ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "height"},
-             "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end"}}
+             "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end", "frame"}}
 CAPACITY = {"sines": 3, "steps": 2, "ramps": 2, "pulses": 2}  # what the trajectory FMU holds
 STEP_CONTROLS = ("fixed", "doubling", "energy")
 
@@ -236,6 +239,8 @@ def load_scene(path: str | Path) -> Scene:
     for pulse in pulses:
         if pulse.component not in WRENCH_COMPONENTS:
             raise fail("load", "pulses", f"component {pulse.component!r} is not one of {', '.join(WRENCH_COMPONENTS)}")
+        if pulse.frame not in FRAMES:
+            raise fail("load", "pulses", f"frame {pulse.frame!r}: use 'base' or 'platform'")
         if sum(p.component == pulse.component for p in pulses) > CAPACITY["pulses"]:
             raise fail("load", "pulses", f"has more than {CAPACITY['pulses']} pulses on {pulse.component}; the "
                        "trajectory FMU holds that many per component")

@@ -8,7 +8,7 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from .scene import CAPACITY, WRENCH_COMPONENTS, Pulse, Scene, Signal
+from .scene import CAPACITY, FRAMES, WRENCH_COMPONENTS, Pulse, Scene, Signal
 from .ports import POSE
 
 
@@ -40,6 +40,8 @@ def trajectory_parameters(trajectory: Mapping[str, Signal], pulses: Iterable[Pul
             raise ValueError(f"load: more than {CAPACITY['pulses']} pulses on {pulse.component}")
         prefix = f"load.{pulse.component}.pulse[{k}]"
         values.update({f"{prefix}.value": pulse.value, f"{prefix}.start": pulse.start, f"{prefix}.end": pulse.end})
+        if pulse.frame != "base":
+            values[f"{prefix}.frame"] = FRAMES[pulse.frame]
     if table:
         values["table.file"] = Path(table).resolve()  # a file: an SSP export carries it along
         values["table.interpolation"] = {"linear": 1, "cubic": 2}[interpolation]

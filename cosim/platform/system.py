@@ -20,7 +20,7 @@ import numpy as np
 from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Execution, Experiment, Observer,
                       RunFailed, StepControl, SystemStructure, fmu_path)
 from ..engine.fmi import LogMessage
-from .ports import DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE, WRENCH re-exported)
+from .ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE re-exported)
 
 
 def drive_names(drive: str) -> list[str]:
@@ -42,7 +42,8 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     drive_fmu = fmu_path(wiring.fmu)
     for k, instance in enumerate(drive_names(drive)):
         components.append(Component(instance, drive_fmu, {**(drive_values or {}), **(leg_values[k] if leg_values else {})}))
-    connections = [Connection(("trajectory", n), ("mechanics", n)) for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH]]
+    connections = [Connection(("trajectory", n), ("mechanics", n))
+                   for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH, *BODY_WRENCH]]
     bonds = []
     for i, instance in zip(LEGS, drive_names(drive)):
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):

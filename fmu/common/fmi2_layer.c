@@ -195,6 +195,7 @@ void fmu_set_model_data(FmuInstance *fmu, void *data, void (*release)(FmuInstanc
 }
 
 double *fmu_real(FmuInstance *fmu, int vr) { return (double *)value_address(fmu, vr); }
+int *fmu_integer(FmuInstance *fmu, int vr) { return (int *)value_address(fmu, vr); }
 
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }
 

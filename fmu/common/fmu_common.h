@@ -94,6 +94,7 @@ double fmu_input_at(const FmuInstance *fmu, int vr, double t);
 double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t);
 /* The Real variable `vr`, for models that address variables through arrays of references. */
 double *fmu_real(FmuInstance *fmu, int vr);
+int *fmu_integer(FmuInstance *fmu, int vr); /* an Integer variable by value reference */
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr);
 
 /* Runs the internal solver (solver.* parameters) over [time, time + h] on the model's ODE, with

@@ -23,6 +23,8 @@ static const int VR_POSE_REF[] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z,
                                   VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw};
 static const int VR_WRENCH[] = {VR_load_force_x, VR_load_force_y, VR_load_force_z,
                                 VR_load_torque_x, VR_load_torque_y, VR_load_torque_z};
+static const int VR_BODY_WRENCH[] = {VR_load_body_force_x, VR_load_body_force_y, VR_load_body_force_z,
+                                     VR_load_body_torque_x, VR_load_body_torque_y, VR_load_body_torque_z};
 
 static const double PI = 3.14159265358979323846;
 
@@ -86,19 +88,31 @@ static void initial_state(const ModelVariables *v, double *x) {
     x[10] = v->initial_twist_wx; x[11] = v->initial_twist_wy; x[12] = v->initial_twist_wz;
 }
 
-static void inputs_at(const FmuInstance *fmu, double t, double torque[6], double force[6], double wrench[6]) {
+/* The inputs at t for state x; the external wrench in the base frame: load.* plus the follower
+ * load load.body.* turned by the platform's orientation R (force and torque alike: Eq 23's F_e and
+ * M_e are base-frame vectors at the platform origin). */
+static void inputs_at(const FmuInstance *fmu, double t, const double *x, double torque[6], double force[6],
+                      double wrench[6]) {
+    double body[6], R[9];
     for (int i = 0; i < 6; i++) {
         torque[i] = fmu_input_at(fmu, VR_TORQUE[i], t);
         force[i] = fmu_input_at(fmu, VR_FORCE[i], t);
         wrench[i] = fmu_input_at(fmu, VR_WRENCH[i], t);
+        body[i] = fmu_input_at(fmu, VR_BODY_WRENCH[i], t);
     }
+    platform_rotation_from_quaternion(x + 3, R);
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            wrench[r] += R[3 * r + c] * body[c];
+            wrench[3 + r] += R[3 * r + c] * body[3 + c];
+        }
 }
 
 static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     const FmuInstance *fmu = (const FmuInstance *)ctx;
     double torque[6], force[6], wrench[6];
     PlatformDiagnostics d;
-    inputs_at(fmu, t, torque, force, wrench);
+    inputs_at(fmu, t, x, torque, force, wrench);
     if (platform_derivatives(&fmu->s.internal.platform, x, torque, force, wrench, dxdt, &d) != 0) {
         for (int k = 0; k < MODEL_N_STATES; k++) dxdt[k] = NAN; /* the solver reports it */
         return;
@@ -217,7 +231,7 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->pose_roll = euler[0]; v->pose_pitch = euler[1]; v->pose_yaw = euler[2];
     v->twist_vx = x[7]; v->twist_vy = x[8]; v->twist_vz = x[9];
     v->twist_wx = x[10]; v->twist_wy = x[11]; v->twist_wz = x[12];
-    inputs_at(fmu, t, torque, force, wrench);
+    inputs_at(fmu, t, x, torque, force, wrench);
     if (platform_derivatives(p, x, torque, force, wrench, dxdt, &d) != 0) d.drive_power = NAN;
     v->energy_kinetic = d.kinetic;
     v->energy_potential = d.potential;

@@ -74,6 +74,12 @@ X(Real, load_force_z, "load.force.z", input, continuous, "N", 0.0, -FMU_INF, FMU
 X(Real, load_torque_x, "load.torque.x", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque about the platform origin, base frame, x") \
 X(Real, load_torque_y, "load.torque.y", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, y") \
 X(Real, load_torque_z, "load.torque.z", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, z") \
+X(Real, load_body_force_x, "load.body.force.x", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force on the platform at its origin, platform frame (a follower load that turns with the platform; added to load.force), x") \
+X(Real, load_body_force_y, "load.body.force.y", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force, platform frame, y") \
+X(Real, load_body_force_z, "load.body.force.z", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "External force, platform frame, z") \
+X(Real, load_body_torque_x, "load.body.torque.x", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque about the platform origin, platform frame, x") \
+X(Real, load_body_torque_y, "load.body.torque.y", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, platform frame, y") \
+X(Real, load_body_torque_z, "load.body.torque.z", input, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, "External torque, platform frame, z") \
 \
 POSE_VARIABLES(X, "pose", pose_, output, continuous, "Platform pose (base frame; R = Rz(yaw) Ry(pitch) Rx(roll))") \
 X(Real, twist_vx, "twist.vx", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Platform origin velocity, base frame, x") \

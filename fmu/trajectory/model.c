@@ -39,12 +39,14 @@ typedef struct {
      {STEP_REFS(dof, 1), STEP_REFS(dof, 2)}, {RAMP_REFS(dof, 1), RAMP_REFS(dof, 2)}}
 static const DofSignal DOFS[N_DOF] = {DOF_REFS(x), DOF_REFS(y), DOF_REFS(z), DOF_REFS(roll), DOF_REFS(pitch), DOF_REFS(yaw)};
 
-/* One wrench component: its output and its two pulses (value, start, end). */
-typedef struct { int output, pulse[2][3]; } WrenchSignal;
+/* One wrench component: its base- and platform-frame outputs and its two pulses (value, start,
+ * end, frame). */
+typedef struct { int output, body_output, pulse[2][4]; } WrenchSignal;
 #define PULSE_REFS(kind, axis, k)                                                                  \
     {VR_load_##kind##_##axis##_pulse##k##_value, VR_load_##kind##_##axis##_pulse##k##_start,      \
-     VR_load_##kind##_##axis##_pulse##k##_end}
-#define WRENCH_REFS(kind, axis) {VR_load_##kind##_##axis, {PULSE_REFS(kind, axis, 1), PULSE_REFS(kind, axis, 2)}}
+     VR_load_##kind##_##axis##_pulse##k##_end, VR_load_##kind##_##axis##_pulse##k##_frame}
+#define WRENCH_REFS(kind, axis) \
+    {VR_load_##kind##_##axis, VR_load_body_##kind##_##axis, {PULSE_REFS(kind, axis, 1), PULSE_REFS(kind, axis, 2)}}
 static const WrenchSignal WRENCH[6] = {WRENCH_REFS(force, x),  WRENCH_REFS(force, y),  WRENCH_REFS(force, z),
                                        WRENCH_REFS(torque, x), WRENCH_REFS(torque, y), WRENCH_REFS(torque, z)};
 
@@ -251,10 +253,12 @@ static void pose_at(FmuInstance *fmu, int d, double t, double out[3]) {
     }
 }
 
-static double wrench_at(FmuInstance *fmu, int component, double t) {
+/* The sum at t of a wrench component's pulses given in `frame` (1 base, 2 platform). */
+static double wrench_at(FmuInstance *fmu, int component, double t, int frame) {
     double value = 0.0;
     for (int k = 0; k < 2; k++) {
         const int *pulse = WRENCH[component].pulse[k];
+        if (*fmu_integer(fmu, pulse[3]) != frame) continue;
         if (t >= *fmu_real(fmu, pulse[1]) - edge_tolerance(t) && t <= *fmu_real(fmu, pulse[2]) + edge_tolerance(t))
             value += *fmu_real(fmu, pulse[0]);
     }
@@ -299,7 +303,10 @@ void model_compute_outputs(FmuInstance *fmu) {
         pose_at(fmu, d, t, q);
         *fmu_real(fmu, DOFS[d].output) = q[0];
     }
-    for (int c = 0; c < 6; c++) *fmu_real(fmu, WRENCH[c].output) = wrench_at(fmu, c, t);
+    for (int c = 0; c < 6; c++) {
+        *fmu_real(fmu, WRENCH[c].output) = wrench_at(fmu, c, t, 1);
+        *fmu_real(fmu, WRENCH[c].body_output) = wrench_at(fmu, c, t, 2);
+    }
     const Table *table = (const Table *)fmu->model_data;
     fmu->s.v.table_rows = table ? table->rows : 0;
 }

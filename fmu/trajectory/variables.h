@@ -59,11 +59,16 @@ X(Real, load_##kind##_##axis##_pulse##k##_value, "load." #kind "." #axis ".pulse
 X(Real, load_##kind##_##axis##_pulse##k##_start, "load." #kind "." #axis ".pulse[" #k "].start", parameter, fixed, \
   "s", 0.0, -FMU_INF, FMU_INF, "Start of pulse " #k " of load." #kind "." #axis) \
 X(Real, load_##kind##_##axis##_pulse##k##_end, "load." #kind "." #axis ".pulse[" #k "].end", parameter, fixed, \
-  "s", 0.0, -FMU_INF, FMU_INF, "End of pulse " #k " of load." #kind "." #axis " (inclusive)")
+  "s", 0.0, -FMU_INF, FMU_INF, "End of pulse " #k " of load." #kind "." #axis " (inclusive)") \
+X(Integer, load_##kind##_##axis##_pulse##k##_frame, "load." #kind "." #axis ".pulse[" #k "].frame", parameter, \
+  fixed, "", 1, 1, 2, "Frame of pulse " #k ": 1 = base (output load." #kind "." #axis "), 2 = platform, a " \
+  "follower load that turns with it (output load.body." #kind "." #axis ")")
 
 #define WRENCH_VARIABLES(X, kind, axis, unit, what) \
 X(Real, load_##kind##_##axis, "load." #kind "." #axis, output, continuous, unit, 0.0, -FMU_INF, FMU_INF, \
-  "External " what " on the platform, base frame (the sum of its pulses)") \
+  "External " what " on the platform, base frame (the sum of its base-frame pulses)") \
+X(Real, load_body_##kind##_##axis, "load.body." #kind "." #axis, output, continuous, unit, 0.0, -FMU_INF, FMU_INF, \
+  "External " what " on the platform, platform frame (the sum of its platform-frame pulses)") \
 PULSE_VARIABLES(X, kind, axis, 1, unit) PULSE_VARIABLES(X, kind, axis, 2, unit)
 
 /* clang-format off */
