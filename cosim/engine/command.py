@@ -15,7 +15,9 @@ from typing import Mapping
 import numpy as np
 
 from .execution import Execution, RunFailed
-from .observers import DivergenceMonitor, Progress
+from .advice import advice_text
+from .observers import DivergenceMonitor, Diverged, Progress
+from .settings import FixedStep
 from .results import message_kinds, thin, write, write_log
 from .settings import from_strings
 from .structure import SystemStructure
@@ -77,6 +79,10 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
     except RunFailed as failed:
         result, failure = failed.result, failed
     wall = time.perf_counter() - start
+    if failure is not None and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
+        failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
+                                                                    failure.error.time, stop), failure.error.time),
+                            failure.result)
     report = SystemReport(structure.name, len(execution.steps), execution.rejected,
                           float(result["time"][-1] - result["time"][0]) if len(result) else 0.0, wall,
                           execution.fmi_seconds, float(np.max(execution.energy_residuals, initial=0.0)),

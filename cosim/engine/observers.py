@@ -152,8 +152,8 @@ class DivergenceMonitor(Observer):
             self.message = (
                 f"the coupling diverged from about t = {start:.3f} s: over the last {self.window} macro steps the "
                 f"power bonds' energy residual was {100 * ratio:.0f} % of the energy they carried (a stable coupling "
-                f"stays under 1 %), worst at {self.bond_names[worst]}. The macro step {self.step * 1e3:g} ms is too "
-                f"large for this system: try {self.step * 250:g} ms (a quarter), or step_control = \"doubling\"")
+                f"stays under 1 %), worst at {self.bond_names[worst]}: the macro step {self.step * 1e3:g} ms is too "
+                f"large for this system")
         self._residual[:] = 0.0
         self._transferred[:] = 0.0
         self._count = 0

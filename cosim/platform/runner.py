@@ -15,7 +15,8 @@ import numpy as np
 
 from ..engine import (Algorithm, EnergyControl, Experiment, FixedStep, Progress, RunFailed, StepControl,
                       StepDoubling, SystemStructure)
-from ..engine import FmuError, NoStep, ParameterError
+from ..engine import Diverged, FmuError, NoStep, ParameterError
+from ..engine.advice import advice_text
 from ..engine.results import message_kinds, thin, write as write_results, write_log
 from ..engine.settings import control_name, to_strings
 from .parameter_sets import mechanics_start_values
@@ -173,6 +174,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         failure = None
     except RunFailed as failed:  # system.run attaches the partial run
         outcome, failure = failed.run, str(failed)
+        if isinstance(failed.error, Diverged) and isinstance(control, FixedStep):
+            failure += "; " + advice_text(structure, algorithm, control.step, failed.error.time, scene.duration)
     except (ParameterError, FmuError, NoStep, KeyError) as error:  # found before a single step
         mapped = scene_error(scene, error)
         if mapped is None:
