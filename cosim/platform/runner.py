@@ -24,6 +24,7 @@ from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of
 from .signals import scene_trajectory
 from .system import Run, columns, default_algorithm, platform_structure, run
+from .tuning import SizingError, check_sizing, design, leg_plants, summary
 
 
 @dataclass
@@ -41,6 +42,7 @@ class RunReport:
     step_control: str = "fixed"
     warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
     log: Path | None = None  # where every FMU message was written
+    tuning: str | None = None  # the gains designed for the plant (tuning = "auto")
 
     @property
     def real_time_factor(self) -> float:
@@ -65,6 +67,8 @@ class RunReport:
             more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""
             lines.append(f"{len(self.warnings)} warnings from the FMUs ({kinds}{more}), first: {self.warnings[0]}"
                          + (f"; all in {self.log}" if self.log else ""))
+        if self.tuning:
+            lines.append(self.tuning)
         if self.failure:
             lines.append(f"FAILED: {self.failure}")
         return "\n".join(lines)
@@ -93,12 +97,31 @@ def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
     return columns(scene.drive, scene.outputs_mechanics, drive_outputs)
 
 
+def scene_design(scene: Scene) -> tuple[list[dict] | None, str | None]:
+    """Per leg, the drive parameters designed for the platform (tuning = "auto"), and their
+    summary; (None, None) for the drives' defaults. Raises SceneError when a drive cannot hold its
+    leg (sizing, checked whatever the tuning)."""
+    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
+    plants = leg_plants(mechanics_values)
+    try:
+        check_sizing(scene.drive, plants, mechanics_values, scene.drive_parameters)
+    except SizingError as error:
+        raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'drive', 'kind')}: drive.kind = "
+                         f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
+    if scene.tuning != "auto":
+        return None, None
+    designed = design(scene.drive, plants, mechanics_values, scene.drive_parameters)
+    return designed, summary(scene.drive, designed)
+
+
 def scene_structure(scene: Scene) -> SystemStructure:
     """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
     the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them."""
     mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
-    structure = platform_structure(scene.drive, mechanics_values, scene.drive_parameters, scene_trajectory(scene),
-                                   name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step))
+    designed, _ = scene_design(scene)
+    structure = platform_structure(scene.drive, mechanics_values, scene.drive_parameters if designed is None else {},
+                                   scene_trajectory(scene), leg_values=designed, name=scene.path.stem,
+                                   experiment=Experiment(0.0, scene.duration, scene.step))
     algorithm, control = scene_settings(scene)
     structure.settings = to_strings(algorithm, control)
     record, names = scene_record(scene)
@@ -183,6 +206,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         raise mapped from None
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, failure, control_name(control))
+    report.tuning = scene_design(scene)[1]
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"

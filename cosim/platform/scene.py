@@ -1,7 +1,10 @@
 """Scenes: one TOML file describes a run (see scenes/ for the shipped ones).
 
     [scene]       name, duration [s], step [s]
-    [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives); [drive.parameters]
+    [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives), tuning = "auto" (the
+                  loops designed for this platform; the default for a drive swapped onto another
+                  platform) | "defaults" (the FMU's, the default on the drive's own platform);
+                  [drive.parameters] (explicit values win over the design)
     [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
     [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2,
                   step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
@@ -105,12 +108,13 @@ class Scene:
     outputs_mechanics: list[str] = field(default_factory=list)
     outputs_drive: list[str] | None = None  # None: the drive kind's default
     output_interval: float | None = None
+    tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
 
 
 SCHEMA: dict[str, set[str]] = {
     "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"},
     "scene": {"name", "duration", "step"},
-    "drive": {"kind", "parameters"},
+    "drive": {"kind", "parameters", "tuning"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max"},
     "trajectory": {*POSE, "table", "interpolation"},
@@ -122,6 +126,7 @@ ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "he
              "ramps": {"start", "end", "slope"}, "pulses": {"component", "value", "start", "end", "frame"}}
 CAPACITY = {"sines": 3, "steps": 2, "ramps": 2, "pulses": 2}  # what the trajectory FMU holds
 STEP_CONTROLS = ("fixed", "doubling", "energy")
+NATIVE_DRIVE = {"meng2010": "pmsm", "sumnu2015": "linear"}  # the drive each platform's papers use
 
 
 def line_of(text: str, table: str, key: str) -> int:
@@ -199,6 +204,11 @@ def load_scene(path: str | Path) -> Scene:
     kind = drive.get("kind", "pmsm")
     if kind not in DRIVES:
         raise fail("drive", "kind", f"= {kind!r} is not a drive kind ({', '.join(DRIVES)})")
+    parameter_set = mechanics.get("parameter_set", "meng2010")
+    # a drive on the platform its defaults were designed for keeps them; a swapped one is designed
+    tuning = drive.get("tuning", "defaults" if NATIVE_DRIVE.get(parameter_set) == kind else "auto")
+    if tuning not in ("auto", "defaults"):
+        raise fail("drive", "tuning", f"= {tuning!r}: use 'auto' (designed for this platform) or 'defaults'")
     algorithm = coupling.get("algorithm", "gauss-seidel")
     if algorithm not in ("gauss-seidel", "jacobi"):
         raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")
@@ -268,4 +278,5 @@ def load_scene(path: str | Path) -> Scene:
                  mass_set=mass_set, mechanics_parameters=mechanics_parameters,
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
-                 outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval)
+                 outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
+                 tuning=tuning)

@@ -92,7 +92,9 @@ def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
     differing = [(a, b) for a, b in zip(original.splitlines(), swapped.splitlines()) if a != b]
     assert differing == [('kind = "linear"', 'kind = "pmsm"')]
     a, b = load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), load_scene(write(tmp_path, swapped))
-    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path"}
+    # the swapped drive is designed for the platform (tuning "auto"); the native one keeps its defaults
+    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path", "tuning"}
+    assert (a.tuning, b.tuning) == ("defaults", "auto")
     for scene in (a, b):
         wiring = DRIVES[scene.drive]
         from_drives = [c.target[1] for c in scene_structure(scene).connections
@@ -101,20 +103,17 @@ def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
 
 
 def test_a_run_that_fails_names_the_fmu_and_keeps_its_results(tmp_path, capsys):
-    """The Meng platform (950 kg) on six linear motors (610 N peak each) cannot be held: it sinks
-    until its legs lie nearly flat and the leg Jacobian turns singular; the mechanics stops the run
-    with an error, and the CLI
-    names the instance, the call and the time, exits 1, and the CSV and .mat files hold the
-    results up to the last good step."""
-    scene_file = write(tmp_path, BASE.replace('kind = "pmsm"', 'kind = "linear"').replace("duration = 1.0", "duration = 3.0")
-                       + "[trajectory.z]\noffset = 1.689527733348906\n")
+    """The Meng scene with the stroke as a hard stop: Eq 35 takes leg 4 past its 2.2 m stroke at
+    0.634 s, the mechanics stops the run with an error, and the CLI names the instance, the call
+    and the time, exits 1, and the CSV and .mat files hold the results up to the last good step."""
+    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace("duration = 10.0", "duration = 1.0")
+    scene_file = write(tmp_path, text + '[mechanics.parameters]\n"limit.hard_stop" = true\n')
     out = tmp_path / "out"
     assert main(["run", str(scene_file), "--out", str(out), "--no-plots"]) == 1
     err = capsys.readouterr().err
-    assert "FAILED: mechanics: fmi2DoStep failed at t = " in err and "near-singular" in err
+    assert "FAILED: mechanics: fmi2DoStep failed at t = 0.63" in err and "stroke" in err, err
     saved = np.genfromtxt(out / "scene.csv", delimiter=",", names=True)
-    assert 0.1 < saved["time"][-1] < 3.0
-    assert saved["posez"][-1] < 1.0  # it was sinking
+    assert saved["time"][-1] == pytest.approx(0.633, abs=1e-9)
     mat = loadmat(out / "scene.mat")
     assert mat["pose_z"].size == saved.size
     with pytest.raises(SceneFailed) as failed:
@@ -197,3 +196,51 @@ def test_a_neutral_offset_is_the_pose_the_mechanics_starts_at(tmp_path):
     longer = load_scene(write(tmp_path, "[scene]\nduration = 1.0\n[mechanics.parameters]\n"
                                         '"geometry.middle_leg_length" = 1.96\n[trajectory.z]\noffset = "neutral"\n'))
     assert longer.trajectory["z"].offset > scene.trajectory["z"].offset + 0.05
+
+
+def test_a_drive_that_cannot_hold_its_leg_is_named_before_the_run(tmp_path, capsys):
+    """Sizing: six linear motors (203 N continuous) under the 950 kg Meng platform, whose legs each
+    need 2066 N at the neutral pose: one line naming the leg, the load and the limit, exit 2."""
+    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace('kind = "pmsm"', 'kind = "linear"')
+    assert main(["run", str(write(tmp_path, text)), "--no-plots", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert ":8: drive.kind = 'linear' on meng2010: leg 1 needs 2066 N to hold the start pose, above " \
+           "linear_motor's motor.continuous_force = 203 N" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_auto_tuning_on_the_meng_platform_reproduces_the_pmsm_defaults():
+    """The documented rules applied to the plant the mechanics' core gives (J_eq = M_ii / (K_FT
+    i_theta) = 0.0209 kg m^2 with the rotor, static torque 8.264 N m) give the FMU's own default
+    gains, which were designed by hand for it, and the hold current the Meng scene types in."""
+    from cosim.platform.parameter_sets import mechanics_start_values
+    from cosim.platform.tuning import design, leg_plants
+    from cosim.engine.checks import variables
+    values = mechanics_start_values("meng2010")
+    designed = design("pmsm", leg_plants(values), values, {})
+    defaults = {n: float(v.start) for n, v in variables(fmu_path("pmsm_drive")).items() if v.start is not None
+                and v.type == "Real"}
+    for leg in designed:
+        for key in ("control.speed_kp", "control.speed_ki", "control.position_kp", "control.position_ki"):
+            assert leg[key] == pytest.approx(defaults[key], rel=1e-3), key
+        assert leg["initial.current_q"] == pytest.approx(5.509, rel=1e-3)
+
+
+def test_explicit_gains_win_over_the_design_and_the_design_is_reported(tmp_path):
+    """tuning = "auto" designs every leg; a gain the scene gives is kept on every leg; the run's
+    report lists the designed gains."""
+    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace("duration = 10.0", "duration = 0.05")
+    text = text.replace('kind = "pmsm"', 'kind = "pmsm"\ntuning = "auto"').replace(
+        '"initial.current_q" = 5.509', '"control.speed_kp" = 5.0')
+    scene = load_scene(write(tmp_path, text))
+    structure = scene_structure(scene)
+    drives = [c for c in structure.components if c.name.startswith("pmsm")]
+    assert all(c.parameters["control.speed_kp"] == 5.0 for c in drives)
+    assert all(c.parameters["initial.current_q"] == pytest.approx(5.509, rel=1e-3) for c in drives)
+    _, report = run_scene(scene)
+    assert "drive loops designed for the plant: speed_kp 5" in report.text()
+
+
+def test_a_bad_tuning_is_named_with_its_line(tmp_path):
+    with pytest.raises(SceneError, match=r"scene.toml:4: 'drive.tuning' = 'manual'"):
+        load_scene(write(tmp_path, '[scene]\nduration = 1.0\n[drive]\ntuning = "manual"\n'))

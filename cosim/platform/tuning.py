@@ -1,0 +1,131 @@
+"""Drives designed for the plant they drive.
+
+What a drive designer needs, per leg at the start pose, comes from the mechanics' own dynamics
+core (fmu/mechanics/platform.c through cosim.platform.platform_core):
+- the leg's inertia with the other legs held, M_ii of the joint-space mass matrix: twice the
+  kinetic energy when leg i alone extends at 1 m/s (motor systems included when they are on);
+- the static load: the leg force that holds the start pose against gravity;
+- the stroke.
+From it each drive's loops follow the rules its documentation states:
+- pmsm_drive: current loop by the modulus optimum (independent of the plant: kept); speed loop
+  symmetric-optimum style at w_c = 500 rad/s on the motor-side inertia J_eq = M_ii / (K_FT i_theta):
+  Kp_w = w_c J_eq / K_m, Ki_w = Kp_w w_c / 6; position loop from the speed loop's bandwidth:
+  Kp_p = 0.12 w_c, Ki_p = 5 Kp_p; and the drive starts holding its leg (initial.current_q).
+- linear_motor: position PID critically damped at w = 2 pi 10 Hz on m = M_ii: Kp = m w^2,
+  Kd = 2 m w, Ki = Kp w / 10; the current loop is kept.
+Sizing is checked first: a drive that cannot hold its leg's static load (linear motor: its
+continuous force; PMSM: K_m times its current limit) is a `SizingError` naming the leg, the load
+and the limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from ..engine.checks import variables
+from ..engine.artifacts import fmu_path
+from .platform_core import Core, neutral_pose
+from .ports import DRIVES, POSE
+
+SPEED_CROSSOVER = 500.0           # w_c [rad/s] of the PMSM speed loop
+POSITION_BANDWIDTH = 2 * math.pi * 10.0  # w [rad/s] of the linear motor's position PID
+
+
+class SizingError(ValueError):
+    """A drive that cannot hold its leg at the start pose: leg, load and limit named."""
+
+
+@dataclass(frozen=True)
+class LegPlant:
+    mass: float          # M_ii [kg]: the leg's inertia with the other legs held (leg side)
+    static_force: float  # [N]: the leg force that holds the start pose (positive: pushing)
+    length: float        # [m] at the start pose
+    stroke: tuple[float, float]  # [m]
+
+
+def start_pose(values: Mapping[str, object]) -> np.ndarray:
+    neutral = neutral_pose(dict(values))
+    return np.array([float(values.get(f"initial.pose.{a}", neutral[k])) for k, a in enumerate(POSE)])
+
+
+def leg_plants(values: Mapping[str, object]) -> list[LegPlant]:
+    """Each leg's plant at the start pose, for mechanics start values."""
+    core = Core().use_start_values(dict(values))
+    pose = start_pose(values)
+    delta = 1e-6
+    jacobian = np.column_stack([(core.leg_lengths(pose + delta * e) - core.leg_lengths(pose - delta * e)) / (2 * delta)
+                                for e in np.eye(6)])  # d leg lengths / d pose
+    hold = core.inverse_dynamics(pose, np.zeros(6), np.zeros(6))  # drive efforts holding the pose
+    efforts_are_torques = bool(values.get("effects.motor_inertia", True)) or "transmission.force_torque" not in values
+    force_torque = float(values.get("transmission.force_torque", 250.0))
+    lengths = core.leg_lengths(pose)
+    stroke = (float(values.get("limit.leg_length_min", 0.0)), float(values.get("limit.leg_length_max", math.inf)))
+    plants = []
+    for i in range(6):
+        rate = np.linalg.solve(jacobian, np.eye(6)[i])  # pose rate moving leg i alone at 1 m/s
+        _, diagnostics = core.derivatives(core.state(pose, rate))
+        force = hold[i] * force_torque if efforts_are_torques else hold[i]
+        plants.append(LegPlant(2.0 * diagnostics.kinetic, float(force), float(lengths[i]), stroke))
+    return plants
+
+
+def _defaults(drive: str) -> dict[str, float]:
+    return {name: float(v.start) for name, v in variables(fmu_path(DRIVES[drive].fmu)).items()
+            if v.start is not None and v.type in ("Real", "Integer")}
+
+
+def design(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, object],
+           drive_values: Mapping[str, object]) -> list[dict[str, float]]:
+    """Per leg, the drive parameters its rules give for its plant (explicit drive_values win)."""
+    given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    designed = []
+    for plant in plants:
+        if drive == "pmsm":
+            screw = float(mechanics_values.get("transmission.screw_ratio", 277.8))
+            force_torque = float(mechanics_values.get("transmission.force_torque", 250.0))
+            inertia = plant.mass / (force_torque * screw)  # J_eq, motor side [kg m^2]
+            kp_w = SPEED_CROSSOVER * inertia / given["motor.torque_constant"]
+            kp_p = 0.12 * SPEED_CROSSOVER
+            values = {"control.speed_kp": kp_w, "control.speed_ki": kp_w * SPEED_CROSSOVER / 6,
+                      "control.position_kp": kp_p, "control.position_ki": 5 * kp_p,
+                      "initial.current_q": plant.static_force / force_torque / given["motor.torque_constant"]}
+        else:
+            w, m = POSITION_BANDWIDTH, plant.mass
+            values = {"control.position_kp": m * w * w, "control.position_kd": 2 * m * w,
+                      "control.position_ki": m * w ** 3 / 10}
+        designed.append({**values, **{k: v for k, v in drive_values.items()}})
+    return designed
+
+
+def check_sizing(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, object],
+                 drive_values: Mapping[str, object]) -> None:
+    given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    for i, plant in enumerate(plants, start=1):
+        if drive == "pmsm":
+            force_torque = float(mechanics_values.get("transmission.force_torque", 250.0))
+            torque = abs(plant.static_force) / force_torque
+            limit = given["motor.torque_constant"] * given["limit.current"]
+            if torque > limit:
+                raise SizingError(f"leg {i} needs {torque:.3g} N m to hold the start pose, above pmsm_drive's "
+                                  f"K_m x limit.current = {limit:.3g} N m")
+        else:
+            limit = given["motor.continuous_force"]
+            if abs(plant.static_force) > limit:
+                raise SizingError(f"leg {i} needs {abs(plant.static_force):.4g} N to hold the start pose, above "
+                                  f"linear_motor's motor.continuous_force = {limit:.4g} N")
+
+
+def summary(drive: str, designed: list[dict[str, float]]) -> str:
+    """The gains chosen, one line (ranges over the legs)."""
+    keys = ["control.speed_kp", "control.speed_ki", "control.position_kp", "control.position_ki"] if drive == "pmsm" \
+        else ["control.position_kp", "control.position_ki", "control.position_kd"]
+    parts = []
+    for key in keys:
+        values = [float(d[key]) for d in designed]
+        low, high = min(values), max(values)
+        parts.append(f"{key.split('.')[1]} {low:.4g}" + (f"-{high:.4g}" if high > low * (1 + 1e-9) else ""))
+    return "drive loops designed for the plant: " + ", ".join(parts)
