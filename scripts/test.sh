@@ -9,4 +9,8 @@ status=0
 if [ "$status" -eq 5 ]; then
   echo "pytest collected no tests: failing the run" >&2
 fi
+# The FMUs under hostile use: random FMI call sequences under sanitizers, threads under TSan.
+if [ "$#" -eq 0 ]; then
+  bash scripts/fuzz.sh ci || status=1
+fi
 exit "$status"

@@ -5,6 +5,7 @@
  */
 #include "fmu_common.h"
 
+#include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -145,11 +146,26 @@ static fmi2Status after_set(FmuInstance *fmu, const ModelVariables *before, int 
     return fmi2OK;
 }
 
-static void refresh_outputs(FmuInstance *fmu) {
-    if (!fmu->outputs_stale) return;
+/* Every Real output finite? Logs the first that is not, naming the call. */
+static int outputs_finite(FmuInstance *fmu, const char *call) {
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL &&
+            !isfinite(*(double *)value_address(fmu, vr))) {
+            LOG_ERROR(fmu, "%s: output '%s' is not finite at t = %.9g s (the inputs or parameters are beyond what the "
+                      "model can compute)", call, fmu_variables[vr].name, fmu->s.time);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Outputs recomputed if inputs or parameters changed; 0 (logged) when one is not finite. */
+static int refresh_outputs(FmuInstance *fmu, const char *call) {
+    if (!fmu->outputs_stale) return 1;
     if (fmu->s.phase & PHASE_INITIALIZATION) model_initialize(fmu);
     if (fmu->s.phase & (PHASE_INITIALIZATION | AFTER_INITIALIZATION)) model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
+    return outputs_finite(fmu, call);
 }
 
 double fmu_input_at(const FmuInstance *fmu, int vr, double t) {
@@ -232,7 +248,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         return fmi2OK;
     }
     for (size_t i = 0; i < nCategories; i++) {
-        const char *cat = categories[i];
+        const char *cat = categories ? categories[i] : NULL;
         if (!cat) { LOG_ERROR(fmu, "fmi2SetDebugLogging: category %zu is NULL", i); return fmi2Error; }
         if (strcmp(cat, "logEvents") == 0) fmu->log_events = loggingOn;
         else if (strcmp(cat, "logStatusWarning") == 0) fmu->log_warnings = loggingOn;
@@ -305,13 +321,18 @@ void fmi2FreeInstance(fmi2Component c) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     FmuInstance *fmu = (FmuInstance *)c;
-    (void)toleranceDefined; (void)tolerance;
     if (!allowed(fmu, "fmi2SetupExperiment", PHASE_INSTANTIATED)) return fmi2Error;
-    if (!isfinite(startTime) || (stopTimeDefined && !(stopTime >= startTime))) {
+    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+        LOG_ERROR(fmu, "fmi2SetupExperiment: tolerance %g must be a positive finite number", tolerance);
+        return fmi2Error;
+    }
+    if (!isfinite(startTime) || (stopTimeDefined && !(stopTime >= startTime && isfinite(stopTime)))) {
         LOG_ERROR(fmu, "fmi2SetupExperiment: invalid times start = %g, stop = %g", startTime, stopTime);
         return fmi2Error;
     }
     fmu->s.time = fmu->s.input_time = startTime;
+    fmu->s.stop_time_defined = stopTimeDefined ? 1 : 0;
+    fmu->s.stop_time = stopTimeDefined ? stopTime : 0.0;
     return fmi2OK;
 }
 
@@ -332,6 +353,10 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     fmu->s.phase = PHASE_STEP_COMPLETE;
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
+    if (!outputs_finite(fmu, "fmi2ExitInitializationMode")) {
+        fmu->s.phase = PHASE_ERROR;
+        return fmi2Error;
+    }
     return fmi2OK;
 }
 
@@ -352,16 +377,25 @@ fmi2Status fmi2Reset(fmi2Component c) {
 /* ------------------------------------------------------------------------------------------ */
 /* Get and set                                                                                 */
 
-#define GET_PHASES (PHASE_INITIALIZATION | AFTER_INITIALIZATION | PHASE_INSTANTIATED)
+/* FMI 2.0, Co-Simulation state machine: fmi2GetXXX in initialization mode, slave initialized,
+ * terminated and error, not before initialization */
+#define GET_PHASES (PHASE_INITIALIZATION | AFTER_INITIALIZATION)
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2GetReal", GET_PHASES)) return fmi2Error;
     if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2GetReal: NULL array"); return fmi2Error; }
-    refresh_outputs(fmu);
+    if (!refresh_outputs(fmu, "fmi2GetReal")) return fmi2Error;
+    int all_finite = 1;
     for (size_t i = 0; i < nvr; i++) {
         if (!check_reference(fmu, "fmi2GetReal", vr[i], FMU_REAL)) return fmi2Error;
         value[i] = *(double *)value_address(fmu, (int)vr[i]);
+        all_finite = all_finite && isfinite(value[i]);
+    }
+    if (!all_finite) { /* only an instance in the error state holds such values: read for diagnosis */
+        fmu_log(fmu, fmi2Warning, "logStatusWarning", "fmi2GetReal: values of an instance in state '%s' that are not "
+                "finite", phase_name(fmu->s.phase));
+        return fmi2Warning;
     }
     return fmi2OK;
 }
@@ -370,7 +404,7 @@ static fmi2Status get_ints(FmuInstance *fmu, const char *call, FmuType type,
                            const fmi2ValueReference vr[], size_t nvr, int value[]) {
     if (!allowed(fmu, call, GET_PHASES)) return fmi2Error;
     if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "%s: NULL array", call); return fmi2Error; }
-    refresh_outputs(fmu);
+    if (!refresh_outputs(fmu, call)) return fmi2Error;
     for (size_t i = 0; i < nvr; i++) {
         if (!check_reference(fmu, call, vr[i], type)) return fmi2Error;
         value[i] = *(int *)value_address(fmu, (int)vr[i]);
@@ -472,13 +506,115 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* ------------------------------------------------------------------------------------------ */
 /* FMU state                                                                                   */
 
+/* A state as the importer holds it: a tag that names this build and the snapshot's size and
+ * checksum, whether the outputs were current, then the snapshot. A state pointer is checked by its
+ * tag before anything is copied (a pointer from another FMU, or memory that is no state, is
+ * refused without reading past the tag: every state is larger than it), and a restored snapshot is
+ * validated as if its values had been set one by one. */
+typedef struct {
+    char magic[8];
+    unsigned long long guid_hash, size, checksum;
+    int outputs_stale;
+} StateTag;
+
+typedef struct {
+    StateTag tag;
+    FmuSnapshot s;
+} StoredState;
+
+static const char STATE_MAGIC[8] = "STEWST1";
+
+static unsigned long long fnv1a(const void *data, size_t n) {
+    const unsigned char *bytes = (const unsigned char *)data;
+    unsigned long long hash = 1469598103934665603ULL;
+    for (size_t i = 0; i < n; i++) hash = (hash ^ bytes[i]) * 1099511628211ULL;
+    return hash;
+}
+
+static void tag_state(StoredState *stored, int outputs_stale) {
+    memcpy(stored->tag.magic, STATE_MAGIC, sizeof stored->tag.magic);
+    stored->tag.guid_hash = fnv1a(MODEL_GUID, strlen(MODEL_GUID));
+    stored->tag.size = sizeof(FmuSnapshot);
+    stored->tag.checksum = fnv1a(&stored->s, sizeof(FmuSnapshot));
+    stored->tag.outputs_stale = outputs_stale;
+}
+
+/* Is this a state of this build, unaltered? Logs why not. */
+static int state_is_ours(FmuInstance *fmu, const char *call, const StoredState *stored, int check_sum) {
+    if (memcmp(stored->tag.magic, STATE_MAGIC, sizeof STATE_MAGIC) != 0 ||
+        stored->tag.guid_hash != fnv1a(MODEL_GUID, strlen(MODEL_GUID)) || stored->tag.size != sizeof(FmuSnapshot)) {
+        LOG_ERROR(fmu, "%s: not a state of this build of %s (%s)", call, MODEL_IDENTIFIER_STRING, MODEL_GUID);
+        return 0;
+    }
+    if (check_sum && stored->tag.checksum != fnv1a(&stored->s, sizeof(FmuSnapshot))) {
+        LOG_ERROR(fmu, "%s: the state's bytes were altered (checksum mismatch)", call);
+        return 0;
+    }
+    return 1;
+}
+
+/* The snapshot now in fmu->s as trustworthy as set values: a valid phase and time, every
+ * parameter and input finite and within its bounds, finite internal states and solver memory,
+ * and the model's own rules (which also rebuild model data such as a table from the snapshot). */
+static int snapshot_valid(FmuInstance *fmu, const char *call) {
+    const FmuSnapshot *s = &fmu->s;
+    const int phase = s->phase;
+    if (phase != PHASE_INSTANTIATED && phase != PHASE_INITIALIZATION && phase != PHASE_STEP_COMPLETE &&
+        phase != PHASE_STEP_FAILED && phase != PHASE_TERMINATED && phase != PHASE_ERROR) {
+        LOG_ERROR(fmu, "%s: the state's phase %d is not one of FMI 2.0's", call, phase);
+        return 0;
+    }
+    if (!isfinite(s->time) || !isfinite(s->input_time) || !isfinite(s->stop_time)) {
+        LOG_ERROR(fmu, "%s: the state's time is not finite", call);
+        return 0;
+    }
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        const FmuVariable *var = &fmu_variables[vr];
+        if (var->causality == FMU_OUTPUT || var->causality == FMU_LOCAL || var->type == FMU_STRING) continue;
+        const double value = var->type == FMU_REAL ? *(double *)value_address(fmu, vr)
+                                                   : (double)*(int *)value_address(fmu, vr);
+        if (!isfinite(value) || value < var->min || value > var->max) {
+            LOG_ERROR(fmu, "%s: the state's '%s' = %g is outside [%g, %g] %s", call, var->name, value, var->min,
+                      var->max, var->unit);
+            return 0;
+        }
+        if (s->input_derivative_given[vr] < 0 || s->input_derivative_given[vr] > 2 ||
+            !isfinite(s->input_derivative[vr][0]) || !isfinite(s->input_derivative[vr][1])) {
+            LOG_ERROR(fmu, "%s: the state's input derivatives of '%s' are invalid", call, var->name);
+            return 0;
+        }
+    }
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].type == FMU_STRING &&
+            memchr(((FmuText *)value_address(fmu, vr))->text, '\0', FMU_TEXT_MAX) == NULL) {
+            LOG_ERROR(fmu, "%s: the state's '%s' is not a terminated string", call, fmu_variables[vr].name);
+            return 0;
+        }
+#if MODEL_N_STATES > 0
+    for (int k = 0; k < MODEL_N_STATES; k++)
+        if (!isfinite(s->x[k])) {
+            LOG_ERROR(fmu, "%s: the state's internal state %d is not finite", call, k);
+            return 0;
+        }
+    const OdeSolver *solver = &s->solver;
+    if (!(solver->h_next >= 0.0 && solver->h_next <= 1.0) || !(solver->steps >= 0.0) || !(solver->rejected >= 0.0)) {
+        LOG_ERROR(fmu, "%s: the state's solver memory is invalid", call);
+        return 0;
+    }
+#endif
+    return model_validate(fmu) == fmi2OK;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2GetFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
     if (!state) { LOG_ERROR(fmu, "fmi2GetFMUstate: NULL state pointer"); return fmi2Error; }
-    if (!*state) *state = fmu->callbacks.allocateMemory(1, sizeof(FmuSnapshot));
+    if (*state && !state_is_ours(fmu, "fmi2GetFMUstate", (const StoredState *)*state, 0)) return fmi2Error;
+    if (!*state) *state = fmu->callbacks.allocateMemory(1, sizeof(StoredState));
     if (!*state) { LOG_ERROR(fmu, "fmi2GetFMUstate: out of memory"); return fmi2Error; }
-    memcpy(*state, &fmu->s, sizeof(FmuSnapshot));
+    StoredState *stored = (StoredState *)*state;
+    memcpy(&stored->s, &fmu->s, sizeof(FmuSnapshot));
+    tag_state(stored, fmu->outputs_stale);
     return fmi2OK;
 }
 
@@ -486,8 +622,19 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2SetFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
     if (!state) { LOG_ERROR(fmu, "fmi2SetFMUstate: NULL state"); return fmi2Error; }
-    memcpy(&fmu->s, state, sizeof(FmuSnapshot));
-    fmu->outputs_stale = 1;
+    const StoredState *stored = (const StoredState *)state;
+    if (!state_is_ours(fmu, "fmi2SetFMUstate", stored, 1)) return fmi2Error;
+    FmuSnapshot before = fmu->s;
+    const int stale_before = fmu->outputs_stale;
+    memcpy(&fmu->s, &stored->s, sizeof(FmuSnapshot));
+    if (!snapshot_valid(fmu, "fmi2SetFMUstate")) {
+        fmu->s = before;
+        fmu->outputs_stale = stale_before;
+        model_validate(fmu); /* model data back to the instance's own */
+        return fmi2Error;
+    }
+    /* the outputs are the snapshot's own: exactly what they were when the state was taken */
+    fmu->outputs_stale = stored->tag.outputs_stale;
     return fmi2OK;
 }
 
@@ -495,67 +642,61 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!fmu) return fmi2Error;
     if (state && *state) {
+        if (!state_is_ours(fmu, "fmi2FreeFMUstate", (const StoredState *)*state, 0)) return fmi2Error;
+        memset(*state, 0, sizeof(StateTag)); /* a freed state is no state any more */
         fmu->callbacks.freeMemory(*state);
         *state = NULL;
     }
     return fmi2OK;
 }
 
-/* Serialized form: a header that identifies the model build, then the snapshot's bytes. */
-typedef struct {
-    char magic[8];
-    char guid[48];
-    unsigned long long snapshot_size;
-} SerialHeader;
-
-static const char SERIAL_MAGIC[8] = "STEWFMU";
-
+/* Serialized form: the stored state (tag and snapshot) as bytes. */
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
     FmuInstance *fmu = (FmuInstance *)c;
-    (void)state;
     if (!allowed(fmu, "fmi2SerializedFMUstateSize", ANY_LIVE_PHASE)) return fmi2Error;
-    *size = sizeof(SerialHeader) + sizeof(FmuSnapshot);
+    if (!size) { LOG_ERROR(fmu, "fmi2SerializedFMUstateSize: NULL size"); return fmi2Error; }
+    if (state && !state_is_ours(fmu, "fmi2SerializedFMUstateSize", (const StoredState *)state, 0)) return fmi2Error;
+    *size = sizeof(StoredState);
     return fmi2OK;
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2SerializeFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
-    if (!state || !bytes || size < sizeof(SerialHeader) + sizeof(FmuSnapshot)) {
+    if (!state || !bytes || size < sizeof(StoredState)) {
         LOG_ERROR(fmu, "fmi2SerializeFMUstate: NULL state or buffer, or buffer of %zu bytes < %zu", size,
-                  sizeof(SerialHeader) + sizeof(FmuSnapshot));
+                  sizeof(StoredState));
         return fmi2Error;
     }
-    SerialHeader header;
-    memset(&header, 0, sizeof header);
-    memcpy(header.magic, SERIAL_MAGIC, sizeof header.magic);
-    strncpy(header.guid, MODEL_GUID, sizeof header.guid - 1);
-    header.snapshot_size = sizeof(FmuSnapshot);
-    memcpy(bytes, &header, sizeof header);
-    memcpy(bytes + sizeof header, state, sizeof(FmuSnapshot));
+    if (!state_is_ours(fmu, "fmi2SerializeFMUstate", (const StoredState *)state, 1)) return fmi2Error;
+    memcpy(bytes, state, sizeof(StoredState));
     return fmi2OK;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2DeSerializeFMUstate", ANY_LIVE_PHASE)) return fmi2Error;
-    SerialHeader header;
-    if (!bytes || !state || size != sizeof header + sizeof(FmuSnapshot)) {
-        LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: expected %zu bytes, got %zu",
-                  sizeof header + sizeof(FmuSnapshot), size);
+    if (!bytes || !state || size != sizeof(StoredState)) {
+        LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: expected %zu bytes, got %zu", sizeof(StoredState), size);
         return fmi2Error;
     }
-    memcpy(&header, bytes, sizeof header);
-    if (memcmp(header.magic, SERIAL_MAGIC, sizeof header.magic) != 0 ||
-        strncmp(header.guid, MODEL_GUID, sizeof header.guid) != 0 ||
-        header.snapshot_size != sizeof(FmuSnapshot)) {
-        LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: the bytes are not a state of this build of %s (%s)",
-                  MODEL_IDENTIFIER_STRING, MODEL_GUID);
+    StoredState *copy = (StoredState *)fmu->callbacks.allocateMemory(1, sizeof(StoredState));
+    if (!copy) { LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: out of memory"); return fmi2Error; }
+    memcpy(copy, bytes, sizeof(StoredState));
+    if (!state_is_ours(fmu, "fmi2DeSerializeFMUstate", copy, 1)) {
+        fmu->callbacks.freeMemory(copy);
         return fmi2Error;
     }
-    if (!*state) *state = fmu->callbacks.allocateMemory(1, sizeof(FmuSnapshot));
-    if (!*state) { LOG_ERROR(fmu, "fmi2DeSerializeFMUstate: out of memory"); return fmi2Error; }
-    memcpy(*state, bytes + sizeof header, sizeof(FmuSnapshot));
+    if (*state) {
+        if (!state_is_ours(fmu, "fmi2DeSerializeFMUstate", (const StoredState *)*state, 0)) {
+            fmu->callbacks.freeMemory(copy);
+            return fmi2Error;
+        }
+        memcpy(*state, copy, sizeof(StoredState));
+        fmu->callbacks.freeMemory(copy);
+    } else {
+        *state = copy;
+    }
     return fmi2OK;
 }
 
@@ -574,6 +715,10 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        const fmi2Integer order[], const fmi2Real value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!allowed(fmu, "fmi2SetRealInputDerivatives", SET_PHASES)) return fmi2Error;
+    if (nvr > 0 && (!vr || !order || !value)) {
+        LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: NULL array");
+        return fmi2Error;
+    }
     for (size_t i = 0; i < nvr; i++) {
         if (!check_reference(fmu, "fmi2SetRealInputDerivatives", vr[i], FMU_REAL)) return fmi2Error;
         if (fmu_variables[vr[i]].causality != FMU_INPUT) {
@@ -611,7 +756,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
         LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: NULL array");
         return fmi2Error;
     }
-    refresh_outputs(fmu);
+    if (!refresh_outputs(fmu, "fmi2GetRealOutputDerivatives")) return fmi2Error;
     for (size_t i = 0; i < nvr; i++) {
         if (!check_reference(fmu, "fmi2GetRealOutputDerivatives", vr[i], FMU_REAL)) return fmi2Error;
         if (fmu_variables[vr[i]].causality != FMU_OUTPUT) {
@@ -645,6 +790,11 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         LOG_ERROR(fmu, "fmi2DoStep: communication step size %g must be positive and finite", h);
         return fmi2Error;
     }
+    if (fmu->s.stop_time_defined && t0 + h > fmu->s.stop_time + 1e-9 * fmax(1.0, fabs(fmu->s.stop_time))) {
+        LOG_ERROR(fmu, "fmi2DoStep: a step to %.12g s passes the stop time %.12g s of fmi2SetupExperiment", t0 + h,
+                  fmu->s.stop_time);
+        return fmi2Error;
+    }
     if (!(fabs(currentCommunicationPoint - t0) <= 1e-9 * fmax(1.0, fabs(t0)))) {
         LOG_ERROR(fmu, "fmi2DoStep: current communication point %.12g s differs from the FMU's time %.12g s",
                   currentCommunicationPoint, t0);
@@ -659,8 +809,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     }
     fmu->s.time = t0 + h;
 #if MODEL_N_STATES > 0
-    fmu->s.v.solver_steps = (int)fmu->s.solver.steps;
-    fmu->s.v.solver_rejected = (int)fmu->s.solver.rejected;
+    fmu->s.v.solver_steps = fmu->s.solver.steps < INT_MAX ? (int)fmu->s.solver.steps : INT_MAX;
+    fmu->s.v.solver_rejected = fmu->s.solver.rejected < INT_MAX ? (int)fmu->s.solver.rejected : INT_MAX;
 #endif
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
@@ -683,6 +833,9 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return fmi2Error;
 }
 
+/* FMI 2.0: the status functions in step complete, step failed and terminated (not in error) */
+#define STATUS_PHASES (PHASE_STEP_COMPLETE | PHASE_STEP_FAILED | PHASE_TERMINATED)
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     (void)s; (void)value;
     LOG_ERROR((FmuInstance *)c, "fmi2GetStatus: no asynchronous step is pending");
@@ -691,7 +844,8 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!allowed(fmu, "fmi2GetRealStatus", AFTER_INITIALIZATION)) return fmi2Error;
+    if (!allowed(fmu, "fmi2GetRealStatus", STATUS_PHASES)) return fmi2Error;
+    if (!value) { LOG_ERROR(fmu, "fmi2GetRealStatus: NULL value"); return fmi2Error; }
     if (s == fmi2LastSuccessfulTime) { *value = fmu->s.time; return fmi2OK; }
     LOG_ERROR(fmu, "fmi2GetRealStatus: status kind %d not provided", (int)s);
     return fmi2Error;
@@ -705,7 +859,8 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!allowed(fmu, "fmi2GetBooleanStatus", AFTER_INITIALIZATION)) return fmi2Error;
+    if (!allowed(fmu, "fmi2GetBooleanStatus", STATUS_PHASES)) return fmi2Error;
+    if (!value) { LOG_ERROR(fmu, "fmi2GetBooleanStatus: NULL value"); return fmi2Error; }
     if (s == fmi2Terminated) { *value = fmi2False; return fmi2OK; }
     LOG_ERROR(fmu, "fmi2GetBooleanStatus: status kind %d not provided", (int)s);
     return fmi2Error;

@@ -25,6 +25,8 @@ typedef struct {
     int phase;                             /* FmuPhase */
     double time;                           /* communication point reached */
     double input_time;                     /* time at which the inputs were last set */
+    double stop_time;                      /* fmi2SetupExperiment's stop time, if defined */
+    int stop_time_defined;
     ModelVariables v;                      /* every variable of the table */
     double input_derivative[VR_COUNT][2];  /* fmi2SetRealInputDerivatives, orders 1 and 2 */
     int input_derivative_given[VR_COUNT];  /* highest order given (0: none); cleared after each step */

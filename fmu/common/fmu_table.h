@@ -31,7 +31,7 @@
     X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 2,                 \
       "Internal ODE solver: 1 = classic Runge-Kutta 4 with fixed step solver.step, "               \
       "2 = Dormand-Prince 5(4) with error control (solver.rtol, solver.atol), steps <= solver.step") \
-    X(Real, solver_step, "solver.step", parameter, fixed, "s", step, 1e-9, 1.0,                    \
+    X(Real, solver_step, "solver.step", parameter, fixed, "s", step, 1e-7, 1.0,                    \
       "RK4: the integration step; Dormand-Prince: the largest step")                               \
     X(Real, solver_rtol, "solver.rtol", parameter, fixed, "1", rtol, 1e-14, 0.1,                   \
       "Relative error tolerance per step (Dormand-Prince)")                                        \

@@ -27,6 +27,8 @@ const char *ode_result_text(OdeResult r) {
     case ODE_STEP_TOO_SMALL: return "the adaptive step fell below the round-off floor";
     case ODE_BAD_SETTINGS: return "invalid solver settings";
     case ODE_EVENT_LOOP: return "an event handler did not clear its event";
+    case ODE_TOO_MUCH_WORK: return "more than 200000 internal steps in one communication step (a shorter "
+                                   "communication step or a longer solver.step is needed)";
     }
     return "unknown";
 }
@@ -171,7 +173,10 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
     if (m > 0 && (result = handle_events_now(s, p, ctx, t, x, g_start, -1)) != ODE_OK) return result;
 
     const double t_eps = 1e-13 * fmax(1.0, fabs(t1));
+    if (!isfinite(t0) || !isfinite(t1) || (t1 - t0) / s->step > ODE_MAX_STEPS) return ODE_TOO_MUCH_WORK;
+    long work = 0;
     while (t1 - t > t_eps) {
+        if (++work > ODE_MAX_STEPS) { result = ODE_TOO_MUCH_WORK; break; }
         double remaining = t1 - t, h;
         int reaches_end;
         if (s->method == ODE_RK4) {

@@ -31,8 +31,15 @@ typedef enum {
     ODE_NONFINITE,       /* a derivative or state became NaN or infinite */
     ODE_STEP_TOO_SMALL,  /* the adaptive step fell below the round-off floor */
     ODE_BAD_SETTINGS,    /* non-positive step or tolerance, too many states */
-    ODE_EVENT_LOOP       /* an event handler did not clear its event */
+    ODE_EVENT_LOOP,      /* an event handler did not clear its event */
+    ODE_TOO_MUCH_WORK    /* more than ODE_MAX_STEPS internal steps (taken, rejected or at events) */
 } OdeResult;
+
+/* The most internal steps one call of ode_integrate may take: the work of one communication step
+ * is bounded whatever the step sizes and the problem (under 1 s of CPU for the costliest model,
+ * the mechanics; at the default internal steps a communication step of up to 20 s for the PMSM
+ * drive, 200 s for the mechanics, 1 s for the switching inverter's 5 us limit). */
+#define ODE_MAX_STEPS 200000
 
 typedef void (*OdeRhs)(void *ctx, double t, const double *x, double *dxdt);
 typedef void (*OdeEvents)(void *ctx, double t, const double *x, double *g);

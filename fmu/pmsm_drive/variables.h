@@ -88,7 +88,7 @@ X(Real, inverter_time_constant, "inverter.time_constant", parameter, fixed, "s",
   "Averaged inverter delay tau_v (assumed: one period of a 10 kHz PWM carrier)") \
 X(Real, inverter_dc_link_voltage, "inverter.dc_link_voltage", parameter, fixed, "V", 860.0, 0.0, FMU_INF, \
   "DC-link voltage of the switching inverter (assumed; see meng2010.toml)") \
-X(Real, inverter_hysteresis_band, "inverter.hysteresis_band", parameter, fixed, "A", 0.5, 0.0, FMU_INF, \
+X(Real, inverter_hysteresis_band, "inverter.hysteresis_band", parameter, fixed, "A", 0.5, 0.01, FMU_INF, \
   "Half width of the hysteresis band of each phase-current comparator (assumed)") \
 X(Boolean, inverter_neutral_connected, "inverter.neutral_connected", parameter, fixed, "", 0, 0, 1, \
   "Switching inverter: false = star point isolated (Fig 3; the three comparators interact and a phase " \
@@ -97,7 +97,7 @@ X(Boolean, inverter_neutral_connected, "inverter.neutral_connected", parameter, 
 X(Real, motor_inductance_0, "motor.inductance_0", parameter, fixed, "H", 1.4e-3, 0.0, FMU_INF, \
   "Zero-sequence inductance, used only with inverter.neutral_connected (assumed: 0.2 L_q, the order " \
   "of the leakage inductance of a surface-magnet machine)") \
-X(Real, inverter_max_step, "inverter.max_step", parameter, fixed, "s", 5e-6, 1e-9, 1e-3, \
+X(Real, inverter_max_step, "inverter.max_step", parameter, fixed, "s", 5e-6, 1e-7, 1e-3, \
   "Largest internal step with the switching inverter; must be shorter than a current ramp across the band") \
 \
 X(Integer, control_mode, "control.mode", parameter, fixed, "", 1, 1, 3, \

@@ -14,11 +14,13 @@
  * their exact first and second time derivatives (zero across steps and pulses), so that a master
  * extrapolating its inputs over a macro step never rings on a step.
  */
+#define _POSIX_C_SOURCE 200809L /* stat: a table must be a regular file */
 #include "fmu_common.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const double PI = 3.14159265358979323846;
 
@@ -75,24 +77,54 @@ static char *trim(char *s) {
     return s;
 }
 
+/* The next comma-separated field of *cursor (NULL at the end); re-entrant, unlike strtok. */
+static char *next_field(char **cursor) {
+    if (!*cursor) return NULL;
+    char *field = *cursor, *comma = strchr(field, ',');
+    if (comma) { *comma = '\0'; *cursor = comma + 1; }
+    else *cursor = NULL;
+    return field;
+}
+
 static int is_blank_or_comment(const char *line) {
     while (*line == ' ' || *line == '\t') line++;
     return *line == '\0' || *line == '\n' || *line == '\r' || *line == '#';
 }
 
 #define TABLE_LINE_MAX 4096
+#define TABLE_MAX_BYTES (64L * 1024 * 1024) /* a table larger than this is refused, not read */
+#define TABLE_MAX_LINES 1000000L
 
 /* Reads table.file; logs what is wrong (with the line) and returns NULL on error. */
 static Table *read_table(FmuInstance *fmu, const char *given_path) {
     const char *path = strncmp(given_path, "file://", 7) == 0 ? given_path + 7 : given_path;
+    struct stat info;
+    if (stat(path, &info) != 0) {
+        fmu_reject(fmu, VR_table_file, "cannot be opened for reading");
+        return NULL;
+    }
+    if (!S_ISREG(info.st_mode)) {
+        fmu_reject(fmu, VR_table_file, "is not a regular file (a device, pipe or folder cannot be a table)");
+        return NULL;
+    }
+    if (info.st_size > TABLE_MAX_BYTES) {
+        fmu_reject(fmu, VR_table_file, "is larger than 64 MiB");
+        return NULL;
+    }
     FILE *file = fopen(path, "r");
     if (!file) {
         fmu_reject(fmu, VR_table_file, "cannot be opened for reading");
         return NULL;
     }
     char line[TABLE_LINE_MAX];
-    int data_lines = 0, header_seen = 0;
+    long data_lines = 0, lines = 0;
+    int header_seen = 0;
     while (fgets(line, sizeof line, file)) {
+        if (++lines > TABLE_MAX_LINES) {
+            fclose(file);
+            fmu_reject(fmu, VR_table_file, "has more than 1000000 lines");
+            return NULL;
+        }
         if (is_blank_or_comment(line)) continue;
         if (header_seen) data_lines++;
         header_seen = 1;
@@ -113,13 +145,13 @@ static Table *read_table(FmuInstance *fmu, const char *given_path) {
             break;
         }
         if (!table->time) { /* the header */
-            char *field = strtok(line, ",");
+            char *cursor = line, *field = next_field(&cursor);
             if (!field || strcmp(trim(field), "time") != 0) {
                 fmu_log(fmu, fmi2Error, "logStatusError", "table.file %s:%d: the first column must be 'time'", path, number);
                 ok = 0;
                 break;
             }
-            while (ok && (field = strtok(NULL, ",")) != NULL) {
+            while (ok && (field = next_field(&cursor)) != NULL) {
                 const char *name = trim(field);
                 int d = 0;
                 while (d < N_DOF && strcmp(name, DOF_NAMES[d]) != 0) d++;
