@@ -73,3 +73,16 @@ def test_impact_shakes_the_torques_not_the_pose(scene):
     assert torque_change[t < 2.5].max() == 0.0
     assert torque_change.max() > 500.0 / (6 * 250.0)
     assert torque_change[t > 2.52 + 0.15].max() < 0.1 * torque_change.max()
+
+
+def test_the_readmes_main_job_numbers_are_what_the_main_job_prints():
+    """The README quotes the main job's largest tracking errors (after the first tenth of the 10 s
+    run, as the run's report prints them, to three significant digits); they may not drift."""
+    import re
+    text = (ROOT / "README.md").read_text().replace("\n", " ")
+    quoted = re.search(r"prints; a test holds this line to it\): ([\d.]+) / ([\d.]+) / ([\d.]+) mm in surge / sway / "
+                       r"heave, ([\d.]+) / ([\d.]+) / ([\d.]+) mrad", text)
+    assert quoted, "the README's main-job sentence changed form"
+    _, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml"))
+    printed = [float(f"{1e3 * e:.3g}") for e in report.largest_error]  # mm and mrad, as quoted
+    assert [float(q) for q in quoted.groups()] == printed, (quoted.groups(), printed)
