@@ -59,9 +59,10 @@ def _main(argv: list[str] | None = None) -> int:
     advise.add_argument("scene", type=Path)
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
     advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
+    advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
     args = parser.parse_args(argv)
     if args.command == "advise":
-        from .platform.advise import advise as run_advice, text
+        from .platform.advise import advise as run_advice, text, write_csv
         try:
             scene = load_scene(args.scene)
         except SceneError as error:
@@ -69,6 +70,7 @@ def _main(argv: list[str] | None = None) -> int:
             return 2
         candidates, info = run_advice(scene, args.tolerance, args.probe)
         print(text(scene, args.tolerance, candidates, info))
+        print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
         return 0
     if args.command == "validate":
         from .platform.validation.report import build

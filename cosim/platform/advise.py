@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -90,18 +91,35 @@ def recommend(candidates: list[Candidate], tolerance: float) -> Candidate | None
     return min(good, key=lambda c: c.wall) if good else None
 
 
+def write_csv(candidates: list[Candidate], path: Path) -> Path:
+    """Every candidate: step, effects off, fidelity, pose error, wall time, macro steps, divergence."""
+    import csv
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["step_ms", "effects_off", "fidelity", "pose_error", "wall_s", "macro_steps", "diverged"])
+        for c in candidates:
+            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, repr(c.error), repr(c.wall),
+                             c.macro_steps, c.diverged or ""])
+    return path
+
+
 def text(scene: Scene, tolerance: float, candidates: list[Candidate], info: dict) -> str:
+    """The candidates within the tolerance (cheapest first) as a table, the rest in a line each."""
     lines = [f"{scene.name}: probes of {info['duration']:g} s against a reference at {scene.step / 4 * 1e3:g} ms "
              f"(every effect on, {info['own_fidelity']}); the reference's own convergence (half its step "
-             f"against it): {info['convergence']:.1e}",
-             f"{'candidate':<62} {'pose error':>11} {'wall [s]':>9} {'steps':>7}"]
-    for c in sorted((c for c in candidates if not c.diverged), key=lambda c: c.wall):
-        mark = "  ok" if c.error <= tolerance else ""
-        lines.append(f"{c.label:<62} {c.error:>11.2e} {c.wall:>9.3f} {c.macro_steps:>7}{mark}")
+             f"against it): {info['convergence']:.1e}"]
+    good = sorted((c for c in candidates if not c.diverged and c.error <= tolerance), key=lambda c: c.wall)
+    missed = sorted((c for c in candidates if not c.diverged and not c.error <= tolerance), key=lambda c: c.error)
     diverged = [c for c in candidates if c.diverged]
+    if good:
+        lines.append(f"within pose error {tolerance:g} ({len(good)} of {len(candidates)}, cheapest first):")
+        lines.append(f"  {'candidate':<62} {'pose error':>11} {'wall [s]':>9} {'steps':>7}")
+        lines += [f"  {c.label:<62} {c.error:>11.2e} {c.wall:>9.3f} {c.macro_steps:>7}" for c in good]
+    if missed:
+        lines.append(f"{len(missed)} ran but missed the tolerance (closest: {missed[0].label}, {missed[0].error:.1e})")
     if diverged:
-        lines.append(f"diverged (stopped by the divergence monitor, never recommended): {len(diverged)} of "
-                     f"{len(candidates)}: " + "; ".join(c.label for c in diverged))
+        lines.append(f"{len(diverged)} diverged (stopped by the divergence monitor, never recommended)")
     best = recommend(candidates, tolerance)
     if info["convergence"] > 0.1 * tolerance:
         lines.append(f"warning: the tolerance {tolerance:g} is within ten times the reference's own error; "

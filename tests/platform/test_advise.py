@@ -30,6 +30,12 @@ def test_advise_cli(tmp_path, capsys):
     scene = (ROOT / "scenes" / "sumnu_case_1.toml").read_text().replace("duration = 5.0", "duration = 0.3")
     path = tmp_path / "short.toml"
     path.write_text(scene)
-    assert main(["advise", str(path), "--tolerance", "1e-3", "--probe", "0.3"]) == 0
+    assert main(["advise", str(path), "--tolerance", "1e-3", "--probe", "0.3", "--out", str(tmp_path / "out")]) == 0
     out = capsys.readouterr().out
     assert "recommended for pose error <= 0.001:" in out and "ideal force source" in out
+    assert "within pose error 0.001 (" in out and "cheapest first" in out
+    import csv
+    with open(tmp_path / "out" / "short_advice.csv") as f:
+        rows = list(csv.DictReader(f))
+    within = [r for r in rows if not r["diverged"] and float(r["pose_error"]) <= 1e-3]
+    assert rows and f"within pose error 0.001 ({len(within)} of {len(rows)}," in out
