@@ -21,37 +21,89 @@ def save_figure(fig, path: Path) -> None:
     plt.close(fig)
 
 
-def plot_tracking(result: np.ndarray, path: Path, title: str) -> None:
+AXES = ("x", "y", "z", "roll", "pitch", "yaw")
+DRIVE_QUANTITIES = {"torque": ("motor torque", "N m"), "speed": ("motor speed", "rad/s"), "current.q": ("i_q", "A"),
+                    "force": ("motor force", "N"), "velocity": ("leg velocity", "m/s"), "current": ("current", "A")}
+
+
+def _steady_limits(ax, t, values, start: float, margin: float = 0.15) -> None:
+    """y limits from the part after `start` (the start-up transient would otherwise set the scale)."""
+    late = np.asarray(values)[..., t >= start]
+    if late.size and np.all(np.isfinite(late)):
+        low, high = float(late.min()), float(late.max())
+        pad = margin * (high - low or abs(high) or 1.0)
+        ax.set_ylim(low - pad, high + pad)
+
+
+def _mark(ax, windows) -> None:
+    for start, end in windows:
+        ax.axvspan(start, end, color="tab:orange", alpha=0.25, lw=0)
+
+
+def plot_tracking(result: np.ndarray, path: Path, title: str, source: str = "", impacts=(), settle: float = 0.5) -> None:
+    """Reference and actual pose per DOF, and the tracking error in mm or mrad, scaled to the steady
+    error after `settle` seconds; an inset shows the whole error with the start-up. `source` names
+    the paper's figure it corresponds to; `impacts` are (start, end) windows to mark."""
     t = result["time"]
-    axes_names = ("x", "y", "z", "roll", "pitch", "yaw")
     fig, axes = plt.subplots(6, 2, figsize=(12, 13), sharex=True)
-    for k, (label, a) in enumerate(zip(DOF, axes_names)):
-        axes[k, 0].plot(t, result[f"pose_ref.{a}"], "k--", lw=1, label="desired")
+    for k, (label, a) in enumerate(zip(DOF, AXES)):
+        unit = "mm" if k < 3 else "mrad"
+        error = 1e3 * (result[f"pose.{a}"] - result[f"pose_ref.{a}"])
+        axes[k, 0].plot(t, result[f"pose_ref.{a}"], "k--", lw=1, label="reference")
         axes[k, 0].plot(t, result[f"pose.{a}"], lw=1, label="actual")
         axes[k, 0].set_ylabel(label)
-        axes[k, 1].plot(t, result[f"pose.{a}"] - result[f"pose_ref.{a}"], lw=1, color="tab:red")
-        axes[k, 1].set_ylabel("error")
-        for ax in axes[k]:
-            ax.grid(True, alpha=0.3)
+        ax = axes[k, 1]
+        ax.plot(t, error, lw=1, color="tab:red")
+        ax.set_ylabel(f"{a} error [{unit}]")
+        if t[-1] > 2 * settle:
+            _steady_limits(ax, t, error, settle)
+            inset = ax.inset_axes([0.78, 0.55, 0.2, 0.4])
+            early = t <= 2 * settle
+            inset.plot(t[early], error[early], lw=0.8, color="tab:red")
+            inset.set_title("start-up", fontsize=6)
+            inset.tick_params(labelsize=6)
+        for panel in axes[k]:
+            panel.grid(True, alpha=0.3)
+            _mark(panel, impacts)
     axes[0, 0].legend(fontsize=8)
-    axes[0, 0].set_title("Pose tracking (as Meng Fig 7)")
-    axes[0, 1].set_title("Tracking error")
+    axes[0, 0].set_title("Pose: reference and actual" + (f" ({source})" if source else ""))
+    axes[0, 1].set_title(f"Tracking error (scaled to t > {settle:g} s; impact shaded)" if impacts else
+                         f"Tracking error (scaled to t > {settle:g} s)")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     fig.suptitle(title)
     save_figure(fig, path)
 
 
-def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str) -> None:
+def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str, source: str = "",
+                impacts=(), settle: float = 0.5) -> None:
+    """Each drive's speed and effort (torque or force) with units, scaled to after the start-up,
+    and, for each impact, the effort enlarged around it: the shock the drives take while the pose
+    stays put is what Meng's Fig 8 shows."""
     t = result["time"]
-    fig, axes = plt.subplots(2, 1, figsize=(12, 8), sharex=True)
+    rows = 2 + (1 if impacts else 0)
+    fig, axes = plt.subplots(rows, 1, figsize=(12, 4 * rows))
+    (speed_name, speed_unit), (effort_name, effort_unit) = DRIVE_QUANTITIES[speed], DRIVE_QUANTITIES[effort]
     for i in range(1, 7):
         axes[0].plot(t, result[f"{speed}[{i}]"], lw=1, label=f"leg {i}")
         axes[1].plot(t, result[f"{effort}[{i}]"], lw=1, label=f"leg {i}")
-    axes[0].set(title=f"Drive {speed} (as Meng Fig 8a)", ylabel=speed)
-    axes[1].set(title=f"Drive {effort} (as Meng Fig 8b)", ylabel=effort, xlabel="time [s]")
-    for ax in axes:
+    for ax, name, unit, var in ((axes[0], speed_name, speed_unit, speed), (axes[1], effort_name, effort_unit, effort)):
+        ax.set(ylabel=f"{name} [{unit}]", xlabel="time [s]")
+        if t[-1] > 2 * settle:
+            _steady_limits(ax, t, np.array([result[f"{var}[{i}]"] for i in range(1, 7)]), settle)
+        _mark(ax, impacts)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, ncol=6)
+    axes[0].set_title(f"Drive {speed_name}" + (f" ({source})" if source else "") + f", scaled to t > {settle:g} s")
+    axes[1].set_title(f"Drive {effort_name}" + (", impact shaded" if impacts else ""))
+    if impacts:
+        start, end = impacts[0]
+        window = (t >= start - 0.05) & (t <= end + 0.15)
+        for i in range(1, 7):
+            axes[2].plot(t[window], result[f"{effort}[{i}]"][window], lw=1, label=f"leg {i}")
+        _mark(axes[2], impacts)
+        axes[2].set(title=f"{effort_name} around the impact at {start:g} s", ylabel=f"{effort_name} [{effort_unit}]",
+                    xlabel="time [s]")
+        axes[2].grid(True, alpha=0.3)
     fig.suptitle(title)
     save_figure(fig, path)

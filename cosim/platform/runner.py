@@ -80,6 +80,11 @@ class SceneFailed(RuntimeError):
         self.report, self.result = report, result
 
 
+# the paper's figures that a scene's plots correspond to, per parameter set
+FIGURES = {"meng2010": ("as Meng et al. 2010, Fig 7", "as Meng et al. 2010, Fig 8"),
+           "sumnu2015": ("as Sumnu 2015, Section 5.3", "as Sumnu 2015, Section 5.3")}
+
+
 def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
     """The scene's coupling algorithm and macro-step control. Step doubling measures the error on
     the mechanics' outputs to the drives (leg angles and speeds, or lengths and velocities)."""
@@ -214,9 +219,12 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         effort, speed = DRIVES[scene.drive].outputs[:2]
         if plots and len(result) > 1:
             from . import results
-            results.plot_tracking(result, out / f"{scene.path.stem}_tracking.png", scene.name)
+            tracking, drives = FIGURES.get(scene.parameter_set, ("", ""))
+            impacts = sorted({(p.start, p.end) for p in scene.pulses})
+            results.plot_tracking(result, out / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
             if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
-                results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed)
+                results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed, drives,
+                                    impacts)
     if failure:
         raise SceneFailed(report, result)
     return result, report
