@@ -157,3 +157,26 @@ class DivergenceMonitor(Observer):
         self._residual[:] = 0.0
         self._transferred[:] = 0.0
         self._count = 0
+
+
+class TaskProgress:
+    """Progress over a known number of tasks (probes of a study, sections of a report): a bar on a
+    terminal, otherwise a line every `every` seconds and one at the end."""
+
+    def __init__(self, label: str, total: int, every: float = 5.0, stream=None):
+        self.label, self.total, self.every = label, total, every
+        self.stream = stream or sys.stderr
+        self.done = 0
+        self._start = self._last = time.perf_counter()
+
+    def advance(self, what: str = "") -> None:
+        self.done += 1
+        now = time.perf_counter()
+        if self.stream.isatty():
+            filled = int(30 * self.done / max(self.total, 1))
+            print(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} {what[:40]:<40}",
+                  end="" if self.done < self.total else "\n", file=self.stream, flush=True)
+        elif now - self._last >= self.every or self.done == self.total:
+            self._last = now
+            print(f"{self.label}: {self.done}/{self.total} done ({what}), {now - self._start:.0f} s", file=self.stream,
+                  flush=True)

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..engine.observers import TaskProgress
 from .runner import SceneFailed, run_scene
 from .scene import Scene
 from .ports import POSE
@@ -69,7 +70,9 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0) -> tuple[list[Can
     convergence = _pose_difference(half, reference)
     candidates = []
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
-    for factor, off, fidelity in itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive]):
+    plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive]))
+    progress = TaskProgress("advise", len(plan))
+    for factor, off, fidelity in plan:
         candidate = Candidate(scene.step * factor, off, fidelity)
         variant = _variant(scene, candidate.step, off, fidelity, duration)
         try:
@@ -83,6 +86,7 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0) -> tuple[list[Can
             candidate.diverged = failed.report.failure
             candidate.wall = failed.report.wall
         candidates.append(candidate)
+        progress.advance(candidate.label)
     return candidates, dict(convergence=convergence, duration=duration, own_fidelity=own)
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from .. import results
 from ...engine.artifacts import ROOT
 from ..platform_core import Core
-from ..runner import run_scene
+from ..runner import FIGURES, run_scene
 from ..scene import Scene, Signal, Sine, load_scene
 from ..signals import sine_motion
 from ..ports import POSE
@@ -53,8 +53,10 @@ def tracking(figures: Path | None = None) -> tuple[list[Row], dict]:
     result, report = run_scene(scene)
     if figures is not None:
         figures.mkdir(parents=True, exist_ok=True)
-        results.plot_tracking(result, figures / "meng_eq35_tracking.png", scene.name)
-        results.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed")
+        impacts = sorted({(p.start, p.end) for p in scene.pulses})
+        results.plot_tracking(result, figures / "meng_eq35_tracking.png", scene.name, FIGURES["meng2010"][0], impacts)
+        results.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed",
+                            FIGURES["meng2010"][1], impacts)
     quiet, _ = run_scene(meng_scene(pulses=[]))
     t = result["time"]
     torque = np.column_stack([result[f"torque[{i}]"] for i in range(1, 7)])

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...engine.observers import TaskProgress
 from . import halder, meng, sumnu
 from .rows import table
 
@@ -33,8 +34,10 @@ def build(out: Path) -> Path:
     figures.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     parts = [INTRO]
+    progress = TaskProgress("validate", 6)
 
     rows, data = meng.tracking(figures)
+    progress.advance("Meng Figs 7-8")
     parts.append(_section(
         "Meng et al. 2010: Figs 7 and 8 (Eq 35 with the impact of Eq 36)",
         f"""Scene `scenes/meng_eq35.toml`: six PMSM drives (averaged inverter), 1 ms Gauss-Seidel coupling of
@@ -47,6 +50,7 @@ stroke for moments (the paper's own motion): the mechanics warns and goes on."""
         rows, ["meng_eq35_tracking.png", "meng_eq35_drives.png"]))
 
     rows, data = meng.bandwidths(figures)
+    progress.advance("Meng Fig 6 bandwidths")
     parts.append(_section(
         "Meng et al. 2010: Fig 6, closed-loop bandwidth of each DOF",
         """The paper linearises its Simulink model ('linear analysis' in Matlab). We simulate instead: per DOF
@@ -59,6 +63,7 @@ pitch do (the legs are inclined about 45 degrees); the paper gives no reason for
         rows, ["meng_fig6_bode.png"]))
 
     rows, data = meng.table_5()
+    progress.advance("Meng Table 5")
     arrays = meng.surge_rows(data["entries"])
     mean_gap = {reading: float(np.abs(arrays[("inverse", reading)] - arrays["paper"]).mean())
                 for reading in ("peak", "peak-to-peak")}
@@ -90,6 +95,7 @@ which the paper does not give (our centres of mass: `params/meng2010.toml`).""",
         rows))
 
     rows_f, data_f = sumnu.figures_4(figures)
+    progress.advance("Sumnu Figs 4.3-4.6")
     parts.append(_section(
         "Sumnu 2015: Figs 4.3-4.6, driving forces with and without the lower leg's inertia",
         """Inverse model of the mechanics on Sumnu's platform (explicit joints of Section 4.2), over one period
@@ -102,6 +108,7 @@ lower part carries the motor's stator: the contrast the thesis raises the masses
         rows_f, ["sumnu_fig4_forces.png"]))
 
     rows_c, data_c = sumnu.case_studies()
+    progress.advance("Sumnu case studies")
     parts.append(_section(
         "Sumnu 2015: PID case studies, Sections 5.2 and 5.3",
         f"""Section 5.2 drives the legs with rigid force actuators: the linear-motor FMU with
@@ -117,6 +124,7 @@ constants may be. The case IV yaw is printed as "1"; we read 0.""",
         rows_c))
 
     rows_h, data_h = halder.study(figures)
+    progress.advance("Halder")
     parts.append(_section(
         "Halder et al.: 6-SBU platform, feedforward plus PD, coupled motion of roll and pitch demands",
         f"""The platform of `params/halder2013.toml` (Eqs 1-4; every value the paper does not give chosen there
