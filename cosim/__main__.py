@@ -97,7 +97,9 @@ def _main(argv: list[str] | None = None) -> int:
     if duration is not None:
         scene.duration = duration
     return report(lambda: run_scene(scene, args.out, plots=not args.no_plots)[1], (SceneError,), SceneFailed,
-                  f"{args.out}/{scene.path.stem}.csv, .mat" + ("" if args.no_plots else " and plots"), args.out)
+                  f"{args.out}/{scene.path.stem}.csv, .mat, .log" + ("" if args.no_plots else
+                                                                    f", plots and the report {scene.path.stem}.html"),
+                  args.out)
 
 
 def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> int:

@@ -4,6 +4,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+# Debian's Chromium for the run report's browser test (tests/platform/test_html_report.py).
+if ! command -v chromium > /dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  { $SUDO apt-get update -qq && $SUDO apt-get install -y -qq chromium; } > apt.log 2>&1 \
+    || { cat apt.log; echo "could not install chromium (needed by the browser test)" >&2; exit 1; }
+fi
 status=0
 .venv/bin/python -m pytest -ra "$@" || status=$?
 if [ "$status" -eq 5 ]; then

@@ -60,6 +60,7 @@ class Execution:
         self.bond_names = self.coupling.bond_names()
         self.energy_residuals = np.zeros(0)  # per macro step, the largest |energy residual| of a bond [J]
         self.steps = np.zeros(0)              # the accepted macro steps [s]
+        self.bond_residual_max = np.zeros(len(self.bond_names))  # per bond, the largest |residual| of a step [J]
         self.start_time = self.stop_time = structure.experiment.start
 
     @property
@@ -99,6 +100,9 @@ class Execution:
             for batch in batches:
                 parts_residuals.append(batch.residuals)
                 parts_steps.append(batch.steps)
+                if len(batch.bond_energy):
+                    self.bond_residual_max = np.maximum(self.bond_residual_max,
+                                                        np.abs(batch.bond_energy[:, :, 0]).max(axis=0))
                 for observer in observers:
                     observer.batch(self, batch)
                 for observer in observers:

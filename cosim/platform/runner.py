@@ -43,6 +43,7 @@ class RunReport:
     warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
     log: Path | None = None  # where every FMU message was written
     tuning: str | None = None  # the gains designed for the plant (tuning = "auto")
+    html: Path | None = None  # the interactive report, when plots were drawn
 
     @property
     def real_time_factor(self) -> float:
@@ -225,6 +226,9 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
             if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
                 results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed, drives,
                                     impacts)
+            from .report_html import write_report
+            report.html = write_report(out / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
+                                       outcome.bond_residuals)
     if failure:
         raise SceneFailed(report, result)
     return result, report

@@ -82,6 +82,7 @@ class Run:
     fmi_seconds: float
     messages: list[tuple[str, LogMessage]] = field(default_factory=list)
     monitor: DivergenceMonitor | None = None
+    bond_residuals: dict[str, float] = field(default_factory=dict)  # per bond, the largest |residual| of a step [J]
 
     @property
     def warnings(self) -> list[str]:
@@ -104,7 +105,8 @@ def run(structure: SystemStructure, algorithm: Algorithm, control: StepControl, 
         result, failure = failed.result, failed
     wall = time.perf_counter() - start
     outcome = Run(result, execution.energy_residuals, execution.steps, execution.rejected, wall,
-                  execution.fmi_seconds, execution.messages(), monitor)
+                  execution.fmi_seconds, execution.messages(), monitor,
+                  dict(zip(execution.bond_names, execution.bond_residual_max.tolist())))
     execution.free()
     if failure is not None:
         failure.run = outcome

@@ -1,0 +1,139 @@
+"""The interactive run report, out/<scene>.html: one self-contained file that works offline (plotly's
+JavaScript is embedded, nothing is fetched): the scene, the run summary, zoomable plots of every
+recorded output, the FMUs' warnings, and for a failed run where and why it stopped.
+
+Every number in the summary is also in the page's `data-value` attributes, so a test can check the
+page against the run.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+from .ports import POSE
+
+BUCKETS = 700  # per trace: each bucket's first, smallest and largest point (every peak and shock kept)
+
+
+def _decimated(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """At most 3 BUCKETS points of (t, y) that keep every bucket's extremes (the CSV has every row)."""
+    n = len(t)
+    if n <= 3 * BUCKETS:
+        return t, y
+    edges = np.linspace(0, n, BUCKETS + 1).astype(int)
+    keep = [edges[:-1], [n - 1]]
+    for a, b in zip(edges[:-1], edges[1:]):
+        if b > a:
+            keep.append([a + int(np.argmin(y[a:b])), a + int(np.argmax(y[a:b]))])
+    index = np.unique(np.concatenate([np.asarray(k, dtype=int) for k in keep]))
+    return t[index], y[index]
+
+
+def _trace(t, y, name, **line):
+    import plotly.graph_objects as go
+    x, v = _decimated(t, np.asarray(y))
+    return go.Scatter(x=x, y=v, name=name, mode="lines", line=line or None)
+
+
+def _figures(result: np.ndarray) -> list[tuple[str, object]]:
+    """(title, plotly figure) of every recorded output: pose against reference per DOF, each drive
+    quantity for the six legs, each other output alone."""
+    import plotly.graph_objects as go
+    rows = result
+    t = rows["time"]
+    names = list(result.dtype.names[1:])
+    figures, used = [], set()
+    for a in POSE:
+        if f"pose.{a}" in names:
+            unit = "m" if a in "xyz" else "rad"
+            fig = go.Figure([_trace(t, rows[f"pose_ref.{a}"], "reference", dash="dash"),
+                             _trace(t, rows[f"pose.{a}"], "actual")])
+            fig.update_layout(yaxis_title=f"{a} [{unit}]")
+            figures.append((f"pose {a}", fig))
+            error = go.Figure([_trace(t, 1e3 * (rows[f"pose.{a}"] - rows[f"pose_ref.{a}"]), "error")])
+            error.update_layout(yaxis_title=f"{a} error [{'mm' if a in 'xyz' else 'mrad'}]")
+            figures.append((f"tracking error {a}", error))
+            used |= {f"pose.{a}", f"pose_ref.{a}"}
+    per_leg = sorted({n.split("[")[0] for n in names if n.endswith(("[1]", "[2]", "[3]", "[4]", "[5]", "[6]"))
+                      and not n.startswith("leg")})
+    for quantity in per_leg:
+        legs = [n for n in names if n.startswith(f"{quantity}[")]
+        fig = go.Figure([_trace(t, rows[n], f"leg {n.split('[')[1].rstrip(']')}") for n in legs])
+        fig.update_layout(yaxis_title=quantity)
+        figures.append((f"drive {quantity}", fig))
+        used |= set(legs)
+    for name in names:
+        if name not in used:
+            fig = go.Figure([_trace(t, rows[name], name)])
+            fig.update_layout(yaxis_title=name)
+            figures.append((name, fig))
+    for _, fig in figures:
+        fig.update_layout(height=320, margin=dict(l=60, r=20, t=30, b=40), xaxis_title="time [s]",
+                          template="plotly_white")
+    return figures
+
+
+def _table(rows: list[tuple[str, str, str]]) -> str:
+    """(label, shown text, exact value) rows as an HTML table with data-value attributes."""
+    cells = "".join(f'<tr><th>{html.escape(label)}</th><td data-name="{html.escape(label)}" '
+                    f'data-value="{html.escape(value)}">{html.escape(shown)}</td></tr>' for label, shown, value in rows)
+    return f"<table>{cells}</table>"
+
+
+def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_residuals: dict[str, float]) -> Path:
+    """Writes the report of a run (`report`: the platform's RunReport; `messages`: (instance,
+    LogMessage) of everything the FMUs logged)."""
+    import plotly.io as pio
+    from plotly.offline import get_plotlyjs
+    summary = [
+        ("macro steps", f"{report.macro_steps}", repr(report.macro_steps)),
+        ("rejected steps", f"{report.rejected_steps}", repr(report.rejected_steps)),
+        ("step control", report.step_control, report.step_control),
+        ("simulated [s]", f"{report.simulated:g}", repr(report.simulated)),
+        ("wall time [s]", f"{report.wall:.3f}", repr(report.wall)),
+        ("real-time factor", f"{report.real_time_factor:.1f}", repr(report.real_time_factor)),
+        ("master share of wall time", f"{100 * report.master_share:.0f} %", repr(report.master_share)),
+        ("largest energy residual of a bond in one step [J]", f"{report.largest_energy_residual:.3e}",
+         repr(report.largest_energy_residual)),
+    ]
+    summary += [(f"largest tracking error {a} [{'m' if a in 'xyz' else 'rad'}]", f"{e:.3e}", repr(float(e)))
+                for a, e in zip(POSE, report.largest_error)]
+    bonds = [(f"bond {name} [J]", f"{value:.3e}", repr(value)) for name, value in bond_residuals.items()]
+    warnings = [(m.time, instance, m.text) for instance, m in messages if m.status in ("warning", "error", "fatal")]
+    figures = _figures(result)
+    plots = "\n".join(f'<section class="plot"><h3>{html.escape(title)}</h3>'
+                      f'{pio.to_html(fig, full_html=False, include_plotlyjs=False, config=dict(responsive=True))}'
+                      f'</section>' for title, fig in figures)
+    failure = (f'<div class="failure" data-name="failure"><h2>The run stopped</h2><p>{html.escape(report.failure)}</p>'
+               f'</div>') if report.failure else ""
+    scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", scene.drive, scene.drive),
+                  ("parameter set", scene.parameter_set, scene.parameter_set),
+                  ("coupling", f"{scene.algorithm}, order {scene.order}", f"{scene.algorithm} {scene.order}"),
+                  ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
+                  ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
+    warning_rows = "".join(f"<tr><td>{t:.6g}</td><td>{html.escape(i)}</td><td>{html.escape(text)}</td></tr>"
+                           for t, i, text in warnings)
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(report.scene)}</title>
+<script>{get_plotlyjs()}</script>
+<style>body{{font-family:sans-serif;margin:1.5em;max-width:1200px}} table{{border-collapse:collapse;margin:0.5em 0}}
+th,td{{border:1px solid #ccc;padding:3px 8px;text-align:left;font-size:0.9em}} .failure{{background:#fee;
+border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3em 0;font-size:1em}}</style>
+</head><body>
+<h1>{html.escape(report.scene)}</h1>
+{failure}
+<h2>Scene</h2>{_table(scene_rows)}
+<h2>Run</h2>{_table(summary)}
+<h2>Power bonds: largest energy residual in one step</h2>{_table(bonds)}
+<h2>Warnings and errors from the FMUs ({len(warnings)})</h2>
+<table class="warnings"><tr><th>step start [s]</th><th>instance</th><th>message</th></tr>{warning_rows}</table>
+<h2>Every recorded output ({len(figures)} plots; drag to zoom, double-click to reset)</h2>
+{plots}
+</body></html>
+"""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(page, encoding="utf-8")
+    return path
