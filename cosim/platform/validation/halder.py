@@ -83,7 +83,7 @@ def feedforward(target: np.ndarray) -> np.ndarray:
 
 
 def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: float = GAIN_SCALE,
-             angle: float | None = None) -> np.ndarray:
+             angle: float | None = None, step: float = STEP) -> np.ndarray:
     """Results (time, pose_ref.*, pose.*) for one demand and strategy (angle: another basic angle,
     for the stability search). Raises RunFailed if the platform leaves its workspace."""
     c = load("halder2013")
@@ -102,7 +102,7 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
     legs = [{"force_ff": float(f)} for f in feedforward(target)]
     signals = trajectory_parameters(trajectory, [Pulse("force.z", weight, 0.0, 1e9)])
     structure = platform_structure("linear", values, drive, signals, leg_values=legs)
-    return run(structure, default_algorithm("linear"), FixedStep(STEP), duration, columns("linear")).result
+    return run(structure, default_algorithm("linear"), FixedStep(step), duration, columns("linear")).result
 
 
 def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:
@@ -120,6 +120,42 @@ def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:
     return float("nan")
 
 
+def stiffness_balance(delta: float = 1e-5) -> dict:
+    """The platform's static stiffness at the neutral, from its quasi-static potential
+    V(q) = m g z + sum 1/2 k_p dl_i^2 - sum F_i dl_i (q the pose, F_i the legs' holding forces):
+    K = s k_p J'J - sum F_i d2 l_i / dq2, the PD legs' stiffness against the loaded legs' geometric
+    stiffness (a strut carrying F swings sideways with -F/L); the frame's origin is the payload's
+    centre of mass, so gravity adds none of its own. Returns per DOF the PD and strut stiffness [N/m,
+    N m/rad] and the gain scale each needs, and the scale s at which K turns positive definite."""
+    values = mechanics_start_values("halder2013")
+    core = Core().use_start_values(values)
+    q0 = np.array([values[f"geometry.neutral.{a}"] for a in POSE])
+    forces = feedforward(q0)
+    lengths = core.leg_lengths
+    e = np.eye(6) * delta
+    J = np.column_stack([(lengths(q0 + e[a]) - lengths(q0 - e[a])) / (2 * delta) for a in range(6)])
+    H = np.zeros((6, 6, 6))
+    for a in range(6):
+        for b in range(6):
+            H[:, a, b] = (lengths(q0 + e[a] + e[b]) - lengths(q0 + e[a] - e[b]) - lengths(q0 - e[a] + e[b])
+                          + lengths(q0 - e[a] - e[b])) / (4 * delta * delta)
+    pd = load("halder2013")["control"]["kp"] * J.T @ J
+    struts = -np.einsum("i,iab->ab", forces, H)
+    return {"leg_force": float(np.mean(forces)), "leg_length": float(np.mean(lengths(q0))),
+            "pd": np.diag(pd), "struts": np.diag(struts), "per_dof": -np.diag(struts) / np.diag(pd),
+            "threshold": float(np.linalg.eigvals(np.linalg.solve(pd, -struts)).real.max())}
+
+
+def per_millimetre_settling(band: float = 0.02) -> float:
+    """The paper's k_p = 500 and k_d read as per millimetre (1000 x the per-metre reading): the time
+    the 15 deg roll step of Case 1 takes to stay within `band` of itself [s]. These stiff legs need
+    a 0.2 ms coupling step (1 ms diverges)."""
+    rows = run_case(ROLL, 1, duration=3.0, gain_scale=1000.0, step=2e-4)
+    error, t = np.abs(rows["pose.roll"] - rows["pose_ref.roll"]), rows["time"]
+    outside = np.nonzero(error > band * abs(rows["pose_ref.roll"][-1]))[0]
+    return float(t[outside[-1]]) if len(outside) else 0.0
+
+
 def coupled_errors(rows: np.ndarray, demand: Demand, neutral_z: float) -> tuple[float, float, float]:
     """Steady state (mean of the last 0.5 s): the basic angle reached [deg], and the unwanted
     translation and heave: the payload's displacement from the neutral along them [mm], whatever
@@ -134,9 +170,19 @@ def study(figures: Path | None = None) -> tuple[list[Row], dict]:
     neutral_z = mechanics_start_values("halder2013")["geometry.neutral.z"]
     threshold = stability_threshold()
     kp = load("halder2013")["control"]["kp"]
+    balance = stiffness_balance()
     rows = [Row("smallest PD gain holding a 1 deg roll step", f"k_p = {kp:g} N/m works", threshold * kp, "N/m",
-                "tried 1, 2, 4, 6, 8 x the paper's gains; below it the payload tips over (see text)")]
-    data = {"threshold": threshold}
+                "tried 1, 2, 4, 6, 8 x the paper's gains; below it the payload tips over (see text)"),
+            Row("gain scale at which the static stiffness turns positive (linearised)", "1 x works",
+                balance["threshold"], "x", "the legs' geometric stiffness against the PD (see text)")]
+    rows += [Row(f"{a}: PD / loaded-strut stiffness at the paper's gains", "",
+                 f"{balance['pd'][k]:.0f} / {balance['struts'][k]:.0f}", "N/m" if k < 3 else "N m/rad",
+                 f"needs {balance['per_dof'][k]:.2f} x") for k, a in enumerate(POSE)]
+    per_mm = per_millimetre_settling()
+    rows.append(Row("15 deg roll step with the gains read per millimetre (1000 x, 0.2 ms coupling step)",
+                    "settles in about 1 s", per_mm, "s", "into 2 % of the step; the paper's settling matches this "
+                    "reading of its gains, not the per-metre one"))
+    data = {"threshold": threshold, "per_millimetre_settling": per_mm, "balance": balance}
     for demand in (ROLL, PITCH):
         for case in CASES:
             result = run_case(demand, case)

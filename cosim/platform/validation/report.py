@@ -139,12 +139,17 @@ inverse model (Eq 16, legs' weight and inertia neglected) at the target pose. As
 forward model (Eq 23, no gravity term for the legs) the legs carry no weight.
 
 Stability: with the paper's gains (k_p = 500 N/m, k_d = 120 N s/m) our model of this platform
-tips over. The payload's centre of mass stands 0.285 m above the upper joints: an inverted
-pendulum whose weight (1962 N x 0.285 m = 559 N m per radian of roll) outweighs what 500 N/m per
-leg restores (about 280 N m/rad by the legs' lever arms); the smallest gain that holds a 1 deg
-roll step is {data_h['threshold']:g}x the paper's. The cases below run at {halder.GAIN_SCALE:g}x its
-k_p and k_d (the ratio k_d / k_p kept). We suspect the paper's gains are per millimetre or its
-model differs; it gives no more detail.
+tips over. Its static stiffness at the neutral explains why: the PD legs' stiffness along the legs
+is smaller than the negative stiffness of the loaded legs themselves (each carries
+{data_h['balance']['leg_force']:.0f} N on a {data_h['balance']['leg_length']:.3f} m leg, and a loaded strut's sideways
+stiffness is minus its force over its length). The frame's origin is the payload's centre of mass, so gravity has no stiffness of its own:
+this is not the payload as an inverted pendulum (yaw, which has no pendulum, needs
+{data_h['balance']['per_dof'][5]:.1f}x the gains on its own). The table gives the balance per DOF; the stiffness turns
+positive definite at {data_h['balance']['threshold']:.2f}x the paper's gains, and the simulated 1 deg roll step first
+holds at {data_h['threshold']:g}x of the scales tried, the first above it. The cases below run at {halder.GAIN_SCALE:g}x its k_p
+and k_d (the ratio k_d / k_p kept). Read per millimetre (1000x), the gains hold the platform and
+settle the 15 deg roll step in {data_h['per_millimetre_settling']:.2f} s, the paper's "about 1 s": we take that to be
+the paper's reading of its gains.
 
 Coupled motion: in our model none remains in the steady state (Case 1: under 0.01 mm per degree
 against the paper's 3.5 mm/deg), because the feedforward is the exact static inverse of the forward
