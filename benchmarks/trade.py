@@ -27,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.libcosim import Ecco, run_in_libcosim  # noqa: E402
 from cosim.platform.results import save_figure  # noqa: E402
+from cosim.engine.observers import TaskProgress  # noqa: E402
 from cosim.platform.runner import SceneFailed, run_scene  # noqa: E402
 from cosim.platform.scene import Scene, load_scene  # noqa: E402
 from cosim.platform.system import POSE  # noqa: E402
@@ -47,7 +48,11 @@ def _at(result: np.ndarray, checkpoints: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(checkpoints, result["time"], result[f"pose.{a}"]) for a in POSE])
 
 
+PROGRESS = TaskProgress("trade", None)
+
+
 def ours(scene: Scene, label: str, family: str, reference: np.ndarray, checkpoints: np.ndarray, **changes) -> Point:
+    PROGRESS.advance(f"{scene.path.stem}: {label}")
     point = Point(family, label)
     try:
         result, report = run_scene(dataclasses.replace(scene, **changes))

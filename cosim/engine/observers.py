@@ -163,7 +163,8 @@ class TaskProgress:
     """Progress over a known number of tasks (probes of a study, sections of a report): a bar on a
     terminal, otherwise a line every `every` seconds and one at the end."""
 
-    def __init__(self, label: str, total: int, every: float = 5.0, stream=None):
+    def __init__(self, label: str, total: int | None, every: float = 5.0, stream=None):
+        """total: the number of tasks, or None when it is not known beforehand (then a count)."""
         self.label, self.total, self.every = label, total, every
         self.stream = stream or sys.stderr
         self.done = 0
@@ -172,6 +173,13 @@ class TaskProgress:
     def advance(self, what: str = "") -> None:
         self.done += 1
         now = time.perf_counter()
+        if self.total is None:
+            if now - self._last >= self.every or self.stream.isatty():
+                self._last = now
+                print(f"{chr(13) if self.stream.isatty() else ''}{self.label}: {self.done} done ({what[:40]}), "
+                      f"{now - self._start:.0f} s", end="" if self.stream.isatty() else "\n", file=self.stream,
+                      flush=True)
+            return
         if self.stream.isatty():
             filled = int(30 * self.done / max(self.total, 1))
             print(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} {what[:40]:<40}",
