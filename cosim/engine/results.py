@@ -29,9 +29,26 @@ def mat_name(name: str) -> str:
     return name.replace(".", "_").replace("[", "_").replace("]", "")
 
 
+def _element(kind: int, data: bytes) -> bytes:
+    """A MAT-file data element: type, byte count, data padded to 8 bytes."""
+    return np.array([kind, len(data)], "<u4").tobytes() + data + b"\0" * (-len(data) % 8)
+
+
 def write_mat(result: np.ndarray, path: Path) -> None:
-    from scipy.io import savemat
-    savemat(path, {mat_name(n): result[n] for n in result.dtype.names})
+    """MATLAB level-5 .mat, one double column vector per result column (what scipy.io.savemat
+    writes, without importing scipy: the format is a header and one miMATRIX element a variable)."""
+    MI_INT8, MI_INT32, MI_UINT32, MI_DOUBLE, MI_MATRIX, MX_DOUBLE_CLASS = 1, 5, 6, 9, 14, 6
+    header = b"MATLAB 5.0 MAT-file, written by cosim".ljust(116, b" ") + b"\0" * 8 + \
+        np.array([0x0100], "<u2").tobytes() + b"IM"
+    parts = [header]
+    for name in result.dtype.names:
+        column = np.ascontiguousarray(result[name], dtype="<f8")
+        body = (_element(MI_UINT32, np.array([MX_DOUBLE_CLASS, 0], "<u4").tobytes())
+                + _element(MI_INT32, np.array([len(column), 1], "<i4").tobytes())
+                + _element(MI_INT8, mat_name(name).encode("ascii"))
+                + _element(MI_DOUBLE, column.tobytes()))
+        parts.append(_element(MI_MATRIX, body))
+    Path(path).write_bytes(b"".join(parts))
 
 
 def write(result: np.ndarray, out: Path, stem: str) -> list[Path]:
