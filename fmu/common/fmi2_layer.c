@@ -377,7 +377,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 /* ------------------------------------------------------------------------------------------ */
 /* Get and set                                                                                 */
 
-/* FMI 2.0, Co-Simulation state machine: fmi2GetXXX in initialization mode, slave initialized,
+/* FMI 2.0, Co-Simulation state machine: the fmi2Get functions in initialization mode, slave initialized,
  * terminated and error, not before initialization */
 #define GET_PHASES (PHASE_INITIALIZATION | AFTER_INITIALIZATION)
 
