@@ -1,18 +1,64 @@
-"""Helpers shared by the benchmarks: the native drive bench (drive_bench.c) built on demand."""
+"""Helpers shared by the benchmarks: the native drive bench (drive_bench.c) built on demand, and
+`publish`, which writes a benchmark's results into docs/benchmarks.md and the README's copy of them,
+so no measured number is ever typed by hand."""
 
 from __future__ import annotations
 
 import os
+import platform
+import re
 import subprocess
+import sys
+import time
 import zipfile
 from pathlib import Path
 
 import fmpy
 from fmpy import read_model_description
 
-from cosim.engine.artifacts import BUILD_DIR, fmu_path
+from cosim.engine.artifacts import BUILD_DIR, ROOT, fmu_path
 
 HERE = Path(__file__).resolve().parent
+BENCHMARKS_DOC = ROOT / "docs" / "benchmarks.md"
+README = ROOT / "README.md"
+
+
+def _block(name: str) -> re.Pattern:
+    return re.compile(rf"<!-- benchmark:{re.escape(name)} -->\n.*?<!-- /benchmark:{re.escape(name)} -->", re.S)
+
+
+def blocks(text: str) -> dict[str, str]:
+    """Every published block of a document, by benchmark name."""
+    return {m.group(1): m.group(0) for m in
+            re.finditer(r"<!-- benchmark:([\w-]+) -->\n.*?<!-- /benchmark:\1 -->", text, re.S)}
+
+
+def machine() -> str:
+    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else ""
+    return f"{os.cpu_count()} cores, {cpu}".rstrip(", ")
+
+
+def publish(name: str, command: str, lines: list[str], doc_path: Path = BENCHMARKS_DOC,
+            readme_path: Path = README) -> None:
+    """Writes a benchmark's results (markdown lines) as block `name` of docs/benchmarks.md (appended
+    the first time) and replaces the README's block of the same name, if it has one: the README
+    only ever holds copies that a benchmark wrote (tests/test_docs.py holds them equal)."""
+    stamp = time.strftime("%Y-%m-%d")
+    block = "\n".join([f"<!-- benchmark:{name} -->", f"`{command}` ({stamp}, {machine()}):", "", *lines,
+                        f"<!-- /benchmark:{name} -->"])
+    doc = doc_path.read_text() if doc_path.exists() else (
+        "# Benchmarks\n\nEach block below is written by the command it names, in one run; the README quotes "
+        "these blocks (its copies are rewritten by the same command). Ratios are measured within one run; "
+        "lone times vary by about +-30 % between runs on this machine.\n")
+    pattern = _block(name)
+    doc = pattern.sub(lambda _: block, doc) if pattern.search(doc) else doc.rstrip("\n") + "\n\n" + block + "\n"
+    doc_path.write_text(doc)
+    readme = readme_path.read_text()
+    if pattern.search(readme):
+        readme_path.write_text(pattern.sub(lambda _: block, readme))
+    print(f"written: {doc_path.name} [{name}]" + (f" and {readme_path.name}" if pattern.search(readme) else ""),
+          file=sys.stderr)
 
 
 def native_bench(name: str = "drive_bench") -> Path:

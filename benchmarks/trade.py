@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.libcosim import Ecco, run_in_libcosim  # noqa: E402
 from cosim.platform.results import save_figure  # noqa: E402
@@ -188,8 +189,11 @@ def main() -> None:
     doc = ["# The speed-accuracy trade", "",
            f"Rebuilt by `.venv/bin/python benchmarks/trade.py` (probes of {args.probe:g} s, this project's 2-core "
            "machine); see the script's docstring for the method. Wall times are of the stepping alone.", ""]
+    summary = []
     for name, scene, fidelities, effects in studies:
         points, info = study(scene, fidelities, effects)
+        summary += [f"{scene.name} ({args.probe:g} s probes; reference converged to {info['convergence']:.1e}):", "",
+                    *ratios(points, info["duration"]), ""]
         lines = [f"## {scene.name}", "",
                  f"Reference converged to {info['convergence']:.1e} m/rad (its difference to half its step's run).",
                  "", *ratios(points, info["duration"]), "", *table(points, info["duration"]), "",
@@ -198,6 +202,9 @@ def main() -> None:
         doc += lines
         plot(points, ROOT / "docs" / "figures" / f"trade_{name}.png", scene.name)
     (ROOT / "docs" / "trade.md").write_text("\n".join(doc))
+    if args.probe == 1.0:  # the documented command
+        publish("trade", "python benchmarks/trade.py", [*summary, "Every point's table and plot: "
+                                                        "[docs/trade.md](docs/trade.md)."])
 
 
 if __name__ == "__main__":
