@@ -3,7 +3,8 @@
     python -m cosim export SCENE [--ssp FILE.ssp] [--osp DIR]    the scene as an SSP 1.0 archive and/or
                                                                  an OSP configuration (libcosim)
     python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
-    python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL"""
+    python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL
+    python -m cosim sweep SWEEP.toml [--workers N] [--scheduler ADDRESS] [--out DIR]   many runs on Dask"""
 
 from __future__ import annotations
 
@@ -60,7 +61,15 @@ def _main(argv: list[str] | None = None) -> int:
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
     advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
     advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
+    sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (see cosim.platform.sweep)")
+    sweep.add_argument("sweep", type=Path, help="the sweep file (TOML)")
+    sweep.add_argument("--workers", type=int, help="worker processes of a local Dask cluster (default: one per core; "
+                       "0: no Dask, in this process)")
+    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
     args = parser.parse_args(argv)
+    if args.command == "sweep":
+        return run_sweep_file(args.sweep, args.out, args.workers, args.scheduler)
     if args.command == "advise":
         from .platform.advise import advise as run_advice, text, write_csv
         try:
@@ -116,6 +125,37 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
         return 1
     print(outcome.text())
     print(f"results: {written}")
+    return 0
+
+
+def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | None) -> int:
+    from .engine.sweep import SweepError, column_name, run_sweep
+    from .platform.sweep import load_sweep, plot_sweep
+    if workers is not None and workers < 0:
+        print(f"error: --workers {workers}: must be 0 (no Dask) or more", file=sys.stderr)
+        return 2
+    try:
+        sweep = load_sweep(path)
+        outcome = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, out, sweep.signature,
+                            workers=workers, scheduler=scheduler, points_per_task=sweep.points_per_task,
+                            retries=sweep.retries)
+    except SweepError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"interrupted: the points finished so far are in {out}/{path.stem}.parts; run the same command again "
+              "to run only the others", file=sys.stderr)
+        return 130
+    kinds = {s: sum(r["status"] == s for r in outcome.rows) for s in ("ok", "diverged", "failed")}
+    print(f"{sweep.name}: {len(outcome.rows)} points ({outcome.ran} run now, {outcome.skipped} found done): "
+          + ", ".join(f"{n} {s}" for s, n in kinds.items() if n))
+    for row in [r for r in outcome.rows if r["status"] != "ok"][:5]:
+        print(f"  {row['status']}: {', '.join(f'{a.name}={row[column_name(a.name)]!r}' for a in sweep.axes)}: "
+              f"{row['message'][:200]}")
+    written = [*outcome.files]
+    if sweep.plot is not None:
+        written.append(plot_sweep(outcome.rows, sweep.plot, out / f"{sweep.name}.png", sweep.name))
+    print("results: " + ", ".join(str(f) for f in written))
     return 0
 
 

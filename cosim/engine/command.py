@@ -64,8 +64,11 @@ def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[s
 
 
 def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
-                  stop_time: float | None = None) -> tuple[np.ndarray, SystemReport]:
-    """Runs `structure` with its settings (and the overrides); raises RunFailed with .report."""
+                  stop_time: float | None = None, progress: bool = True,
+                  advice: bool = True) -> tuple[np.ndarray, SystemReport]:
+    """Runs `structure` with its settings (and the overrides); raises RunFailed with .report.
+    progress: a progress bar on a terminal; advice: a diverged run probes for a step that holds
+    (both off for a sweep's points)."""
     settings = {k: str(v) for k, v in structure.settings.items() if k not in ("record", "output_interval")}
     settings.update(overrides or {})
     algorithm, control = from_strings(settings, structure.experiment.step)
@@ -75,11 +78,11 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
     start = time.perf_counter()
     failure = None
     try:
-        result = execution.run(stop, [DivergenceMonitor(), Progress(structure.name)])
+        result = execution.run(stop, [DivergenceMonitor(), *([Progress(structure.name)] if progress else [])])
     except RunFailed as failed:
         result, failure = failed.result, failed
     wall = time.perf_counter() - start
-    if failure is not None and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
+    if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
         failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
                                                                     failure.error.time, stop), failure.error.time),
                             failure.result)

@@ -8,7 +8,9 @@ read or written in one FMI call, so a stepping loop makes no per-step allocation
 
 from __future__ import annotations
 
+import atexit
 import ctypes
+import shutil
 import time as clock
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,8 +55,30 @@ class FmuError(RuntimeError):
         super().__init__(f"{instance}: {call} failed at t = {time:.9g} s: {detail}")
 
 
+_LOADED: dict[tuple[str, int, int], tuple[object, Path]] = {}
+
+
+def loaded(fmu_path: str | Path) -> tuple[object, Path]:
+    """The FMU's model description and its extraction, read once per process for each version of
+    the file (path, size, modification time): a run, or a sweep's thousandth point on a worker,
+    parses and unzips nothing. The extractions are removed when the process ends."""
+    path = Path(fmu_path).resolve()
+    status = path.stat()
+    key = (str(path), status.st_size, status.st_mtime_ns)
+    if key not in _LOADED:
+        _LOADED[key] = (read_model_description(str(path)), Path(extract(str(path))))
+    return _LOADED[key]
+
+
+@atexit.register
+def _remove_extractions() -> None:
+    for _, folder in _LOADED.values():
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 class FmuInstance:
-    """An instantiated co-simulation FMU. `unzip_dir` lets several instances share one extraction."""
+    """An instantiated co-simulation FMU. `unzip_dir` gives an extraction of the FMU to use instead
+    of the process's own (cosim.engine.fmi.loaded)."""
 
     def __init__(self, fmu_path: str | Path, instance_name: str, unzip_dir: str | Path | None = None,
                  logging_on: bool = False, warnings: bool = True):
@@ -62,8 +86,10 @@ class FmuInstance:
         (category logStatusWarning); errors are always reported."""
         self.path = Path(fmu_path)
         self.name = instance_name
-        self.model_description = read_model_description(str(self.path))
-        self.unzip_dir = Path(unzip_dir) if unzip_dir else Path(extract(str(self.path)))
+        if unzip_dir:
+            self.model_description, self.unzip_dir = read_model_description(str(self.path)), Path(unzip_dir)
+        else:
+            self.model_description, self.unzip_dir = loaded(self.path)
         self.variables = {v.name: v for v in self.model_description.modelVariables}
         self.messages: list[LogMessage] = []
         self.time = 0.0

@@ -160,31 +160,42 @@ class DivergenceMonitor(Observer):
 
 
 class TaskProgress:
-    """Progress over a known number of tasks (probes of a study, sections of a report): a bar on a
-    terminal, otherwise a line every `every` seconds and one at the end."""
+    """Progress over a known number of tasks (probes of a study, points of a sweep, sections of a
+    report): a bar with the failures and the estimated time left on a terminal, otherwise a line
+    every `every` seconds and one at the end."""
 
     def __init__(self, label: str, total: int | None, every: float = 5.0, stream=None):
         """total: the number of tasks, or None when it is not known beforehand (then a count)."""
         self.label, self.total, self.every = label, total, every
         self.stream = stream or sys.stderr
-        self.done = 0
+        self.done = self.failed = 0
         self._start = self._last = time.perf_counter()
 
-    def advance(self, what: str = "") -> None:
-        self.done += 1
+    def _left(self, now: float) -> str:
+        if not self.done or self.done >= self.total:
+            return ""
+        return f", about {(now - self._start) / self.done * (self.total - self.done):.0f} s left"
+
+    def advance(self, what: str = "", count: int = 1, failed: int = 0) -> None:
+        """`count` more tasks done, `failed` of them failed."""
+        self.done += count
+        self.failed += failed
         now = time.perf_counter()
+        terminal = self.stream.isatty()
         if self.total is None:
-            if now - self._last >= self.every or self.stream.isatty():
+            if now - self._last >= self.every or terminal:
                 self._last = now
-                print(f"{chr(13) if self.stream.isatty() else ''}{self.label}: {self.done} done ({what[:40]}), "
-                      f"{now - self._start:.0f} s", end="" if self.stream.isatty() else "\n", file=self.stream,
-                      flush=True)
+                print(f"{chr(13) if terminal else ''}{self.label}: {self.done} done ({what[:40]}), "
+                      f"{now - self._start:.0f} s", end="" if terminal else "\n", file=self.stream, flush=True)
             return
-        if self.stream.isatty():
+        failures = f", {self.failed} failed" if self.failed else ""
+        if terminal:
             filled = int(30 * self.done / max(self.total, 1))
-            print(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} {what[:40]:<40}",
-                  end="" if self.done < self.total else "\n", file=self.stream, flush=True)
-        elif now - self._last >= self.every or self.done == self.total:
-            self._last = now
-            print(f"{self.label}: {self.done}/{self.total} done ({what}), {now - self._start:.0f} s", file=self.stream,
+            print(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total}{failures}"
+                  f"{self._left(now)} {what[:30]:<30}", end="" if self.done < self.total else "\n", file=self.stream,
                   flush=True)
+        elif now - self._last >= self.every or self.done >= self.total:
+            self._last = now
+            print(f"{self.label}: {self.done}/{self.total} done{failures}{f' ({what})' if what else ''}, "
+                  f"{now - self._start:.0f} s"
+                  f"{self._left(now)}", file=self.stream, flush=True)

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
-from fmpy import extract
 
 from .fmi import FmuInstance
 
@@ -69,14 +68,11 @@ class SystemStructure:
 
     def instantiate(self, logging_on: bool = False) -> dict[str, FmuInstance]:
         """Instantiates and initializes every component with its parameter values (FMUs of the
-        same file share one extraction); on failure, the instances made so far are freed."""
-        unzipped: dict[Path, str] = {}
+        same file share the process's one extraction); on failure, the instances made so far are freed."""
         instances: dict[str, FmuInstance] = {}
         try:
             for c in self.components:
-                if c.fmu not in unzipped:
-                    unzipped[c.fmu] = extract(str(c.fmu))
-                instance = FmuInstance(c.fmu, c.name, unzip_dir=unzipped[c.fmu], logging_on=logging_on)
+                instance = FmuInstance(c.fmu, c.name, logging_on=logging_on)
                 instances[c.name] = instance
                 instance.initialize(c.parameters, start_time=self.experiment.start)
         except BaseException:

@@ -44,6 +44,7 @@ class RunReport:
     log: Path | None = None  # where every FMU message was written
     tuning: str | None = None  # the gains designed for the plant (tuning = "auto")
     html: Path | None = None  # the interactive report, when plots were drawn
+    diverged: bool = False  # the failure is the divergence monitor's verdict
 
     @property
     def real_time_factor(self) -> float:
@@ -190,20 +191,22 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     return None
 
 
-def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tuple[np.ndarray, RunReport]:
+def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progress: bool = True,
+              advice: bool = True) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat and
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
-    FMU fails or the coupling diverges."""
+    FMU fails or the coupling diverges. progress: a bar on a terminal; advice: a diverged run
+    probes for a step that holds (both off for a sweep's points)."""
     structure = scene_structure(scene)
     algorithm, control = scene_settings(scene)
     record = scene_record(scene)
-    progress = Progress(scene.name)
     try:
-        outcome = run(structure, algorithm, control, scene.duration, record, observers=[progress])
-        failure = None
+        outcome = run(structure, algorithm, control, scene.duration, record,
+                      observers=[Progress(scene.name)] if progress else [])
+        failure, diverged = None, False
     except RunFailed as failed:  # system.run attaches the partial run
-        outcome, failure = failed.run, str(failed)
-        if isinstance(failed.error, Diverged) and isinstance(control, FixedStep):
+        outcome, failure, diverged = failed.run, str(failed), isinstance(failed.error, Diverged)
+        if advice and isinstance(failed.error, Diverged) and isinstance(control, FixedStep):
             failure += "; " + advice_text(structure, algorithm, control.step, failed.error.time, scene.duration)
     except (ParameterError, FmuError, NoStep, KeyError) as error:  # found before a single step
         mapped = scene_error(scene, error)
@@ -212,7 +215,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True) -> tupl
         raise mapped from None
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, failure, control_name(control))
-    report.tuning = scene_design(scene)[1]
+    report.tuning, report.diverged = scene_design(scene)[1], diverged
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"

@@ -148,7 +148,38 @@ def line_of(text: str, table: str, key: str) -> int:
     return found
 
 
-def load_scene(path: str | Path) -> Scene:
+def key_path(key: str) -> list[str]:
+    """The tables and key a dotted TOML key names: 'drive.parameters."motor.resistance"' ->
+    ['drive', 'parameters', 'motor.resistance']. Raises ValueError for text that is not a key."""
+    try:
+        data = tomllib.loads(f"{key} = 0")
+    except tomllib.TOMLDecodeError:
+        raise ValueError(f"{key!r} is not a TOML key (quote a name with dots: 'drive.parameters.\"motor.resistance\"')") from None
+    parts = []
+    while isinstance(data, dict):
+        (name, data), = data.items()
+        parts.append(name)
+    return parts
+
+
+def with_overrides(data: dict, overrides: dict[str, Any]) -> dict:
+    """A copy of a scene's TOML document with values set at dotted keys (tables made as needed)."""
+    import copy
+    data = copy.deepcopy(data)
+    for key, value in overrides.items():
+        *tables, name = key_path(key)
+        table = data
+        for t in tables:
+            table = table.setdefault(t, {})
+            if not isinstance(table, dict):
+                raise ValueError(f"{key!r}: {t!r} is a value in the scene, not a table")
+        table[name] = value
+    return data
+
+
+def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Scene:
+    """Reads and checks a scene file; `overrides` sets values at dotted keys of its document
+    first (a sweep's point), checked as if the file said them."""
     path = Path(path)
     if not path.exists():
         raise SceneError(f"{path}: no such scene file")
@@ -162,6 +193,8 @@ def load_scene(path: str | Path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise SceneError(f"{path}: not valid TOML: {error}") from None
+    if overrides:
+        data = with_overrides(data, overrides)
 
     def fail(table: str, key: str, problem: str) -> SceneError:
         where = f"{table}.{key}" if table else key

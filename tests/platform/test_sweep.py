@@ -1,0 +1,224 @@
+"""Sweeps on Dask (cosim.engine.sweep, cosim.platform.sweep): the same rows on a cluster as in one
+process, bit for bit; a real scheduler and workers started as separate processes; failing points
+as rows; a killed worker and an interrupted sweep that lose and repeat nothing; one-line errors
+for a bad sweep file."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from cosim.__main__ import main
+from cosim.engine.artifacts import ROOT
+from cosim.engine.sweep import Axis, SweepError, grid, latin_hypercube, run_sweep, zipped
+from cosim.platform.sweep import load_sweep
+
+SCENE = ROOT / "scenes" / "meng_eq35.toml"
+
+
+def sweep_file(folder: Path, axes: str, duration: float = 0.2, extra: str = "", report: str = "") -> Path:
+    path = folder / "study.toml"
+    path.write_text(f'[sweep]\nscene = "{SCENE}"\nduration = {duration}\n{extra}\n{axes}\n'
+                    + (report or '[report]\nvalues = ["tracking_error", "peak_effort", "energy_residual", "steps"]\n'
+                                 'outputs = { "pose.z" = ["max", "rms"] }\n'))
+    return path
+
+
+STEP_AND_ORDER = ('[[axis]]\nkey = "scene.step"\nvalues = [5e-4, 1e-3]\n'
+                  '[[axis]]\nkey = "coupling.order"\nvalues = [0, 1]\n')
+
+
+def comparable(rows: list[dict]) -> list[dict]:
+    """The rows without their wall times (the only column that may differ between runs)."""
+    return [{k: v for k, v in row.items() if k not in ("wall", "real_time_factor")} for row in rows]
+
+
+def in_process(path: Path, out: Path) -> list[dict]:
+    sweep = load_sweep(path)
+    return run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, out, sweep.signature, workers=0,
+                     progress=False).rows
+
+
+def test_points_are_drawn_as_the_file_says():
+    a, b = Axis("a", (1, 2, 3)), Axis("b", (10.0, 20.0))
+    assert grid([a, b]) == [{"a": x, "b": y} for x in (1, 2, 3) for y in (10.0, 20.0)]
+    assert zipped([Axis("a", (1, 2)), Axis("b", (3, 4))]) == [{"a": 1, "b": 3}, {"a": 2, "b": 4}]
+    with pytest.raises(SweepError):
+        zipped([a, b])
+    axes = [Axis("x", between=(0.0, 1.0)), Axis("y", between=(-5.0, 5.0))]
+    sample = latin_hypercube(axes, 16, seed=7)
+    assert sample == latin_hypercube(axes, 16, seed=7) != latin_hypercube(axes, 16, seed=8)
+    for axis in axes:  # each of the 16 equal strata of every axis is hit exactly once
+        low, high = axis.between
+        strata = sorted(int((p[axis.name] - low) / (high - low) * 16) for p in sample)
+        assert strata == list(range(16))
+
+
+def test_a_sweep_on_a_local_cluster_gives_the_rows_of_the_same_points_run_in_one_process(tmp_path):
+    path = sweep_file(tmp_path, STEP_AND_ORDER)
+    reference = in_process(path, tmp_path / "here")
+    assert main(["sweep", str(path), "--workers", "2", "--out", str(tmp_path / "cluster")]) == 0
+    rows = pq.read_table(tmp_path / "cluster" / "study.parquet").to_pylist()
+    assert len(rows) == 4 and all(r["status"] == "ok" for r in rows)
+    assert comparable(rows) == comparable(reference)  # bit for bit: floats compared exactly
+    # the step is the macro step: 0.2 s at 0.5 ms is 400 steps; and the CSV holds the same table
+    assert [r["steps"] for r in rows] == [400, 400, 200, 200]
+    csv = np.genfromtxt(tmp_path / "cluster" / "study.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    assert np.array_equal(csv["maxposez"], [r["max.pose.z"] for r in rows])
+    # a point's reports are those of the scene run on its own
+    from cosim.platform.runner import run_scene
+    from cosim.platform.scene import load_scene
+    result, report = run_scene(load_scene(SCENE, {"scene.duration": 0.2, "scene.step": 1e-3, "coupling.order": 1}),
+                               plots=False)
+    point = next(r for r in rows if r["scene.step"] == 1e-3 and r["coupling.order"] == 1)
+    assert point["tracking_error.z"] == report.largest_error[2]
+    assert point["peak_effort[3]"] == np.abs(result["torque[3]"]).max()
+
+
+def test_failing_points_are_rows_with_their_messages_and_the_sweep_goes_on(tmp_path):
+    axes = ('[[axis]]\nkey = "scene.step"\nvalues = [1e-3, 2.5e-3]\n'
+            '[[axis]]\nkey = \'drive.parameters."motor.resistance"\'\nvalues = [0.7, -0.7]\n')
+    rows = in_process(sweep_file(tmp_path, axes, duration=0.5, report='[report]\nvalues = ["steps"]\n'),
+                      tmp_path / "out")
+    status = {(r["scene.step"], r["drive.parameters.motor.resistance"]): (r["status"], r["message"]) for r in rows}
+    assert status[(1e-3, 0.7)] == ("ok", "")
+    assert status[(2.5e-3, 0.7)][0] == "diverged" and "diverged" in status[(2.5e-3, 0.7)][1]
+    for step in (1e-3, 2.5e-3):  # a value the FMU's modelDescription refuses: the point's row says why
+        kind, message = status[(step, -0.7)]
+        assert kind == "failed" and "motor.resistance" in message and "outside" in message, message
+
+
+def test_a_bad_sweep_file_is_one_line_naming_its_line(tmp_path, capsys):
+    cases = {
+        '[sweep]\nscene = "SCENE"\nstepp = 1\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":3: 'sweep.stepp'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.stepp"\nvalues = [1e-3]\n': ":3: axis 'scene.stepp'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\n': ":3: axis 'scene.step' needs one of",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = ["fast"]\n': ":3: axis 'scene.step' = 'fast'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "x"\nbetween = [0, 1]\n': ":3: axis 'x': between",
+        '[sweep]\nscene = "nowhere.toml"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":2: 'sweep.scene'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[plot]\nreport = "torque"\nx = '
+        '"scene.step"\n': ":7: 'plot.report' = 'torque' is not a column",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.z" = '
+        '["median"] }\n': ":7: 'report.outputs'",
+    }
+    for number, (text, expected) in enumerate(cases.items()):
+        path = tmp_path / f"bad{number}.toml"
+        path.write_text(text.replace("SCENE", str(SCENE)))
+        assert main(["sweep", str(path), "--workers", "0", "--out", str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and f"{path}{expected}" in err, (text, err)
+    assert not (tmp_path / "out").exists()  # nothing ran, nothing written
+
+
+def _wait_for_parts(folder: Path, count: int, process: subprocess.Popen, timeout: float = 60.0) -> None:
+    start = time.time()
+    while len(list(folder.glob("part-*.parquet"))) < count:
+        assert process.poll() is None, process.communicate()
+        assert time.time() - start < timeout
+        time.sleep(0.05)
+
+
+EIGHT_POINTS = '[[axis]]\nkey = "scene.step"\nvalues = [4e-4, 5e-4, 6e-4, 7e-4, 8e-4, 9e-4, 1e-3, 1.1e-3]\n'
+
+
+def test_an_interrupted_sweep_resumes_losing_and_repeating_nothing(tmp_path):
+    path = sweep_file(tmp_path, EIGHT_POINTS, duration=0.5, extra="points_per_task = 1")
+    reference = in_process(path, tmp_path / "reference")
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "cosim", "sweep", str(path), "--workers", "0", "--out", str(out)]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _wait_for_parts(out / "study.parts", 2, process)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and "run the same command again" in err, err
+    done = len(list((out / "study.parts").glob("part-*.parquet")))
+    assert 2 <= done < 8
+    again = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert f"{done} of 8 points already in" in again.stderr and f"({8 - done} run now, {done} found done)" in again.stdout
+    rows = pq.read_table(out / "study.parquet").to_pylist()
+    assert comparable(rows) == comparable(reference)  # every point once, none lost, none run twice
+    assert len(list((out / "study.parts").glob("part-*.parquet"))) == 8
+    csv_rows = (out / "study.csv").read_text().strip().splitlines()
+    assert len(csv_rows) == 9  # header and each point once
+    # a changed scene duration is another sweep: refused, the old results kept
+    path.write_text(path.read_text().replace("duration = 0.5", "duration = 0.4"))
+    failed = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert failed.returncode == 2 and "holds the results of another sweep" in failed.stderr
+    assert len(list((out / "study.parts").glob("part-*.parquet"))) == 8
+
+
+@pytest.fixture(scope="module")
+def dask_cluster(tmp_path_factory):
+    """A scheduler and two workers, each its own process started by the `dask` command on
+    127.0.0.1, as on a cluster."""
+    folder = tmp_path_factory.mktemp("dask")
+    scheduler_file = folder / "scheduler.json"
+    dask = str(Path(sys.executable).parent / "dask")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                   "--scheduler-file", str(scheduler_file)], cwd=folder, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    start = time.time()
+    while not scheduler_file.exists():
+        assert time.time() - start < 60, "the scheduler did not start"
+        time.sleep(0.1)
+    import json
+    address = json.loads(scheduler_file.read_text())["address"]
+    for _ in range(2):
+        processes.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                           "--no-dashboard", "--host", "127.0.0.1"], cwd=folder, env=env,
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    from distributed import Client
+    with Client(address, timeout="30s") as client:
+        client.wait_for_workers(2, timeout=60)
+    yield address, processes
+    for process in reversed(processes):
+        process.terminate()
+    for process in processes:
+        try:
+            process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            process.kill()
+
+
+def test_a_sweep_on_a_scheduler_and_workers_started_as_separate_processes(tmp_path, dask_cluster):
+    address, _ = dask_cluster
+    path = sweep_file(tmp_path, STEP_AND_ORDER)
+    reference = in_process(path, tmp_path / "here")
+    result = subprocess.run([sys.executable, "-m", "cosim", "sweep", str(path), "--scheduler", address,
+                             "--out", str(tmp_path / "remote")], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "4 points on 2 Dask workers" in result.stderr
+    assert comparable(pq.read_table(tmp_path / "remote" / "study.parquet").to_pylist()) == comparable(reference)
+
+
+def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, dask_cluster):
+    """SIGKILL to a worker process while the sweep runs: the scheduler gives its tasks to the
+    other worker (the nanny restarts the killed one), and every point is a row once, as in one
+    process."""
+    import psutil
+    address, processes = dask_cluster
+    path = sweep_file(tmp_path, EIGHT_POINTS, duration=1.0, extra="points_per_task = 1")
+    reference = in_process(path, tmp_path / "here")
+    out = tmp_path / "remote"
+    process = subprocess.Popen([sys.executable, "-m", "cosim", "sweep", str(path), "--scheduler", address,
+                                "--out", str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _wait_for_parts(out / "study.parts", 1, process)
+    victims = psutil.Process(processes[1].pid).children(recursive=True)  # the nanny's worker process
+    assert victims
+    for victim in victims:
+        victim.kill()
+    _, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err
+    rows = pq.read_table(out / "study.parquet").to_pylist()
+    assert all(r["status"] == "ok" for r in rows), [r["message"] for r in rows]
+    assert comparable(rows) == comparable(reference)
