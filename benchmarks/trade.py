@@ -3,8 +3,10 @@ step (fixed and adaptive) x drive fidelity x mechanics effects, on the Meng scen
 small scene (Sumnu's case I, linear motors), next to libcosim stepping the same FMUs (fixed step,
 and its ECCO algorithm with a power bond per drive).
 
-For each point: the pose error against a converged reference, the largest energy residual of a
-bond in one step, macro steps, wall time and real-time factor. The reference is the scene under
+For each point: the pose error against a converged reference, for our points the drive efforts'
+error (torque or force, at every step through the start-up, relative to the peak), the largest
+energy residual of a bond in one step, macro steps, wall time and real-time factor. Our points
+run as one sweep (cosim.engine.sweep) on every core. The reference is the scene under
 Gauss-Seidel of order 1 at a sixteenth of its step; its convergence is shown as its difference to
 the run at an eighth. Errors are taken at the same checkpoints (every 50 ms) for every run, ours and
 libcosim's. Prints each scene's table and Pareto front, writes docs/trade.md and
@@ -18,6 +20,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,7 +32,9 @@ from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.libcosim import Ecco, run_in_libcosim  # noqa: E402
 from cosim.platform.results import save_figure  # noqa: E402
 from cosim.engine.observers import TaskProgress  # noqa: E402
-from cosim.platform.runner import SceneFailed, run_scene  # noqa: E402
+from cosim.engine.sweep import run_sweep  # noqa: E402
+from cosim.platform.runner import run_scene  # noqa: E402
+from cosim.platform.sweep import ScenePoint  # noqa: E402
 from cosim.platform.scene import Scene, load_scene  # noqa: E402
 from cosim.platform.system import POSE  # noqa: E402
 
@@ -39,6 +44,7 @@ class Point:
     family: str          # "ours fixed", "ours doubling", "ours energy", "libcosim fixed", "libcosim ECCO"
     label: str
     error: float = float("nan")
+    effort_error: float = float("nan")  # largest drive torque/force error / its peak (ours only)
     residual: float = float("nan")
     steps: int = 0
     wall: float = float("nan")
@@ -49,20 +55,39 @@ def _at(result: np.ndarray, checkpoints: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(checkpoints, result["time"], result[f"pose.{a}"]) for a in POSE])
 
 
-PROGRESS = TaskProgress("trade", None)
+def _overrides(changes: dict) -> dict:
+    """A point's changes to the scene as overrides at the scene file's keys."""
+    keys = {"algorithm": "coupling.algorithm", "order": "coupling.order", "step": "scene.step",
+            "step_control": "coupling.step_control", "rtol": "coupling.rtol", "atol": "coupling.atol"}
+    out = {}
+    for name, value in changes.items():
+        if name in keys:
+            out[keys[name]] = value
+        else:  # drive or mechanics parameters
+            table = {"drive": "drive.parameters", "mechanics": "mechanics.parameters"}[name]
+            out.update({f'{table}."{k}"': v for k, v in value.items()})
+    return out
 
 
-def ours(scene: Scene, label: str, family: str, reference: np.ndarray, checkpoints: np.ndarray, **changes) -> Point:
-    PROGRESS.advance(f"{scene.path.stem}: {label}")
-    point = Point(family, label)
-    try:
-        result, report = run_scene(dataclasses.replace(scene, **changes))
-    except SceneFailed as failed:
-        point.diverged, point.wall = True, failed.report.wall
-        return point
-    point.error = float(np.abs(_at(result, checkpoints) - reference).max())
-    point.residual, point.steps, point.wall = report.largest_energy_residual, report.macro_steps, report.wall
-    return point
+def ours(scene: Scene, base: tuple, planned: list[tuple[str, str, dict]], reference: np.ndarray,
+         checkpoints: np.ndarray) -> list[Point]:
+    """Our engine's points, as one sweep on every core (cosim.engine.sweep): the pose error at the
+    checkpoints (as libcosim's), the drive efforts' error at every step through the start-up."""
+    evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "energy_residual", "steps", "stepping_wall"),
+                          base=base, reference=reference, checkpoints=tuple(checkpoints))
+    with tempfile.TemporaryDirectory() as out:
+        rows = run_sweep(f"trade {scene.path.stem}", [_overrides(changes) for _, _, changes in planned], evaluate,
+                         evaluate.columns(), Path(out)).rows
+    points = []
+    for (label, family, _), row in zip(planned, rows):
+        point = Point(family, label, wall=row.get("stepping_wall", float("nan")))
+        if row["status"] != "ok":
+            point.diverged = True
+        else:
+            point.error, point.effort_error = row["pose_error"], row["effort_error"]
+            point.residual, point.steps = row["energy_residual"], int(row["steps"])
+        points.append(point)
+    return points
 
 
 def pareto(points: list[Point]) -> list[Point]:
@@ -75,42 +100,44 @@ def pareto(points: list[Point]) -> list[Point]:
     return front
 
 
-def study(scene: Scene, fidelities: dict[str, dict], effects: dict[str, dict]) -> tuple[list[Point], dict]:
+def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[str, dict]) -> tuple[list[Point], dict]:
     h = scene.step
     checkpoints = np.round(np.arange(0.05, scene.duration + 1e-9, 0.05), 9)
-    reference_result, _ = run_scene(dataclasses.replace(scene, step=h / 16))
+    reference_result, _ = run_scene(dataclasses.replace(scene, step=h / 16), progress=False)
     reference = _at(reference_result, checkpoints)
-    eighth, _ = run_scene(dataclasses.replace(scene, step=h / 8))
+    eighth, _ = run_scene(dataclasses.replace(scene, step=h / 8), progress=False)
     convergence = float(np.abs(_at(eighth, checkpoints) - reference).max())
-    points = []
+    planned = []
     for algorithm in ("gauss-seidel", "jacobi"):
         for order in (0, 1, 2):
             for factor in (0.25, 0.5, 1.0, 2.0):
-                points.append(ours(scene, f"{algorithm} {order}, {h * factor * 1e3:g} ms", "ours fixed", reference,
-                                   checkpoints, algorithm=algorithm, order=order, step=h * factor))
+                planned.append((f"{algorithm} {order}, {h * factor * 1e3:g} ms", "ours fixed",
+                                dict(algorithm=algorithm, order=order, step=h * factor)))
     for tolerance in (1e-2, 1e-3, 1e-4):
-        points.append(ours(scene, f"doubling rtol=atol={tolerance:g}", "ours doubling", reference, checkpoints,
-                           step_control="doubling", rtol=tolerance, atol=tolerance))
-        points.append(ours(scene, f"energy rtol={tolerance:g}", "ours energy", reference, checkpoints,
-                           step_control="energy", rtol=tolerance, atol=tolerance / 10))
+        planned.append((f"doubling rtol=atol={tolerance:g}", "ours doubling",
+                        dict(step_control="doubling", rtol=tolerance, atol=tolerance)))
+        planned.append((f"energy rtol={tolerance:g}", "ours energy",
+                        dict(step_control="energy", rtol=tolerance, atol=tolerance / 10)))
     for name, drive in fidelities.items():
         for factor in (0.5, 1.0):
-            points.append(ours(scene, f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", reference, checkpoints,
-                               step=h * factor, drive_parameters={**scene.drive_parameters, **drive}))
+            planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", dict(step=h * factor, drive=drive)))
     for name, mechanics in effects.items():
-        points.append(ours(scene, f"{name}, {h * 1e3:g} ms", "ours effects", reference, checkpoints,
-                           mechanics_parameters={**scene.mechanics_parameters, **mechanics}))
+        planned.append((f"{name}, {h * 1e3:g} ms", "ours effects", dict(mechanics=mechanics)))
+    points = ours(scene, base, planned, reference_result, checkpoints)
+    progress = TaskProgress(f"trade {scene.path.stem}: libcosim", 6)
     for factor in (0.25, 0.5, 1.0, 2.0):
         point = Point("libcosim fixed", f"libcosim fixed {h * factor * 1e3:g} ms")
         run = run_in_libcosim(dataclasses.replace(scene, step=h * factor), checkpoints=checkpoints)
         point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
         point.steps = int(round(scene.duration / (h * factor)))
         points.append(point)
+        progress.advance(point.label)
     for tolerance in (1e-2, 1e-3):
         point = Point("libcosim ECCO", f"libcosim ECCO rtol=atol={tolerance:g}")
         run = run_in_libcosim(scene, checkpoints=checkpoints, ecco=Ecco(rtol=tolerance, atol=tolerance))
         point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
         points.append(point)
+        progress.advance(point.label)
     return points, dict(convergence=convergence, duration=scene.duration)
 
 
@@ -135,21 +162,31 @@ def ratios(points: list[Point], duration: float) -> list[str]:
         if match:
             best = min(match, key=lambda p: p.wall)
             lines.append(f"- cheapest run within {target:g} m/rad: {best.label}, real-time factor "
-                         f"{duration / best.wall:.1f}")
+                         f"{duration / best.wall:.1f}; its drive efforts are off by {100 * best.effort_error:.1f} % "
+                         "of their peak")
         else:
             lines.append(f"- no run of ours reaches {target:g} m/rad")
+        both = [p for p in match if p.effort_error <= 0.01]
+        if both:
+            best = min(both, key=lambda p: p.wall)
+            lines.append(f"- cheapest run within {target:g} m/rad and 1 % of the drive efforts' peak (through the "
+                         f"start-up): {best.label}, real-time factor {duration / best.wall:.1f}")
+        else:
+            lines.append(f"- no run of ours reaches {target:g} m/rad with the drive efforts within 1 % of their peak "
+                         "(the start-up shock's first milliseconds need finer steps)")
     return lines
 
 
 def table(points: list[Point], duration: float) -> list[str]:
     front = set(id(p) for p in pareto(points))
-    lines = ["| point | pose error [m, rad] | largest bond residual [J] | macro steps | wall [s] | real-time factor | Pareto |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| point | pose error [m, rad] | drive effort error [% of peak] | largest bond residual [J] | macro steps "
+             "| wall [s] | real-time factor | Pareto |", "|---|---|---|---|---|---|---|---|"]
     for p in sorted(points, key=lambda p: (p.diverged, p.wall)):
         error = "diverged" if p.diverged else f"{p.error:.2e}"
+        effort = "" if p.diverged or not np.isfinite(p.effort_error) else f"{100 * p.effort_error:.2f}"
         residual = "" if p.diverged or not np.isfinite(p.residual) else f"{p.residual:.2e}"
-        lines.append(f"| {p.label} | {error} | {residual} | {p.steps or ''} | {p.wall:.3f} | {duration / p.wall:.1f} | "
-                     f"{'*' if id(p) in front else ''} |")
+        lines.append(f"| {p.label} | {error} | {effort} | {residual} | {p.steps or ''} | {p.wall:.3f} | "
+                     f"{duration / p.wall:.1f} | {'*' if id(p) in front else ''} |")
     return lines
 
 
@@ -177,21 +214,24 @@ def main() -> None:
     args = parser.parse_args()
     meng = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=args.probe, pulses=[])
     sumnu = dataclasses.replace(load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), duration=args.probe)
-    studies = [
-        ("meng", meng, {"ideal inverter": {"inverter.model": 1}, "averaged inverter": {"inverter.model": 2},
+    studies = [  # name, scene, the same as overrides of its file (for the sweep), fidelities, effects
+        ("meng", meng, (("scene.duration", args.probe), ("load.pulses", [])), {"ideal inverter": {"inverter.model": 1}, "averaged inverter": {"inverter.model": 2},
                         "switching inverter": {"inverter.model": 3}},
          {"friction off": {"effects.friction": False}, "actuator inertia off": {"effects.actuator_inertia": False},
           "motor systems off": {"effects.motor_inertia": False}}),
-        ("sumnu_case_1", sumnu, {"ideal force source": {"effects.electrical": False},
+        ("sumnu_case_1", sumnu, (("scene.duration", args.probe),), {"ideal force source": {"effects.electrical": False},
                                  "electrical dynamics": {"effects.electrical": True}},
          {"actuator inertia off": {"effects.actuator_inertia": False}}),
     ]
     doc = ["# The speed-accuracy trade", "",
            f"Rebuilt by `.venv/bin/python benchmarks/trade.py` (probes of {args.probe:g} s, this project's 2-core "
-           "machine); see the script's docstring for the method. Wall times are of the stepping alone.", ""]
+           "machine); see the script's docstring for the method. Wall times are of the stepping alone; our points run as one "
+           "sweep on both cores, two at a time (which costs each about 5 %, benchmarks/sweep.py), libcosim's one at a "
+           "time. The drive effort error is the largest torque (or force) difference to the reference at any step, "
+           "through the start-up, relative to the reference's peak.", ""]
     summary = []
-    for name, scene, fidelities, effects in studies:
-        points, info = study(scene, fidelities, effects)
+    for name, scene, base, fidelities, effects in studies:
+        points, info = study(scene, base, fidelities, effects)
         summary += [f"{scene.name} ({args.probe:g} s probes; reference converged to {info['convergence']:.1e}):", "",
                     *ratios(points, info["duration"]), ""]
         lines = [f"## {scene.name}", "",

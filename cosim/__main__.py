@@ -59,7 +59,11 @@ def _main(argv: list[str] | None = None) -> int:
     advise = commands.add_parser("advise", help="recommend the cheapest effects, drive fidelity and step for a tolerance")
     advise.add_argument("scene", type=Path)
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
+    advise.add_argument("--effort-tolerance", type=float, default=0.01,
+                        help="largest drive torque/force error as a fraction of its peak (default 0.01)")
     advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
+    advise.add_argument("--workers", type=int, help="Dask worker processes for the probes (default: one per core; "
+                        "0: in this process)")
     advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
     sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (see cosim.platform.sweep)")
     sweep.add_argument("sweep", type=Path, help="the sweep file (TOML)")
@@ -77,7 +81,7 @@ def _main(argv: list[str] | None = None) -> int:
         except SceneError as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
-        candidates, info = run_advice(scene, args.tolerance, args.probe)
+        candidates, info = run_advice(scene, args.tolerance, args.probe, args.effort_tolerance, args.workers)
         print(text(scene, args.tolerance, candidates, info))
         print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
         return 0

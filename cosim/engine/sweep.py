@@ -295,6 +295,8 @@ class SweepOutcome:
     failed: int                 # rows whose status is not "ok" (this call's and earlier)
     dashboard: str | None = None
     files: list[Path] = field(default_factory=list)
+    wall: float = 0.0           # [s] this call, start to end
+    startup: float = 0.0        # [s] of it starting or reaching the cluster
 
 
 def task_size(points: int, workers: int) -> int:
@@ -311,6 +313,7 @@ def run_sweep(name: str, points: Sequence[Mapping[str, Value]], evaluate: Callab
     workers: worker processes of a LocalCluster (None: one per core; 0: no Dask, this process);
     scheduler: the address of a running Dask scheduler instead ('tcp://host:8786')."""
     from .observers import TaskProgress
+    begin = time.perf_counter()
     stream = stream or sys.stderr
     axes = list(dict.fromkeys(k for p in points for k in p))
     keyed = [(point_key(p), dict(p)) for p in points]
@@ -333,20 +336,25 @@ def run_sweep(name: str, points: Sequence[Mapping[str, Value]], evaluate: Callab
                         failed=sum(r["status"] != "ok" for r in rows))
 
     bar = TaskProgress(name, len(todo), stream=stream) if progress and todo else None
-    dashboard = None
+    dashboard, startup = None, 0.0
     if todo and workers == 0 and scheduler is None:
         size = points_per_task or task_size(len(todo), 1)
         for start in range(0, len(todo), size):
             complete(evaluate_task(evaluate, todo[start:start + size]))
     elif todo:
-        dashboard = _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_task, retries, stream)
+        dashboard, startup = _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_task, retries,
+                                          stream)
     rows = table.finish([k for k, _ in keyed])
     return SweepOutcome(rows, len(todo), skipped, sum(r["status"] != "ok" for r in rows), dashboard,
-                        [table.parquet, table.csv])
+                        [table.parquet, table.csv], time.perf_counter() - begin, startup)
 
 
-def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_task, retries, stream) -> str | None:
+def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_task, retries,
+                 stream) -> tuple[str | None, float]:
+    """Runs the points on Dask; returns the dashboard's address and the seconds it took to start
+    (or reach) the cluster."""
     import dask
+    begin = time.perf_counter()
     from distributed import Client, KilledWorker, LocalCluster, as_completed
     with dask.config.set({"distributed.scheduler.allowed-failures": retries}):
         cluster = None
@@ -363,6 +371,7 @@ def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_
         try:
             dashboard = client.dashboard_link if _has_dashboard(client) else None
             n_workers = max(len(client.scheduler_info()["workers"]), 1)
+            startup = time.perf_counter() - begin
             print(f"{name}: {len(todo)} points on {n_workers} Dask workers"
                   + (f"; dashboard {dashboard}" if dashboard else ""), file=stream, flush=True)
             size = points_per_task or task_size(len(todo), n_workers)
@@ -383,7 +392,7 @@ def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_
                              "message": f"the task failed on the worker: {type(error).__name__}: {error}"}
                             for k, _ in tasks[future]]
                 complete(rows)
-            return dashboard
+            return dashboard, startup
         finally:
             client.close()
             if cluster is not None:

@@ -1,7 +1,9 @@
 """`python -m cosim advise SCENE --tolerance TOL`: which effects, drive fidelity and macro step does
 a scene really need? Short probes of the scene against a converged reference; the cheapest
-candidate whose pose error stays under the tolerance is recommended, every candidate listed with
-its measured error and cost.
+candidate whose pose error stays under the tolerance and whose drive efforts (torques or forces,
+through the start-up and any impact) stay within `effort_tolerance` of their peak is recommended,
+every candidate listed with its measured errors and cost. The probes are points of one sweep
+(cosim.engine.sweep), so they run on every core.
 
 The reference is the scene with every effect on, its own drive fidelity, at a quarter of its step
 (its convergence is shown: the difference to half the step must be well under the tolerance).
@@ -16,15 +18,17 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..engine.observers import TaskProgress
-from .runner import SceneFailed, run_scene
-from .scene import Scene
+from ..engine.sweep import run_sweep
 from .ports import POSE
+from .runner import run_scene
+from .scene import Scene
+from .sweep import ScenePoint
 
 EFFECTS = ("effects.motor_inertia", "effects.actuator_inertia", "effects.friction")
 FIDELITY = {"pmsm": {"averaged inverter": {"inverter.model": 2}, "ideal inverter": {"inverter.model": 1}},
@@ -38,6 +42,8 @@ class Candidate:
     effects_off: tuple[str, ...]
     fidelity: str
     error: float = float("nan")     # largest pose difference to the reference [m, rad]
+    effort_error: float = float("nan")  # largest drive effort difference to the reference / its peak
+    effort_error_time: float = float("nan")  # [s] when it occurs
     wall: float = float("nan")      # [s] stepping the probe (the faster of two runs if it passed)
     macro_steps: int = 0
     diverged: str | None = None
@@ -55,12 +61,25 @@ def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: fl
                                drive_parameters=drive, step_control="fixed")
 
 
+def _point(scene: Scene, factor: float, effects_off, fidelity: str) -> dict:
+    """A candidate as a sweep point: overrides at the scene's keys."""
+    point = {"scene.step": scene.step * factor}
+    for effect in EFFECTS:
+        point[f'mechanics.parameters."{effect}"'] = False if effect in effects_off else \
+            scene.mechanics_parameters.get(effect, True)
+    point.update({f'drive.parameters."{k}"': v for k, v in FIDELITY[scene.drive][fidelity].items()})
+    return point
+
+
 def _pose_difference(result: np.ndarray, reference: np.ndarray) -> float:
     return max(float(np.abs(np.interp(reference["time"], result["time"], result[f"pose.{a}"])
                             - reference[f"pose.{a}"]).max()) for a in POSE)
 
 
-def advise(scene: Scene, tolerance: float, probe: float = 2.0) -> tuple[list[Candidate], dict]:
+def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance: float = 0.01,
+           workers: int | None = None) -> tuple[list[Candidate], dict]:
+    """Every candidate's errors against the reference and its cost; workers as in
+    cosim.engine.sweep.run_sweep (None: every core)."""
     duration = min(scene.duration, probe)
     own = next(name for name, values in FIDELITY[scene.drive].items()
                if all(scene.drive_parameters.get(k, v if name.startswith(("averaged", "electrical")) else None) == v
@@ -68,30 +87,44 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0) -> tuple[list[Can
     reference, _ = run_scene(_variant(scene, scene.step / 4, (), own, duration))
     half, _ = run_scene(_variant(scene, scene.step / 2, (), own, duration))
     convergence = _pose_difference(half, reference)
-    candidates = []
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
     plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive]))
-    progress = TaskProgress("advise", len(plan))
-    for factor, off, fidelity in plan:
+    evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "steps", "stepping_wall"),
+                          base=(("scene.duration", duration), ("coupling.step_control", "fixed")),
+                          reference=reference)
+    points = [_point(scene, *candidate) for candidate in plan]
+
+    def sweep(chosen: list[dict], name: str) -> list[dict]:
+        with tempfile.TemporaryDirectory() as out:
+            return run_sweep(name, chosen, evaluate, evaluate.columns(), Path(out), workers=workers).rows
+
+    rows = sweep(points, "advise")
+    candidates = []
+    for (factor, off, fidelity), row in zip(plan, rows):
         candidate = Candidate(scene.step * factor, off, fidelity)
-        variant = _variant(scene, candidate.step, off, fidelity, duration)
-        try:
-            result, report = run_scene(variant)
-            candidate.error = _pose_difference(result, reference)
-            candidate.macro_steps = report.macro_steps
-            candidate.wall = report.wall
-            if candidate.error <= tolerance:  # timing decides among these: measure again, keep the faster
-                candidate.wall = min(candidate.wall, run_scene(variant)[1].wall)
-        except SceneFailed as failed:
-            candidate.diverged = failed.report.failure
-            candidate.wall = failed.report.wall
+        if row["status"] == "ok":
+            candidate.error, candidate.effort_error = row["pose_error"], row["effort_error"]
+            candidate.effort_error_time = row["effort_error_time"]
+            candidate.macro_steps, candidate.wall = int(row["steps"]), row["stepping_wall"]
+        else:
+            candidate.diverged = row["message"]
+            candidate.wall = row.get("stepping_wall", float("nan"))
         candidates.append(candidate)
-        progress.advance(candidate.label)
-    return candidates, dict(convergence=convergence, duration=duration, own_fidelity=own)
+    passed = [k for k, c in enumerate(candidates) if within(c, tolerance, effort_tolerance)]
+    if passed:  # timing decides among these: measure again, keep the faster
+        for k, row in zip(passed, sweep([points[k] for k in passed], "advise (timing)")):
+            if row["status"] == "ok":
+                candidates[k].wall = min(candidates[k].wall, row["stepping_wall"])
+    return candidates, dict(convergence=convergence, duration=duration, own_fidelity=own,
+                            effort_tolerance=effort_tolerance)
 
 
-def recommend(candidates: list[Candidate], tolerance: float) -> Candidate | None:
-    good = [c for c in candidates if c.diverged is None and c.error <= tolerance]
+def within(candidate: Candidate, tolerance: float, effort_tolerance: float = 0.01) -> bool:
+    return candidate.diverged is None and candidate.error <= tolerance and candidate.effort_error <= effort_tolerance
+
+
+def recommend(candidates: list[Candidate], tolerance: float, effort_tolerance: float = 0.01) -> Candidate | None:
+    good = [c for c in candidates if within(c, tolerance, effort_tolerance)]
     return min(good, key=lambda c: c.wall) if good else None
 
 
@@ -101,33 +134,45 @@ def write_csv(candidates: list[Candidate], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["step_ms", "effects_off", "fidelity", "pose_error", "wall_s", "macro_steps", "diverged"])
+        writer.writerow(["step_ms", "effects_off", "fidelity", "pose_error", "effort_error", "wall_s", "macro_steps",
+                         "diverged"])
         for c in candidates:
-            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, repr(c.error), repr(c.wall),
-                             c.macro_steps, c.diverged or ""])
+            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, repr(c.error),
+                             repr(c.effort_error), repr(c.wall), c.macro_steps, c.diverged or ""])
     return path
 
 
 def text(scene: Scene, tolerance: float, candidates: list[Candidate], info: dict) -> str:
-    """The candidates within the tolerance (cheapest first) as a table, the rest in a line each."""
+    """The candidates within the tolerances (cheapest first) as a table, the rest in a line each."""
+    effort_tolerance = info.get("effort_tolerance", 0.01)
     lines = [f"{scene.name}: probes of {info['duration']:g} s against a reference at {scene.step / 4 * 1e3:g} ms "
              f"(every effect on, {info['own_fidelity']}); the reference's own convergence (half its step "
              f"against it): {info['convergence']:.1e}"]
-    good = sorted((c for c in candidates if not c.diverged and c.error <= tolerance), key=lambda c: c.wall)
-    missed = sorted((c for c in candidates if not c.diverged and not c.error <= tolerance), key=lambda c: c.error)
+    good = sorted((c for c in candidates if within(c, tolerance, effort_tolerance)), key=lambda c: c.wall)
+    missed = sorted((c for c in candidates if not c.diverged and not within(c, tolerance, effort_tolerance)),
+                    key=lambda c: c.error)
     diverged = [c for c in candidates if c.diverged]
+    criteria = f"pose error {tolerance:g} and drive effort error {100 * effort_tolerance:g} % of its peak"
     if good:
-        lines.append(f"within pose error {tolerance:g} ({len(good)} of {len(candidates)}, cheapest first):")
-        lines.append(f"  {'candidate':<62} {'pose error':>11} {'wall [s]':>9} {'steps':>7}")
-        lines += [f"  {c.label:<62} {c.error:>11.2e} {c.wall:>9.3f} {c.macro_steps:>7}" for c in good]
+        lines.append(f"within {criteria} ({len(good)} of {len(candidates)}, cheapest first):")
+        lines.append(f"  {'candidate':<62} {'pose error':>11} {'effort err':>10} {'wall [s]':>9} {'steps':>7}")
+        lines += [f"  {c.label:<62} {c.error:>11.2e} {100 * c.effort_error:>9.2f}% {c.wall:>9.3f} {c.macro_steps:>7}"
+                  for c in good]
     if missed:
-        lines.append(f"{len(missed)} ran but missed the tolerance (closest: {missed[0].label}, {missed[0].error:.1e})")
+        efforts = sorted((c for c in missed if c.error <= tolerance), key=lambda c: c.effort_error)
+        lines.append(f"{len(missed)} ran but missed a tolerance (closest in pose: {missed[0].label}, "
+                     f"{missed[0].error:.1e})")
+        if efforts:
+            c = efforts[0]
+            lines.append(f"{len(efforts)} of them keep the pose but not the drive efforts (closest: {c.label}, "
+                         f"{100 * c.effort_error:.1f} % of the peak at t = {c.effort_error_time:.4f} s)")
     if diverged:
         lines.append(f"{len(diverged)} diverged (stopped by the divergence monitor, never recommended)")
-    best = recommend(candidates, tolerance)
+    best = recommend(candidates, tolerance, effort_tolerance)
     if info["convergence"] > 0.1 * tolerance:
         lines.append(f"warning: the tolerance {tolerance:g} is within ten times the reference's own error; "
                      "the ranking below it is not reliable")
-    lines.append(f"recommended for pose error <= {tolerance:g}: {best.label} ({best.error:.1e}, {best.wall:.3f} s)"
-                 if best else f"no candidate keeps the pose error under {tolerance:g}: keep the full model at a smaller step")
+    lines.append(f"recommended for {criteria}: {best.label} ({best.error:.1e}, {100 * best.effort_error:.2f} %, "
+                 f"{best.wall:.3f} s)" if best else
+                 f"no candidate keeps {criteria}: keep the full model at a smaller step")
     return "\n".join(lines)

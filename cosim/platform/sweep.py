@@ -46,8 +46,10 @@ SCENE_REPORTS = {  # report name -> what it adds to a row
     "energy_residual": "largest energy residual of a power bond in one macro step [J]",
     "steps": "macro steps taken (and rejected, under step control)",
     "real_time_factor": "simulated time / wall time of the stepping",
+    "stepping_wall": "wall time of the stepping alone [s] (without loading and setting up the FMUs)",
     "pose_error": "largest pose difference to the sweep's reference run [m, rad] (advise, trade)",
-    "effort_error": "largest drive effort difference to the reference, relative to its peak (advise, trade)",
+    "effort_error": "largest drive effort difference to the reference, relative to its peak (advise, trade); "
+                    "effort_error_time: when [s]",
 }
 SYSTEM_REPORTS = ("energy_residual", "steps", "real_time_factor")
 SCHEMA = {"": {"sweep", "axis", "report", "plot"},
@@ -66,12 +68,14 @@ class ScenePoint:
     outputs: tuple[tuple[str, tuple[str, ...]], ...] = ()
     base: tuple[tuple[str, Any], ...] = ()  # overrides of every point (the sweep's duration)
     reference: np.ndarray | None = field(default=None, compare=False, hash=False)
+    checkpoints: tuple[float, ...] | None = None  # pose_error at these times only (as a peer tool reports)
 
     def columns(self) -> list[str]:
         names = []
         for report in self.reports:
             names += {"tracking_error": [f"tracking_error.{a}" for a in POSE],
                       "peak_effort": [f"peak_effort[{k}]" for k in range(1, 7)],
+                      "effort_error": ["effort_error", "effort_error_time"],
                       "steps": ["steps", "rejected"]}.get(report, [report])
         return names + [f"{s}.{c}" for c, stats in self.outputs for s in stats]
 
@@ -113,23 +117,37 @@ class ScenePoint:
                 row.update(steps=report.macro_steps, rejected=report.rejected_steps)
             elif name == "real_time_factor":
                 row["real_time_factor"] = report.simulated / report.wall if report.wall > 0 else float("nan")
+            elif name == "stepping_wall":
+                row["stepping_wall"] = report.wall
             elif name == "pose_error":
-                row["pose_error"] = difference(result, self.reference, [f"pose.{a}" for a in POSE])
+                poses = [f"pose.{a}" for a in POSE]
+                if self.checkpoints is None:
+                    row["pose_error"] = difference(result, self.reference, poses)
+                elif not len(result) or result["time"][-1] < self.checkpoints[-1] - 1e-9:
+                    row["pose_error"] = float("inf")
+                else:
+                    at = np.asarray(self.checkpoints)
+                    row["pose_error"] = max(float(np.max(np.abs(np.interp(at, result["time"], result[n])
+                                                                - np.interp(at, self.reference["time"],
+                                                                            self.reference[n])))) for n in poses)
             elif name == "effort_error":
                 names = [f"{effort}[{k}]" for k in range(1, 7)]
                 peak = max(float(np.max(np.abs(self.reference[n]))) for n in names)
-                row["effort_error"] = difference(result, self.reference, names) / peak
+                error, when = difference(result, self.reference, names, with_time=True)
+                row.update(effort_error=error / peak, effort_error_time=when)
         row.update(statistics(result, dict(self.outputs)))
         return {**row, "status": status, "message": message}
 
 
-def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str]) -> float:
-    """Largest |result - reference| over `names`, the result interpolated at the reference's times
-    (inf when the result stops before the reference does)."""
+def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str], with_time: bool = False):
+    """Largest |result - reference| over `names` at the result's own times, the (finer) reference
+    interpolated there (and when, with_time); inf when the result stops before the reference does."""
     if not len(result) or result["time"][-1] < reference["time"][-1] - 1e-9:
-        return float("inf")
-    return max(float(np.max(np.abs(np.interp(reference["time"], result["time"], result[n]) - reference[n])))
-               for n in names)
+        return (float("inf"), float("nan")) if with_time else float("inf")
+    t = result["time"]
+    gap = np.max([np.abs(result[n] - np.interp(t, reference["time"], reference[n])) for n in names], axis=0)
+    k = int(np.argmax(gap))
+    return (float(gap[k]), float(t[k])) if with_time else float(gap[k])
 
 
 # -- the sweep file -------------------------------------------------------------------------------
@@ -308,6 +326,18 @@ def _check_points(path: Path, text: str, evaluate, axes: list[Axis], points: lis
 
 # -- the plot -------------------------------------------------------------------------------------
 
+UNITS = {"scene.step": "s", "scene.duration": "s", "energy_residual": "J", "real_time_factor": "-",
+         "tracking_error.x": "m", "tracking_error.y": "m", "tracking_error.z": "m", "tracking_error.roll": "rad",
+         "tracking_error.pitch": "rad", "tracking_error.yaw": "rad", "steps": "-", "pose_error": "m, rad",
+         "effort_error": "of the peak"}
+
+
+def label(column: str) -> str:
+    """An axis label: the column and its unit where the table knows it."""
+    unit = UNITS.get(column) or ("N m or N" if column.startswith("peak_effort") else None)
+    return f"{column} [{unit}]" if unit else column
+
+
 def _outline():
     from matplotlib import patheffects
     return patheffects.withStroke(linewidth=2, foreground="black")
@@ -331,7 +361,7 @@ def plot_sweep(rows: list[dict], spec: dict, path: Path, title: str) -> Path:
             bottom = min((r[report] for r in ok), default=1.0)
             ax.plot([r[x_name] for r in bad], [bottom] * len(bad), "rx", ms=8,
                     label=f"diverged or failed ({len(bad)})")
-        ax.set(xlabel=x_name, ylabel=report)
+        ax.set(xlabel=label(x_name), ylabel=label(report))
         if spec.get("log_y"):
             ax.set_yscale("log")
         ax.legend()
@@ -357,11 +387,14 @@ def plot_sweep(rows: list[dict], spec: dict, path: Path, title: str) -> Path:
             if bad:
                 ax.plot([r[x_name] for r in bad], [r[y_name] for r in bad], "rx", label="diverged or failed")
                 ax.legend()
-        fig.colorbar(image, ax=ax, label=report)
-        ax.set(xlabel=x_name, ylabel=y_name)
+        fig.colorbar(image, ax=ax, label=label(report))
+        ax.set(xlabel=label(x_name), ylabel=label(y_name))
     if spec.get("log_x") and y_name is None:
         ax.set_xscale("log")
     ax.set_title(title)
-    ax.grid(y_name is None, alpha=0.3)
+    if y_name is None:
+        ax.grid(True, alpha=0.3)
+    else:
+        ax.grid(False)
     save_figure(fig, path)
     return path
