@@ -10,10 +10,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 
-from fmpy import read_model_description
 
 from .structure import SystemStructure, Value
 
@@ -32,14 +30,11 @@ class ParameterError(ValueError):
         return f"{self.component}.{self.variable} = {self.value!r}: {self.reason} ({self.fmu})"
 
 
-@lru_cache(maxsize=32)
-def _variables(path: Path, mtime: float) -> dict:
-    return {v.name: v for v in read_model_description(str(path)).modelVariables}
-
-
 def variables(path: Path) -> dict:
-    """The FMU's variables by name (cached per file and modification time)."""
-    return _variables(Path(path), Path(path).stat().st_mtime)
+    """The FMU's variables by name (its model description read once per process and file
+    version: cosim.engine.fmi.loaded)."""
+    from .fmi import loaded
+    return {v.name: v for v in loaded(path)[0].modelVariables}
 
 
 def _bound(text) -> float | None:

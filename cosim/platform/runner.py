@@ -121,11 +121,13 @@ def scene_design(scene: Scene) -> tuple[list[dict] | None, str | None]:
     return designed, summary(scene.drive, designed)
 
 
-def scene_structure(scene: Scene) -> SystemStructure:
+def scene_structure(scene: Scene, designed: list[dict] | None | bool = False) -> SystemStructure:
     """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
-    the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them."""
+    the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them.
+    designed: the drives' designed parameters if scene_design was already called."""
     mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
-    designed, _ = scene_design(scene)
+    if designed is False:
+        designed, _ = scene_design(scene)
     structure = platform_structure(scene.drive, mechanics_values, scene.drive_parameters if designed is None else {},
                                    scene_trajectory(scene), leg_values=designed, name=scene.path.stem,
                                    experiment=Experiment(0.0, scene.duration, scene.step))
@@ -197,7 +199,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
     FMU fails or the coupling diverges. progress: a bar on a terminal; advice: a diverged run
     probes for a step that holds (both off for a sweep's points)."""
-    structure = scene_structure(scene)
+    designed, tuning = scene_design(scene)
+    structure = scene_structure(scene, designed)
     algorithm, control = scene_settings(scene)
     record = scene_record(scene)
     try:
@@ -215,7 +218,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
         raise mapped from None
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, failure, control_name(control))
-    report.tuning, report.diverged = scene_design(scene)[1], diverged
+    report.tuning, report.diverged = tuning, diverged
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"
