@@ -222,3 +222,10 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, dask_cluster):
     rows = pq.read_table(out / "study.parquet").to_pylist()
     assert all(r["status"] == "ok" for r in rows), [r["message"] for r in rows]
     assert comparable(rows) == comparable(reference)
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "sweeps").glob("*.toml")), ids=lambda p: p.name)
+def test_every_shipped_sweep_file_is_valid(path):
+    sweep = load_sweep(path)
+    assert sweep.points and sweep.plot is not None
+    assert all(set(point) == {a.name for a in sweep.axes} for point in sweep.points)
