@@ -2,7 +2,13 @@
 
 The mechanics FMU's defaults are the Meng platform (params/meng2010.toml), so that set maps to the
 same values the FMU already has; the Sumnu platform (params/sumnu2015.toml) loads as explicit
-joint coordinates (geometry.layout = 2) with one of the thesis' mass sets.
+joint coordinates (geometry.layout = 2) with one of the thesis' mass sets. A platform's set gives
+every value the mechanics reads, so switching an effect on never brings in another paper's values.
+
+A drive set (params/<platform>_<drive kind>.toml, e.g. sumnu2015_pmsm) is a drive sized for a
+platform its papers do not drive that way: its [drive] table holds the drive FMU's parameters, its
+[mechanics] table what the drive changes on the legs (motor system, screw), both by FMU variable
+names. A scene that swaps the drive uses the matching set unless it names another.
 """
 
 from __future__ import annotations
@@ -79,8 +85,13 @@ def sumnu_mechanics(c: dict, mass_set: str = "heavy") -> dict[str, float]:
         "actuator.rotating_mass": masses["rotating_part_mass"],
         "actuator.rotating_inertia": masses["rotating_part_inertia_diag"][0],
         "actuator.rotating_com": legs["rotating_part_com_from_base_joint"],
+        # Linear motors act along the legs: no motor systems, no screw (i_theta = K_FT = 1, so the
+        # mechanics' motor angle and torque ports read as leg length and force), no motor friction.
         "effects.motor_inertia": False,
         "effects.friction": False,
+        "motor_system.mass": 0.0, "motor_system.inertia": 0.0, "motor_system.com": 0.0,
+        "motor_system.rotor_inertia": 0.0, "transmission.screw_ratio": 1.0, "transmission.force_torque": 1.0,
+        "motor.viscous_friction": 0.0,
     })
     for axis, value in zip(("xx", "yy", "zz"), masses["platform_inertia_diag"]):
         values[f"platform.inertia_{axis}"] = value
@@ -166,6 +177,22 @@ def halder_mechanics(c: dict) -> dict[str, float]:
     for axis, value in zip("xyz", c["environment"]["gravity"]):
         values[f"environment.gravity_{axis}"] = value
     return values
+
+
+def drive_set_name(platform: str, drive: str) -> str | None:
+    """The project's drive set for `drive` on `platform`, if it has one (None for a platform's own
+    drive, whose FMU defaults are its paper's)."""
+    name = f"{platform}_{drive}"
+    return name if (PARAMS / f"{name}.toml").exists() else None
+
+
+def drive_set(name: str) -> tuple[dict, dict]:
+    """A drive set's (drive FMU values, mechanics FMU values)."""
+    values = load(name)
+    unknown = set(values) - {"drive", "mechanics"}
+    if unknown:
+        raise ValueError(f"params/{name}.toml: a drive set holds [drive] and [mechanics] only, not {sorted(unknown)}")
+    return dict(values.get("drive", {})), dict(values.get("mechanics", {}))
 
 
 def mechanics_start_values(name: str, mass_set: str = "heavy") -> dict[str, float]:

@@ -19,12 +19,12 @@ from ..engine import Diverged, FmuError, NoStep, ParameterError
 from ..engine.advice import advice_text
 from ..engine.results import message_kinds, thin, write as write_results, write_log
 from ..engine.settings import control_name, to_strings
-from .parameter_sets import mechanics_start_values
+from .parameter_sets import drive_set, mechanics_start_values
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of
 from .signals import scene_trajectory
 from .system import Run, columns, default_algorithm, platform_structure, run
-from .tuning import SizingError, check_sizing, design, leg_plants, summary
+from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
 
 
 @dataclass
@@ -104,20 +104,33 @@ def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
     return columns(scene.drive, scene.outputs_mechanics, drive_outputs)
 
 
+def scene_values(scene: Scene) -> tuple[dict, dict]:
+    """The mechanics' and the drives' parameter values: the platform's set, the drive set (a
+    drive sized for this platform), then the scene's own, which win."""
+    drive_values, drive_mechanics = drive_set(scene.drive_set) if scene.drive_set else ({}, {})
+    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **drive_mechanics,
+                        **scene.mechanics_parameters}
+    return mechanics_values, {**drive_values, **scene.drive_parameters}
+
+
 def scene_design(scene: Scene) -> tuple[list[dict] | None, str | None]:
-    """Per leg, the drive parameters designed for the platform (tuning = "auto"), and their
-    summary; (None, None) for the drives' defaults. Raises SceneError when a drive cannot hold its
-    leg (sizing, checked whatever the tuning)."""
-    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
+    """Per leg, the drive parameters: designed for the platform (tuning = "auto", with their
+    summary), or the defaults with the PMSM starting to hold its leg (initial.current_q from the
+    static load, unless the scene gives it); None for a drive's plain defaults. Raises SceneError
+    when a drive cannot hold its leg (sizing, checked whatever the tuning)."""
+    mechanics_values, drive_values = scene_values(scene)
     plants = leg_plants(mechanics_values)
     try:
-        check_sizing(scene.drive, plants, mechanics_values, scene.drive_parameters)
+        check_sizing(scene.drive, plants, mechanics_values, drive_values)
     except SizingError as error:
         raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'drive', 'kind')}: drive.kind = "
                          f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
     if scene.tuning != "auto":
-        return None, None
-    designed = design(scene.drive, plants, mechanics_values, scene.drive_parameters)
+        if scene.drive == "pmsm" and "initial.current_q" not in drive_values:
+            return [{**drive_values, "initial.current_q": q} for q in hold_currents(plants, mechanics_values,
+                                                                                    drive_values)], None
+        return (None if not drive_values else [dict(drive_values) for _ in plants]), None
+    designed = design(scene.drive, plants, mechanics_values, drive_values)
     return designed, summary(scene.drive, designed)
 
 
@@ -125,10 +138,10 @@ def scene_structure(scene: Scene, designed: list[dict] | None | bool = False) ->
     """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
     the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them.
     designed: the drives' designed parameters if scene_design was already called."""
-    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
+    mechanics_values, drive_values = scene_values(scene)
     if designed is False:
         designed, _ = scene_design(scene)
-    structure = platform_structure(scene.drive, mechanics_values, scene.drive_parameters if designed is None else {},
+    structure = platform_structure(scene.drive, mechanics_values, drive_values if designed is None else {},
                                    scene_trajectory(scene), leg_values=designed, name=scene.path.stem,
                                    experiment=Experiment(0.0, scene.duration, scene.step))
     algorithm, control = scene_settings(scene)

@@ -4,7 +4,9 @@
     [drive]       kind = "pmsm" | "linear" (the one line that swaps the drives), tuning = "auto" (the
                   loops designed for this platform; the default for a drive swapped onto another
                   platform) | "defaults" (the FMU's, the default on the drive's own platform);
-                  [drive.parameters] (explicit values win over the design)
+                  parameter_set = "sumnu2015_pmsm" | ... | "none" (a drive sized for another paper's
+                  platform, params/<platform>_<kind>.toml; the default for a swapped drive when the
+                  project has one); [drive.parameters] (explicit values win over the set and the design)
     [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
     [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2,
                   step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
@@ -109,12 +111,13 @@ class Scene:
     outputs_drive: list[str] | None = None  # None: the drive kind's default
     output_interval: float | None = None
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
+    drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
 
 
 SCHEMA: dict[str, set[str]] = {
     "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"},
     "scene": {"name", "duration", "step"},
-    "drive": {"kind", "parameters", "tuning"},
+    "drive": {"kind", "parameters", "tuning", "parameter_set"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max"},
     "trajectory": {*POSE, "table", "interpolation"},
@@ -242,6 +245,15 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     tuning = drive.get("tuning", "defaults" if NATIVE_DRIVE.get(parameter_set) == kind else "auto")
     if tuning not in ("auto", "defaults"):
         raise fail("drive", "tuning", f"= {tuning!r}: use 'auto' (designed for this platform) or 'defaults'")
+    from .parameter_sets import PARAMS, drive_set_name
+    drive_set = drive.get("parameter_set", drive_set_name(parameter_set, kind)
+                          if NATIVE_DRIVE.get(parameter_set) != kind else None)
+    if drive_set == "none":
+        drive_set = None
+    if drive_set is not None and (not isinstance(drive_set, str) or not (PARAMS / f"{drive_set}.toml").is_file()):
+        known = ", ".join(p.stem for p in sorted(PARAMS.glob("*_*.toml"))) or "none"
+        raise fail("drive", "parameter_set", f"= {drive_set!r}: no drive set params/{drive_set}.toml (known: {known}, "
+                   "or 'none')")
     algorithm = coupling.get("algorithm", "gauss-seidel")
     if algorithm not in ("gauss-seidel", "jacobi"):
         raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")
@@ -312,4 +324,4 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                  outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
-                 tuning=tuning)
+                 tuning=tuning, drive_set=drive_set)

@@ -118,10 +118,10 @@ def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mappin
              drive_values: Mapping[str, object] | None = None,
              trajectory_values: Mapping[str, object] | None = None, mechanics_outputs: Sequence[str] = (),
              drive_outputs: Sequence[str] = (), order: int = 1, algorithm: str = "gauss-seidel",
-             divergence_ratio: float | None = 0.05) -> Run:
+             divergence_ratio: float | None = 0.05, leg_values: Sequence[Mapping[str, object]] | None = None) -> Run:
     """A platform run at a fixed step in one call (for studies and tests): the pose and reference
-    and the chosen outputs recorded."""
+    and the chosen outputs recorded. leg_values: per drive, on top of drive_values."""
     from ..engine import FixedStep
-    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values)
+    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values)
     return run(structure, default_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
                columns(drive, mechanics_outputs, drive_outputs), divergence_ratio)

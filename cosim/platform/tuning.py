@@ -59,18 +59,21 @@ def leg_plants(values: Mapping[str, object]) -> list[LegPlant]:
     delta = 1e-6
     jacobian = np.column_stack([(core.leg_lengths(pose + delta * e) - core.leg_lengths(pose - delta * e)) / (2 * delta)
                                 for e in np.eye(6)])  # d leg lengths / d pose
-    hold = core.inverse_dynamics(pose, np.zeros(6), np.zeros(6))  # drive efforts holding the pose
-    efforts_are_torques = bool(values.get("effects.motor_inertia", True)) or "transmission.force_torque" not in values
-    force_torque = float(values.get("transmission.force_torque", 250.0))
+    hold = core.inverse_dynamics(pose, np.zeros(6), np.zeros(6))  # motor torques holding the pose: F / K_FT
+    force_torque = float(values.get("transmission.force_torque", _mechanics_default("transmission.force_torque")))
     lengths = core.leg_lengths(pose)
     stroke = (float(values.get("limit.leg_length_min", 0.0)), float(values.get("limit.leg_length_max", math.inf)))
     plants = []
     for i in range(6):
         rate = np.linalg.solve(jacobian, np.eye(6)[i])  # pose rate moving leg i alone at 1 m/s
         _, diagnostics = core.derivatives(core.state(pose, rate))
-        force = hold[i] * force_torque if efforts_are_torques else hold[i]
+        force = hold[i] * force_torque
         plants.append(LegPlant(2.0 * diagnostics.kinetic, float(force), float(lengths[i]), stroke))
     return plants
+
+
+def _mechanics_default(name: str) -> float:
+    return float(variables(fmu_path("mechanics"))[name].start)
 
 
 def _defaults(drive: str) -> dict[str, float]:
@@ -85,14 +88,15 @@ def design(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, ob
     designed = []
     for plant in plants:
         if drive == "pmsm":
-            screw = float(mechanics_values.get("transmission.screw_ratio", 277.8))
-            force_torque = float(mechanics_values.get("transmission.force_torque", 250.0))
+            screw = float(mechanics_values.get("transmission.screw_ratio", _mechanics_default("transmission.screw_ratio")))
+            force_torque = float(mechanics_values.get("transmission.force_torque",
+                                                      _mechanics_default("transmission.force_torque")))
             inertia = plant.mass / (force_torque * screw)  # J_eq, motor side [kg m^2]
             kp_w = SPEED_CROSSOVER * inertia / given["motor.torque_constant"]
             kp_p = 0.12 * SPEED_CROSSOVER
             values = {"control.speed_kp": kp_w, "control.speed_ki": kp_w * SPEED_CROSSOVER / 6,
                       "control.position_kp": kp_p, "control.position_ki": 5 * kp_p,
-                      "initial.current_q": plant.static_force / force_torque / given["motor.torque_constant"]}
+                      "initial.current_q": hold_currents([plant], mechanics_values, given)[0]}
         else:
             w, m = POSITION_BANDWIDTH, plant.mass
             values = {"control.position_kp": m * w * w, "control.position_kd": 2 * m * w,
@@ -101,12 +105,21 @@ def design(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, ob
     return designed
 
 
+def hold_currents(plants: list[LegPlant], mechanics_values: Mapping[str, object],
+                  drive_values: Mapping[str, object]) -> list[float]:
+    """Per leg, the PMSM's q current that holds the start pose: i_q = F / (K_FT K_m)."""
+    given = {**_defaults("pmsm"), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    force_torque = float(mechanics_values.get("transmission.force_torque", _mechanics_default("transmission.force_torque")))
+    return [plant.static_force / force_torque / given["motor.torque_constant"] for plant in plants]
+
+
 def check_sizing(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, object],
                  drive_values: Mapping[str, object]) -> None:
     given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     for i, plant in enumerate(plants, start=1):
         if drive == "pmsm":
-            force_torque = float(mechanics_values.get("transmission.force_torque", 250.0))
+            force_torque = float(mechanics_values.get("transmission.force_torque",
+                                                      _mechanics_default("transmission.force_torque")))
             torque = abs(plant.static_force) / force_torque
             limit = given["motor.torque_constant"] * given["limit.current"]
             if torque > limit:

@@ -262,19 +262,21 @@ def test_sumnu_case_studies_with_linear_motors(case):
 
 
 def test_swapping_the_drive_changes_one_setting():
-    """The same Sumnu platform and trajectory with six PMSM drives or six linear motors: only the
-    drive kind differs, each drive with its own defaults. Both follow a 1-2 cm, 3 rad/s motion:
-    the linear motors within 3 mm and mrad; the PMSM drives within 5 mm and mrad, because their
-    default gains were designed for the Meng leg's motor-side inertia (0.0209 kg m^2, rotor
-    included), while Sumnu's legs carry no motor systems, so the loops see almost no inertia and
-    need a 0.05 ms coupling step: at 0.1 ms and above the divergence monitor stops the run (their
-    torques chatter at the Nyquist frequency while the pose still looks right)."""
+    """The same Sumnu platform and trajectory with six linear motors or six PMSM drives: only the
+    drive kind differs, each drive sized and designed for these legs (the linear motors' defaults
+    are the thesis'; the PMSMs come with the project's drive set params/sumnu2015_pmsm.toml, a
+    servo and a 10 mm lead screw, their loops designed by cosim.platform.tuning). Both follow a
+    1-2 cm, 3 rad/s motion at the 1 ms step: the linear motors within 3 mm and mrad, the PMSMs
+    within 5 mm and mrad (their position loop has no velocity feedforward)."""
+    from cosim.platform.parameter_sets import drive_set
+    from cosim.platform.tuning import design, leg_plants
     values = mechanics_start_values("sumnu2015")
-
+    set_drive, set_mechanics = drive_set("sumnu2015_pmsm")
+    pmsm_values = {**values, **set_mechanics}
+    setups = {"pmsm": (pmsm_values, design("pmsm", leg_plants(pmsm_values), pmsm_values, set_drive), 5e-3),
+              "linear": (values, None, 3e-3)}
     reference = sines({"x": -1.5, "z": 1}, {"x": 0.01, "y": 0.02, "z": 0.02})
-
-    bounds = {"pmsm": 5e-3, "linear": 3e-3}
-    for drive, bound in bounds.items():
-        r = simulate(drive, 3.0, 5e-5, values, trajectory_values=reference).result
+    for drive, (mechanics, legs, bound) in setups.items():
+        r = simulate(drive, 3.0, 1e-3, mechanics, trajectory_values=reference, leg_values=legs).result
         error = np.array([np.abs(r[f"pose.{a}"] - r[f"pose_ref.{a}"]) for a in POSE]).T[r["time"] > 1.5].max(axis=0)
         assert np.all(error < bound), (drive, error)

@@ -93,7 +93,8 @@ def test_sumnu_platform_loads_as_a_second_set(make_mechanics, dll):
     expected = np.linalg.norm(home[:3] + np.array(geometry["platform_joints"]) @ R.T - np.array(geometry["base_joints"]),
                               axis=1)
     core = Core(dll).use_start_values(values)
-    forces = 250.0 * core.inverse_dynamics(home, np.zeros(6), np.zeros(6))  # K_FT T = axial force
+    # K_FT T = axial force (the set has no screw: K_FT = 1, the "torques" are the leg forces)
+    forces = values["transmission.force_torque"] * core.inverse_dynamics(home, np.zeros(6), np.zeros(6))
     assert np.all(forces > 0) and forces.sum() > 8.0 * 9.81  # the legs carry the platform and themselves
     mech = make_mechanics({**values, **{f"leg[{i + 1}].force": forces[i] for i in range(6)}})
     for i in range(6):

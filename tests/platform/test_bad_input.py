@@ -15,16 +15,16 @@ MENG = (ROOT / "scenes" / "meng_eq35.toml").read_text()
 
 
 def drive_parameter(line: str) -> str:
-    return MENG.replace("[drive.parameters]\n", f"[drive.parameters]\n{line}\n", 1)
+    return MENG.replace("\n[mechanics]\n", f"\n[drive.parameters]\n{line}\n\n[mechanics]\n", 1)
 
 
 CASES = {
     "boolean as text": ('[scene]\nduration = 1.0\n[mechanics.parameters]\n"limit.hard_stop" = "false"\n',
                         ':4: mechanics.parameters."limit.hard_stop" = \'false\': must be true or false (mechanics)'),
     "integer with a fraction": (drive_parameter('"motor.pole_pairs" = 4.7'),
-                                ':10: drive.parameters."motor.pole_pairs" = 4.7: must be a whole number (pmsm_drive)'),
+                                ':13: drive.parameters."motor.pole_pairs" = 4.7: must be a whole number (pmsm_drive)'),
     "value outside its bounds": (drive_parameter('"motor.resistance" = -0.7'),
-                                 ':10: drive.parameters."motor.resistance" = -0.7: outside [0, inf] Ohm (pmsm_drive)'),
+                                 ':13: drive.parameters."motor.resistance" = -0.7: outside [0, inf] Ohm (pmsm_drive)'),
     "misspelt parameter": (drive_parameter('"motor.resistnce" = 0.7'),
                            "no such variable (did you mean 'motor.resistance'?) (pmsm_drive)"),
     "NaN amplitude": ("[scene]\nduration = 1.0\n[trajectory.x]\nsines = [{amplitude = nan, frequency = 1.0}]\n",

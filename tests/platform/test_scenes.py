@@ -93,8 +93,9 @@ def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
     assert differing == [('kind = "linear"', 'kind = "pmsm"')]
     a, b = load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), load_scene(write(tmp_path, swapped))
     # the swapped drive is designed for the platform (tuning "auto"); the native one keeps its defaults
-    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path", "tuning"}
+    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path", "tuning", "drive_set"}
     assert (a.tuning, b.tuning) == ("defaults", "auto")
+    assert (a.drive_set, b.drive_set) == (None, "sumnu2015_pmsm")  # a PMSM and screw sized for these legs
     for scene in (a, b):
         wiring = DRIVES[scene.drive]
         from_drives = [c.target[1] for c in scene_structure(scene).connections
@@ -199,9 +200,10 @@ def test_a_neutral_offset_is_the_pose_the_mechanics_starts_at(tmp_path):
 
 
 def test_a_drive_that_cannot_hold_its_leg_is_named_before_the_run(tmp_path, capsys):
-    """Sizing: six linear motors (203 N continuous) under the 950 kg Meng platform, whose legs each
-    need 2066 N at the neutral pose: one line naming the leg, the load and the limit, exit 2."""
-    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace('kind = "pmsm"', 'kind = "linear"')
+    """Sizing: six linear motors with their FMU's defaults (Sumnu's, 203 N continuous; the scene
+    asks for no drive set) under the 950 kg Meng platform, whose legs each need 2066 N at the
+    neutral pose: one line naming the leg, the load and the limit, exit 2."""
+    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace('kind = "pmsm"', 'kind = "linear"\nparameter_set = "none"')
     assert main(["run", str(write(tmp_path, text)), "--no-plots", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert ":8: drive.kind = 'linear' on meng2010: leg 1 needs 2066 N to hold the start pose, above " \
@@ -230,8 +232,7 @@ def test_explicit_gains_win_over_the_design_and_the_design_is_reported(tmp_path)
     """tuning = "auto" designs every leg; a gain the scene gives is kept on every leg; the run's
     report lists the designed gains."""
     text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace("duration = 10.0", "duration = 0.05")
-    text = text.replace('kind = "pmsm"', 'kind = "pmsm"\ntuning = "auto"').replace(
-        '"initial.current_q" = 5.509', '"control.speed_kp" = 5.0')
+    text = text.replace('kind = "pmsm"', 'kind = "pmsm"\ntuning = "auto"\n[drive.parameters]\n"control.speed_kp" = 5.0')
     scene = load_scene(write(tmp_path, text))
     structure = scene_structure(scene)
     drives = [c for c in structure.components if c.name.startswith("pmsm")]

@@ -1,0 +1,87 @@
+"""Any drive on any platform: the shipped swapped scenes (Meng's platform on linear motors, Sumnu's
+on PMSMs with ball screws) differ from their papers' scenes in the drive kind alone, run at the
+default 1 ms step with drives sized and designed for their legs, and track; the README quotes their
+tracking errors and this test holds it to what the runs print. A platform's parameter set gives
+every value the mechanics reads, so switching the motor systems on adds nothing of another paper."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from cosim.engine.artifacts import ROOT
+from cosim.platform.parameter_sets import mechanics_start_values
+from cosim.platform.runner import run_scene, scene_structure
+from cosim.platform.scene import load_scene
+
+SWAPPED = {"meng_eq35_linear": ("meng_eq35", "SWAPPED_MENG", "Meng on linear motors"),
+           "sumnu_case_1_pmsm": ("sumnu_case_1", "SWAPPED_SUMNU", "Sumnu case I on PMSMs")}
+
+
+def quoted(errors: np.ndarray) -> str:
+    mm = " / ".join(f"{1e3 * e:.3g}" for e in errors[:3])
+    mrad = " / ".join(f"{1e3 * e:.3g}" for e in errors[3:])
+    return f"{mm} mm in surge / sway / heave, {mrad} mrad in roll / pitch / yaw"
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {name: run_scene(load_scene(ROOT / "scenes" / f"{name}.toml"), plots=False) for name in SWAPPED}
+
+
+@pytest.mark.parametrize("name", SWAPPED)
+def test_a_swapped_scene_is_its_papers_scene_with_another_drive_kind(name):
+    own = (ROOT / "scenes" / f"{SWAPPED[name][0]}.toml").read_text().splitlines()
+    swapped = (ROOT / "scenes" / f"{name}.toml").read_text().splitlines()
+    code = [(a, b) for a, b in zip([l for l in own if not l.startswith("#")], [l for l in swapped if not l.startswith("#")])
+            if a != b]
+    assert [b.split("#")[0].strip() for _, b in code if not b.startswith("name")] == \
+           [{"meng_eq35_linear": 'kind = "linear"', "sumnu_case_1_pmsm": 'kind = "pmsm"'}[name]]
+
+
+def test_the_swapped_drives_come_sized_for_their_legs():
+    meng = scene_structure(load_scene(ROOT / "scenes" / "meng_eq35_linear.toml"))
+    drives = [c for c in meng.components if c.name.startswith("linear")]
+    assert all(c.parameters["motor.continuous_force"] == 3000.0 for c in drives)  # > 2066 N per leg
+    assert next(c for c in meng.components if c.name == "mechanics").parameters["effects.motor_inertia"] is False
+    sumnu = scene_structure(load_scene(ROOT / "scenes" / "sumnu_case_1_pmsm.toml"))
+    mechanics = next(c for c in sumnu.components if c.name == "mechanics").parameters
+    assert mechanics["effects.motor_inertia"] is True and mechanics["motor_system.rotor_inertia"] == 1.3e-4
+    assert mechanics["transmission.screw_ratio"] == pytest.approx(2 * np.pi / 0.01)
+    pmsm = [c for c in sumnu.components if c.name.startswith("pmsm")]
+    assert all(c.parameters["motor.torque_constant"] == 0.3 for c in pmsm)
+    # designed for the leg: J_eq = M_ii / (K_FT i_theta); the electromechanical time constant
+    # J_eq R / K_m^2 is then well above the 1 ms step (the reason for this motor)
+    kp_w = pmsm[0].parameters["control.speed_kp"]
+    j_eq = kp_w * 0.3 / 500.0
+    assert j_eq * 1.5 / 0.3 ** 2 > 2e-3
+
+
+@pytest.mark.parametrize("name", SWAPPED)
+def test_a_swapped_scene_tracks_at_the_default_step(name, runs):
+    result, report = runs[name]
+    assert report.failure is None and report.macro_steps == round(report.simulated / 1e-3)
+    bounds = {"meng_eq35_linear": [0.5e-3] * 6,    # the linear motors' PID with feedforward: < 0.5 mm, mrad
+              "sumnu_case_1_pmsm": [8e-3] * 3 + [2e-3] * 3}[name]  # the PMSM's P position loop lags by mm
+    assert np.all(report.largest_error < bounds), report.largest_error
+    assert "drive loops designed for the plant" in report.text()
+
+
+def test_the_readme_quotes_what_the_swapped_scenes_print(runs):
+    text = (ROOT / "README.md").read_text().replace("\n", " ")
+    for name, (_, _, label) in SWAPPED.items():
+        assert f"{label} {quoted(runs[name][1].largest_error)}" in text, (name, quoted(runs[name][1].largest_error))
+
+
+def test_sumnu_parameters_stand_alone_without_mengs_motor_systems():
+    values = mechanics_start_values("sumnu2015")
+    assert values["motor_system.mass"] == values["motor_system.rotor_inertia"] == 0.0
+    assert values["transmission.screw_ratio"] == values["transmission.force_torque"] == 1.0
+    scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"scene.duration": 0.3})
+    on = load_scene(ROOT / "scenes" / "sumnu_case_1.toml",
+                    {"scene.duration": 0.3, 'mechanics.parameters."effects.motor_inertia"': True})
+    a, _ = run_scene(scene, plots=False)
+    b, _ = run_scene(on, plots=False)
+    assert np.abs(a["pose.z"] - b["pose.z"]).max() < 1e-12  # the switch adds nothing: no motor on these legs
