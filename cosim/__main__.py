@@ -62,6 +62,8 @@ def _main(argv: list[str] | None = None) -> int:
     advise.add_argument("--effort-tolerance", type=float, default=0.01,
                         help="largest drive torque/force error as a fraction of its peak (default 0.01)")
     advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
+    advise.add_argument("--keep-gains", action="store_true",
+                        help="run reduced models with the scene's drive gains (default: loops designed for each)")
     advise.add_argument("--workers", type=int, help="Dask worker processes for the probes (default: one per core; "
                         "0: in this process)")
     advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
@@ -81,7 +83,8 @@ def _main(argv: list[str] | None = None) -> int:
         except SceneError as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
-        candidates, info = run_advice(scene, args.tolerance, args.probe, args.effort_tolerance, args.workers)
+        candidates, info = run_advice(scene, args.tolerance, args.probe, args.effort_tolerance, args.workers,
+                                      redesign=not args.keep_gains)
         print(text(scene, args.tolerance, candidates, info))
         print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
         return 0

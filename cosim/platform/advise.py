@@ -47,11 +47,12 @@ class Candidate:
     wall: float = float("nan")      # [s] stepping the probe (the faster of two runs if it passed)
     macro_steps: int = 0
     diverged: str | None = None
+    gains: str = "scene's"  # or "designed": the drives' loops designed for this candidate's reduced plant
 
     @property
     def label(self) -> str:
         off = ", ".join(e.split(".")[1] for e in self.effects_off) or "-"
-        return f"{self.step * 1e3:g} ms | off: {off} | {self.fidelity}"
+        return f"{self.step * 1e3:g} ms | off: {off} | {self.fidelity} | {self.gains} gains"
 
 
 def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: float) -> Scene:
@@ -61,9 +62,10 @@ def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: fl
                                drive_parameters=drive, step_control="fixed")
 
 
-def _point(scene: Scene, factor: float, effects_off, fidelity: str) -> dict:
-    """A candidate as a sweep point: overrides at the scene's keys."""
-    point = {"scene.step": scene.step * factor}
+def _point(scene: Scene, factor: float, effects_off, fidelity: str, redesign: bool) -> dict:
+    """A candidate as a sweep point: overrides at the scene's keys; with `redesign`, a reduced
+    model's drives get loops designed for its plant (tuning "auto")."""
+    point = {"scene.step": scene.step * factor, "drive.tuning": "auto" if redesign and effects_off else scene.tuning}
     for effect in EFFECTS:
         point[f'mechanics.parameters."{effect}"'] = False if effect in effects_off else \
             scene.mechanics_parameters.get(effect, True)
@@ -77,9 +79,11 @@ def _pose_difference(result: np.ndarray, reference: np.ndarray) -> float:
 
 
 def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance: float = 0.01,
-           workers: int | None = None) -> tuple[list[Candidate], dict]:
+           workers: int | None = None, redesign: bool = True) -> tuple[list[Candidate], dict]:
     """Every candidate's errors against the reference and its cost; workers as in
-    cosim.engine.sweep.run_sweep (None: every core)."""
+    cosim.engine.sweep.run_sweep (None: every core). redesign: a candidate that leaves effects out
+    runs its drives with loops designed for its reduced plant (cosim.platform.tuning), as a
+    designer would; the full-model candidates keep the scene's own gains."""
     duration = min(scene.duration, probe)
     own = next(name for name, values in FIDELITY[scene.drive].items()
                if all(scene.drive_parameters.get(k, v if name.startswith(("averaged", "electrical")) else None) == v
@@ -92,7 +96,7 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
     evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "steps", "stepping_wall"),
                           base=(("scene.duration", duration), ("coupling.step_control", "fixed")),
                           reference=reference)
-    points = [_point(scene, *candidate) for candidate in plan]
+    points = [_point(scene, *candidate, redesign) for candidate in plan]
 
     def sweep(chosen: list[dict], name: str) -> list[dict]:
         with tempfile.TemporaryDirectory() as out:
@@ -101,7 +105,8 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
     rows = sweep(points, "advise")
     candidates = []
     for (factor, off, fidelity), row in zip(plan, rows):
-        candidate = Candidate(scene.step * factor, off, fidelity)
+        candidate = Candidate(scene.step * factor, off, fidelity,
+                              gains="designed" if points[len(candidates)]["drive.tuning"] == "auto" else "scene's")
         if row["status"] == "ok":
             candidate.error, candidate.effort_error = row["pose_error"], row["effort_error"]
             candidate.effort_error_time = row["effort_error_time"]
@@ -134,10 +139,10 @@ def write_csv(candidates: list[Candidate], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["step_ms", "effects_off", "fidelity", "pose_error", "effort_error", "wall_s", "macro_steps",
-                         "diverged"])
+        writer.writerow(["step_ms", "effects_off", "fidelity", "gains", "pose_error", "effort_error", "wall_s",
+                         "macro_steps", "diverged"])
         for c in candidates:
-            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, repr(c.error),
+            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, c.gains, repr(c.error),
                              repr(c.effort_error), repr(c.wall), c.macro_steps, c.diverged or ""])
     return path
 
@@ -155,8 +160,8 @@ def text(scene: Scene, tolerance: float, candidates: list[Candidate], info: dict
     criteria = f"pose error {tolerance:g} and drive effort error {100 * effort_tolerance:g} % of its peak"
     if good:
         lines.append(f"within {criteria} ({len(good)} of {len(candidates)}, cheapest first):")
-        lines.append(f"  {'candidate':<62} {'pose error':>11} {'effort err':>10} {'wall [s]':>9} {'steps':>7}")
-        lines += [f"  {c.label:<62} {c.error:>11.2e} {100 * c.effort_error:>9.2f}% {c.wall:>9.3f} {c.macro_steps:>7}"
+        lines.append(f"  {'candidate':<78} {'pose error':>11} {'effort err':>10} {'wall [s]':>9} {'steps':>7}")
+        lines += [f"  {c.label:<78} {c.error:>11.2e} {100 * c.effort_error:>9.2f}% {c.wall:>9.3f} {c.macro_steps:>7}"
                   for c in good]
     if missed:
         efforts = sorted((c for c in missed if c.error <= tolerance), key=lambda c: c.effort_error)
