@@ -54,6 +54,8 @@ def load() -> ctypes.CDLL:
     dll.platform_inverse_dynamics.argtypes = [P(Platform), P(D), P(D), P(D), P(D), P(D)]
     dll.platform_inverse_dynamics.restype = ctypes.c_int
     dll.platform_state_from_pose.argtypes = [P(D), P(D), P(D)]
+    dll.platform_leg_plants.argtypes = [P(Platform), P(D), P(D), P(D)]
+    dll.platform_leg_plants.restype = ctypes.c_int
     return dll
 
 
@@ -150,6 +152,13 @@ class Core:
     def energy(self, x) -> float:
         _, diag = self.derivatives(x)
         return diag.kinetic + diag.potential
+
+    def leg_plants(self, pose) -> tuple[np.ndarray, np.ndarray]:
+        """Per leg at `pose`: the inertia along its axis with the other legs held [kg] and the axial
+        force that holds the pose [N] (what the mechanics FMU outputs as leg[i].plant.*)."""
+        inertia, force = (D * LEGS)(), (D * LEGS)()
+        assert self.dll.platform_leg_plants(ctypes.byref(self.p), arr(self.state(pose)), inertia, force) == 0
+        return np.array(inertia[:]), np.array(force[:])
 
     def inverse_dynamics(self, pose, rate, acceleration, wrench=np.zeros(6)) -> np.ndarray:
         out = (D * LEGS)()

@@ -1,7 +1,9 @@
 """Drives designed for the plant they drive.
 
 What a drive designer needs, per leg at the start pose, comes from the mechanics' own dynamics
-core (fmu/mechanics/platform.c through cosim.platform.platform_core):
+core (fmu/mechanics/platform.c: platform_leg_plants, through cosim.platform.platform_core; the
+mechanics FMU outputs the same as leg[i].plant.inertia and leg[i].plant.static_force, so other FMI
+tools can design drives from it):
 - the leg's inertia with the other legs held, M_ii of the joint-space mass matrix: twice the
   kinetic energy when leg i alone extends at 1 m/s (motor systems included when they are on);
 - the static load: the leg force that holds the start pose against gravity;
@@ -53,23 +55,14 @@ def start_pose(values: Mapping[str, object]) -> np.ndarray:
 
 
 def leg_plants(values: Mapping[str, object]) -> list[LegPlant]:
-    """Each leg's plant at the start pose, for mechanics start values."""
+    """Each leg's plant at the start pose, for mechanics start values: the dynamics core's
+    platform_leg_plants, the same function that gives the mechanics FMU's leg[i].plant.* outputs."""
     core = Core().use_start_values(dict(values))
     pose = start_pose(values)
-    delta = 1e-6
-    jacobian = np.column_stack([(core.leg_lengths(pose + delta * e) - core.leg_lengths(pose - delta * e)) / (2 * delta)
-                                for e in np.eye(6)])  # d leg lengths / d pose
-    hold = core.inverse_dynamics(pose, np.zeros(6), np.zeros(6))  # motor torques holding the pose: F / K_FT
-    force_torque = float(values.get("transmission.force_torque", _mechanics_default("transmission.force_torque")))
+    inertia, force = core.leg_plants(pose)
     lengths = core.leg_lengths(pose)
     stroke = (float(values.get("limit.leg_length_min", 0.0)), float(values.get("limit.leg_length_max", math.inf)))
-    plants = []
-    for i in range(6):
-        rate = np.linalg.solve(jacobian, np.eye(6)[i])  # pose rate moving leg i alone at 1 m/s
-        _, diagnostics = core.derivatives(core.state(pose, rate))
-        force = hold[i] * force_torque
-        plants.append(LegPlant(2.0 * diagnostics.kinetic, float(force), float(lengths[i]), stroke))
-    return plants
+    return [LegPlant(float(inertia[i]), float(force[i]), float(lengths[i]), stroke) for i in range(6)]
 
 
 def _mechanics_default(name: str) -> float:

@@ -16,6 +16,7 @@ enum { E_DRIVE = PLATFORM_STATES, E_TRANSMISSION, E_FRICTION, E_LOAD };
 
 #define LEG_VRS(field) \
     {VR_leg1_##field, VR_leg2_##field, VR_leg3_##field, VR_leg4_##field, VR_leg5_##field, VR_leg6_##field}
+static const int VR_PLANT_INERTIA[] = LEG_VRS(plant_inertia), VR_PLANT_STATIC_FORCE[] = LEG_VRS(plant_static_force);
 static const int VR_TORQUE[] = LEG_VRS(torque), VR_FORCE[] = LEG_VRS(force), VR_LENGTH[] = LEG_VRS(length),
                  VR_VELOCITY[] = LEG_VRS(velocity), VR_ANGLE[] = LEG_VRS(angle), VR_SPEED[] = LEG_VRS(speed),
                  VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref);
@@ -205,6 +206,14 @@ void model_initialize(FmuInstance *fmu) {
     memset(fmu->s.x, 0, sizeof fmu->s.x);
     initial_state(&fmu->s.v, fmu->s.x);
     memset(&fmu->s.solver, 0, sizeof fmu->s.solver);
+    /* the legs' plants at the start pose, for whoever designs the drives (they do not change) */
+    double inertia[PLATFORM_LEGS], static_force[PLATFORM_LEGS];
+    if (platform_leg_plants(&fmu->s.internal.platform, fmu->s.x, inertia, static_force) != 0)
+        for (int i = 0; i < PLATFORM_LEGS; i++) inertia[i] = static_force[i] = NAN;
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        *fmu_real(fmu, VR_PLANT_INERTIA[i]) = inertia[i];
+        *fmu_real(fmu, VR_PLANT_STATIC_FORCE[i]) = static_force[i];
+    }
 }
 
 void model_compute_outputs(FmuInstance *fmu) {

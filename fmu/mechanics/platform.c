@@ -466,3 +466,27 @@ int platform_inverse_dynamics(const Platform *p, const double pose[6], const dou
     for (int i = 0; i < PLATFORM_LEGS; i++) torque[i] = F[i] / p->force_torque;
     return 0;
 }
+
+int platform_leg_plants(const Platform *p, const double *x, double inertia[PLATFORM_LEGS],
+                        double static_force[PLATFORM_LEGS]) {
+    double at_rest[PLATFORM_STATES], M[36], rhs0[6], J[36], JT[36], Q[6];
+    const double no_wrench[6] = {0, 0, 0, 0, 0, 0};
+    LegGeometry legs[PLATFORM_LEGS];
+    memcpy(at_rest, x, sizeof at_rest);
+    memset(at_rest + 7, 0, sizeof(double) * 6);
+    assemble(p, at_rest, no_wrench, M, rhs0, legs, NULL);
+    platform_leg_jacobian(legs, J); /* leg rates = J u */
+    for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 6; j++) JT[6 * i + j] = J[6 * j + i];
+    for (int i = 0; i < PLATFORM_LEGS; i++) { /* u moving leg i alone at unit rate: J u = e_i */
+        double e[6] = {0, 0, 0, 0, 0, 0}, u[6], A[36];
+        e[i] = 1.0;
+        memcpy(A, J, sizeof A); /* lu_solve overwrites its matrix */
+        if (lu_solve(6, A, e, u) != 0) return -1;
+        inertia[i] = 0.0; /* u' M u: twice the kinetic energy */
+        for (int r = 0; r < 6; r++)
+            for (int c = 0; c < 6; c++) inertia[i] += u[r] * M[6 * r + c] * u[c];
+    }
+    for (int k = 0; k < 6; k++) Q[k] = -rhs0[k]; /* at rest: J' F = -(gravity and bias terms) */
+    return lu_solve(6, JT, Q, static_force) != 0 ? -1 : 0;
+}

@@ -85,6 +85,13 @@ void platform_legs(const Platform *p, const double *x, LegGeometry legs[PLATFORM
 /* Leg Jacobian J (6x6, row major): L_dot_i = J_i u, row i = [n_i', (r_i x n_i)']. */
 void platform_leg_jacobian(const LegGeometry legs[PLATFORM_LEGS], double J[36]);
 
+/* Each leg's plant at the pose of state x (its velocities ignored): inertia[i] = M_ii of the
+ * joint-space mass matrix J^-T M J^-1 (the leg's inertia along its axis with the other legs held)
+ * and static_force[i], the axial force that holds the pose without external loads. 0, or -1 at a
+ * singular pose. */
+int platform_leg_plants(const Platform *p, const double *x, double inertia[PLATFORM_LEGS],
+                        double static_force[PLATFORM_LEGS]);
+
 /* |det J| over the product of its rows' norms: 1 for orthogonal leg lines, 0 at a singularity. */
 double platform_jacobian_conditioning(const LegGeometry legs[PLATFORM_LEGS]);
 

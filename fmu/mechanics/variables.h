@@ -43,6 +43,15 @@ X(Real, leg##i##_length_ref, "leg[" #i "].length_ref", output, continuous, "m", 
 X(Real, leg##i##_angle_ref, "leg[" #i "].angle_ref", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
   "Motor angle of leg " #i " at pose_ref")
 
+/* What a drive designer needs of leg i, at the start pose (computed once, at initialization): the
+ * leg's inertia with the other legs held, M_ii of the joint-space mass matrix J^-T M J^-1, and the
+ * axial force that holds the start pose against gravity. The stroke is limit.leg_length_min/max. */
+#define LEG_PLANT_VARIABLES(X, i) \
+X(Real, leg##i##_plant_inertia, "leg[" #i "].plant.inertia", output, discrete, "kg", 0.0, -FMU_INF, FMU_INF, \
+  "Inertia of leg " #i " along its axis with the other legs held, at the start pose (motor systems included when on)") \
+X(Real, leg##i##_plant_static_force, "leg[" #i "].plant.static_force", output, discrete, "N", 0.0, -FMU_INF, FMU_INF, \
+  "Axial force of leg " #i " that holds the start pose (positive: pushing; K_FT times the motor torque for a screw)")
+
 #define POSE_VARIABLES(X, prefix, field_prefix, causality, variability, what) \
 X(Real, field_prefix##x, prefix ".x", causality, variability, "m", 0.0, -FMU_INF, FMU_INF, what ", x (surge)") \
 X(Real, field_prefix##y, prefix ".y", causality, variability, "m", 0.0, -FMU_INF, FMU_INF, what ", y (sway)") \
@@ -151,7 +160,9 @@ X(Real, limit_leg_length_min, "limit.leg_length_min", parameter, fixed, "m", 1.5
 X(Real, limit_leg_length_max, "limit.leg_length_max", parameter, fixed, "m", 2.2, 0.0, FMU_INF, "Longest leg of the stroke (Table 4)") \
 X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, "Largest tilt of a leg from its neutral direction at either joint (20 deg, Halder et al.)") \
 X(Boolean, limit_hard_stop, "limit.hard_stop", parameter, fixed, "", 0, 0, 1, "false: leaving the stroke or a joint limit is a logged warning; true: an error that stops the run") \
-FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10)
+FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10) \
+LEG_PLANT_VARIABLES(X, 1) LEG_PLANT_VARIABLES(X, 2) LEG_PLANT_VARIABLES(X, 3) \
+LEG_PLANT_VARIABLES(X, 4) LEG_PLANT_VARIABLES(X, 5) LEG_PLANT_VARIABLES(X, 6)
 /* clang-format on */
 
 #endif

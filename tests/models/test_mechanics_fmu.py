@@ -319,3 +319,31 @@ def test_inverse_kinematics_outputs_follow_pose_ref(make_mechanics, dll):
     for i in range(6):
         assert mech.get(f"leg[{i + 1}].length_ref") == pytest.approx(lengths[i], rel=1e-14)
         assert mech.get(f"leg[{i + 1}].angle_ref") == pytest.approx(ratio * (lengths[i] - 1.86), rel=1e-9)
+
+
+@pytest.mark.parametrize("name,tilt", [("meng2010", None), ("meng2010", [0.05, -0.03, 0.1, 0.04, -0.03, 0.08]),
+                                       ("sumnu2015", None)])
+def test_the_legs_plants_are_outputs_that_an_independent_computation_gives(make_mechanics, dll, name, tilt):
+    """leg[i].plant.inertia and .static_force, at the start pose: the inertia is twice the kinetic
+    energy when leg i alone extends at 1 m/s (pose rates from a finite-difference Jacobian of the
+    leg lengths, energy from the forward dynamics' diagnostics), the static force K_FT times the
+    inverse model's holding torque; equal to 1e-7 (the finite differences' error). The FMU gives
+    the core's values bit for bit (one implementation, platform_leg_plants)."""
+    values = mechanics_start_values(name)
+    core = Core(dll).use_start_values(values)
+    pose = core.neutral_pose if tilt is None else core.neutral_pose + np.array(tilt)
+    if tilt is not None:
+        values = {**values, **{f"initial.pose.{a}": pose[k] for k, a in enumerate(POSE)}}
+    mech = make_mechanics(values)
+    inertia = np.array([mech.get(f"leg[{i}].plant.inertia") for i in range(1, 7)])
+    force = np.array([mech.get(f"leg[{i}].plant.static_force") for i in range(1, 7)])
+    assert np.array_equal((inertia, force), core.leg_plants(pose))
+    delta = 1e-6
+    jacobian = np.column_stack([(core.leg_lengths(pose + delta * e) - core.leg_lengths(pose - delta * e)) / (2 * delta)
+                                for e in np.eye(6)])
+    for i in range(6):
+        _, diagnostics = core.derivatives(core.state(pose, np.linalg.solve(jacobian, np.eye(6)[i])))
+        assert inertia[i] == pytest.approx(2 * diagnostics.kinetic, rel=1e-7)
+    k_ft = values.get("transmission.force_torque", 250.0)
+    np.testing.assert_allclose(force, k_ft * core.inverse_dynamics(pose, np.zeros(6), np.zeros(6)), rtol=1e-10)
+    assert np.all(force > 0) and np.all(inertia > 0)
