@@ -61,6 +61,15 @@ class _Controller(ctypes.Structure):
 _library = None
 
 
+def write_csv(path: str, header: str, table: np.ndarray) -> None:
+    """A 2-D float table as CSV through the native library (cosim/engine/kernel/csv.c)."""
+    table = np.ascontiguousarray(table, dtype=np.float64)
+    flat = table.reshape(-1) if table.size else np.zeros(1)
+    if _load().table_write_csv(str(path).encode(), header.encode(), _ptr(flat, _DOUBLES), table.shape[0],
+                               table.shape[1]) != 0:
+        raise OSError(f"cannot write {path}")
+
+
 def _load() -> ctypes.CDLL:
     global _library
     if _library is None:
@@ -72,8 +81,9 @@ def _load() -> ctypes.CDLL:
         for name in ("kernel_run_doubling", "kernel_run_energy"):
             getattr(lib, name).argtypes = [K, C, ctypes.c_int, ctypes.c_double, ctypes.c_int, _DOUBLES, _DOUBLES,
                                            _DOUBLES, _DOUBLES]
+        lib.table_write_csv.argtypes = [ctypes.c_char_p, ctypes.c_char_p, _DOUBLES, ctypes.c_int, ctypes.c_int]
         for name in ("kernel_initialize", "kernel_record", "kernel_run_fixed", "kernel_run_doubling",
-                     "kernel_run_energy"):
+                     "kernel_run_energy", "table_write_csv"):
             getattr(lib, name).restype = ctypes.c_int
         _library = lib
     return _library

@@ -19,9 +19,12 @@ def thin(result: np.ndarray, interval: float | None) -> np.ndarray:
 
 
 def write_csv(result: np.ndarray, path: Path) -> None:
-    """Every value with 17 significant digits (a float's round trip), one header line of names."""
-    columns = np.column_stack([result[n] for n in result.dtype.names]) if len(result) else np.zeros((0, 1))
-    np.savetxt(path, columns, delimiter=",", fmt="%.17g", header=",".join(result.dtype.names), comments="")
+    """Every value with 17 significant digits (a float's round trip), one header line of names
+    (formatted in C: cosim/engine/kernel/csv.c)."""
+    from .kernel import write_csv as native
+    names = result.dtype.names
+    columns = np.column_stack([result[n] for n in names]) if len(result) else np.zeros((0, len(names)))
+    native(str(path), ",".join(names), columns)
 
 
 def mat_name(name: str) -> str:
