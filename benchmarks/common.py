@@ -69,7 +69,7 @@ def native_bench(name: str = "drive_bench") -> Path:
         exe.parent.mkdir(parents=True, exist_ok=True)
         headers = Path(fmpy.__file__).parent / "c-code"
         subprocess.run([os.environ.get("CC", "cc"), "-O2", "-std=c99", "-Wall", "-Wextra", "-Wpedantic",
-                        f"-I{headers}", str(source), "-o", str(exe), "-ldl", "-lm"], check=True)
+                        f"-I{headers}", str(source), "-o", str(exe), "-ldl", "-lm", "-pthread"], check=True)
     return exe
 
 
