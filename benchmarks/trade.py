@@ -58,7 +58,8 @@ def _at(result: np.ndarray, checkpoints: np.ndarray) -> np.ndarray:
 def _overrides(changes: dict) -> dict:
     """A point's changes to the scene as overrides at the scene file's keys."""
     keys = {"algorithm": "coupling.algorithm", "order": "coupling.order", "step": "scene.step",
-            "step_control": "coupling.step_control", "rtol": "coupling.rtol", "atol": "coupling.atol"}
+            "step_control": "coupling.step_control", "rtol": "coupling.rtol", "atol": "coupling.atol",
+            "startup_time": "coupling.startup_time"}
     out = {}
     for name, value in changes.items():
         if name in keys:
@@ -123,6 +124,10 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
             planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", dict(step=h * factor, drive=drive)))
     for name, mechanics in effects.items():
         planned.append((f"{name}, {h * 1e3:g} ms", "ours effects", dict(mechanics=mechanics)))
+    if scene.startup_time:  # what the scene's finer start buys
+        for factor in (0.5, 1.0):
+            planned.append((f"gauss-seidel 1, {h * factor * 1e3:g} ms, no finer start", "ours fixed",
+                            dict(step=h * factor, startup_time=0.0)))
     points = ours(scene, base, planned, reference_result, checkpoints)
     progress = TaskProgress(f"trade {scene.path.stem}: libcosim", 6)
     for factor in (0.25, 0.5, 1.0, 2.0):

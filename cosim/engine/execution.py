@@ -137,6 +137,13 @@ class Execution:
     def _fixed_batches(self, stop_time: float):
         h = self.control.step
         n = int(round((stop_time - self.time) / h))
+        if self.control.startup_time > 0.0:  # the start at the finer step, landing on the regular grid
+            regular = min(n, int(round(self.control.startup_time / h)))
+            yield from self._batches(self.control.startup_step, regular * int(round(h / self.control.startup_step)))
+            n -= regular
+        yield from self._batches(h, n)
+
+    def _batches(self, h: float, n: int):
         done, size = 0, 100  # small batches first: a divergence shows early
         while done < n:
             take = min(size, n - done)

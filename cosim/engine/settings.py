@@ -47,10 +47,27 @@ def _positive(name: str, value: float) -> None:
 
 @dataclass(frozen=True)
 class FixedStep:
+    """Macro steps of `step`; the first `startup_time` seconds (a whole number of steps) at the
+    finer `startup_step` (a whole fraction of the step), so that the start-up shock of the drives'
+    efforts is resolved where it is steep (0: no finer start)."""
     step: float
+    startup_time: float = 0.0
+    startup_step: float = 0.0
 
     def __post_init__(self):
         _positive("step", self.step)
+        if self.startup_time == 0.0:
+            return
+        _positive("startup_time", self.startup_time)
+        _positive("startup_step", self.startup_step)
+        per = self.step / self.startup_step
+        if not (self.startup_step < self.step and abs(per - round(per)) < 1e-9 * per):
+            raise SettingsError(f"startup_step = {self.startup_step!r}: must divide the step {self.step!r} a whole "
+                                "number of times (more than once)")
+        steps = self.startup_time / self.step
+        if abs(steps - round(steps)) > 1e-9 * max(steps, 1.0) or round(steps) < 1:
+            raise SettingsError(f"startup_time = {self.startup_time!r}: must be a whole number of steps of "
+                                f"{self.step!r} s")
 
 
 @dataclass(frozen=True)
@@ -107,7 +124,7 @@ def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
     if algorithm.sequence:
         out["sequence"] = " ".join(algorithm.sequence)
     for name, value in asdict(control).items():
-        if name == "force_reject":
+        if name == "force_reject" or (name.startswith("startup_") and not getattr(control, "startup_time", 0.0)):
             continue
         if isinstance(value, Mapping):
             value = " ".join(f"{k}={v!r}" for k, v in value.items())

@@ -50,6 +50,9 @@ def not_portable(settings: dict) -> list[str]:
         notes.append("Gauss-Seidel stepping in the order " + str(settings.get("sequence", "of the components")) +
                      " (libcosim, Ecos and fmpy.ssp step every component from the same time: Jacobi)")
     control = settings.get("step_control", "fixed")
+    if float(settings.get("startup_time", 0.0)) > 0.0:
+        notes.append(f"a finer macro step ({settings.get('startup_step')} s) over the first "
+                     f"{settings['startup_time']} s")
     if control == "doubling":
         notes.append("step doubling with rollback through FMU state")
     elif control == "energy":

@@ -94,7 +94,8 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
     plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive]))
     evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "steps", "stepping_wall"),
-                          base=(("scene.duration", duration), ("coupling.step_control", "fixed")),
+                          base=(*scene.overrides.items(), ("scene.duration", duration),
+                                ("coupling.step_control", "fixed")),
                           reference=reference)
     points = [_point(scene, *candidate, redesign) for candidate in plan]
 

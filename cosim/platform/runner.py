@@ -7,6 +7,7 @@ results up to the last good communication point are written all the same.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,6 +97,12 @@ def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
         return algorithm, StepDoubling(atol={"mechanics": scene.atol or 1e-3}, **bounds)
     if scene.step_control == "energy":
         return algorithm, EnergyControl(atol=scene.atol or 1e-4, **bounds)
+    if scene.startup_time and scene.startup_step < scene.step:
+        # the first startup_time seconds, rounded up to whole steps, at the largest whole fraction
+        # of the step that is no longer than startup_step (a run at a finer step needs no finer start)
+        per = math.ceil(scene.step / scene.startup_step - 1e-9)
+        steps = math.ceil(scene.startup_time / scene.step - 1e-9)
+        return algorithm, FixedStep(scene.step, steps * scene.step, scene.step / per)
     return algorithm, FixedStep(scene.step)
 
 

@@ -12,7 +12,8 @@
                   step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
                   step doubling, with rollback) | "energy" (ECCO: the power bonds' energy residual),
                   rtol, atol, h_min, h_max (of the adaptive controls; atol in m and rad of the legs'
-                  outputs for doubling, in J for energy)
+                  outputs for doubling, in J for energy); startup_time, startup_step (fixed: the
+                  first startup_time seconds at the finer startup_step, for the start-up shock)
     [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
                   pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
@@ -110,8 +111,11 @@ class Scene:
     outputs_mechanics: list[str] = field(default_factory=list)
     outputs_drive: list[str] | None = None  # None: the drive kind's default
     output_interval: float | None = None
+    startup_time: float = 0.0  # [s] the first seconds at the finer startup_step (fixed step control)
+    startup_step: float = 0.0
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
     drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
+    overrides: dict[str, Any] = field(default_factory=dict)  # the dotted keys load_scene set over the file
 
 
 SCHEMA: dict[str, set[str]] = {
@@ -119,7 +123,8 @@ SCHEMA: dict[str, set[str]] = {
     "scene": {"name", "duration", "step"},
     "drive": {"kind", "parameters", "tuning", "parameter_set"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
-    "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max"},
+    "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max", "startup_time",
+                 "startup_step"},
     "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
@@ -270,6 +275,14 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     tolerances = {key: number("coupling", coupling, key, default, positive=True)
                   for key, default in (("rtol", 1e-3), ("h_min", 1e-6), ("h_max", 1e-2))}
     atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
+    startup = {key: number("coupling", coupling, key) for key in ("startup_time", "startup_step") if key in coupling}
+    for key, value in startup.items():
+        if value < 0:
+            raise fail("coupling", key, f"= {value!r} must not be negative (startup_time = 0: no finer start)")
+    if startup.get("startup_time", 0.0) == 0.0:
+        startup = {}  # no finer start
+    elif "startup_step" not in startup:
+        raise fail("coupling", "startup_time", "needs startup_step, the finer step of the start")
 
     trajectory = {}
     signals = dict(data.get("trajectory", {}))
@@ -324,4 +337,4 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                  outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
-                 tuning=tuning, drive_set=drive_set)
+                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), **startup)

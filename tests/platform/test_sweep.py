@@ -69,8 +69,9 @@ def test_a_sweep_on_a_local_cluster_gives_the_rows_of_the_same_points_run_in_one
     rows = pq.read_table(tmp_path / "cluster" / "study.parquet").to_pylist()
     assert len(rows) == 4 and all(r["status"] == "ok" for r in rows)
     assert comparable(rows) == comparable(reference)  # bit for bit: floats compared exactly
-    # the step is the macro step: 0.2 s at 0.5 ms is 400 steps; and the CSV holds the same table
-    assert [r["steps"] for r in rows] == [400, 400, 200, 200]
+    # the step is the macro step: 0.2 s at 0.5 ms is 400 steps, the first 0.1 s of them at the scene's
+    # finer start (an eighth of 1 ms: 4 per 0.5 ms step); and the CSV holds the same table
+    assert [r["steps"] for r in rows] == [800 + 200, 800 + 200, 800 + 100, 800 + 100]
     csv = np.genfromtxt(tmp_path / "cluster" / "study.csv", delimiter=",", names=True, dtype=None, encoding=None)
     assert np.array_equal(csv["maxposez"], [r["max.pose.z"] for r in rows])
     # a point's reports are those of the scene run on its own
