@@ -128,6 +128,11 @@ class SystemPoint:
         from .ssp import read_ssp
         return read_ssp(Path(self.path))
 
+    def recorded(self) -> list[str]:
+        """The columns a run records (what `outputs` may name)."""
+        from .command import recording
+        return ["time", *recording(self.structure())[1]]
+
     def check(self, values: Mapping[str, Value]) -> None:
         """Raises ValueError (one line) when a point's names or values cannot run."""
         from .checks import check_parameters

@@ -79,6 +79,11 @@ class ScenePoint:
                       "steps": ["steps", "rejected"]}.get(report, [report])
         return names + [f"{s}.{c}" for c, stats in self.outputs for s in stats]
 
+    def recorded(self) -> list[str]:
+        """The columns a run of the scene records (what `outputs` may name)."""
+        from .runner import scene_record
+        return ["time", *scene_record(self.scene({}))[1]]
+
     def scene(self, values: Mapping[str, Any]):
         return load_scene(self.path, {**dict(self.base), **values})
 
@@ -289,6 +294,13 @@ def load_sweep(path: str | Path) -> Sweep:
         evaluate = SystemPoint(str(target), float(duration) if duration is not None else None, output_spec)
         wanted = [w for w in wanted if w in SYSTEM_REPORTS]
     _check_points(path, text, evaluate, axes, points)
+    recorded = evaluate.recorded()
+    for column in outputs:
+        if column not in recorded:
+            import difflib
+            near = difflib.get_close_matches(column, recorded, 1)
+            raise fail("report", "outputs", f"names {column!r}, which the run does not record"
+                       + (f" (did you mean {near[0]!r}?)" if near else f" (recorded: {', '.join(recorded[:12])}, ...)"))
 
     plot = data.get("plot")
     columns = {column_name(n) for n in names} | set(evaluate.columns())

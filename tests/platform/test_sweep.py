@@ -109,6 +109,8 @@ def test_a_bad_sweep_file_is_one_line_naming_its_line(tmp_path, capsys):
         '"scene.step"\n': ":7: 'plot.report' = 'torque' is not a column",
         '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.z" = '
         '["median"] }\n': ":7: 'report.outputs'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.q" = '
+        '["max"] }\n': ":7: 'report.outputs' names 'pose.q', which the run does not record (did you mean",
     }
     for number, (text, expected) in enumerate(cases.items()):
         path = tmp_path / f"bad{number}.toml"
