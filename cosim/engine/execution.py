@@ -156,6 +156,8 @@ class Execution:
             yield self.kernel.run_controlled(stop_time, 500)
 
     def free(self) -> None:
+        if getattr(self, "kernel", None) is not None:
+            self.kernel.release()
         for instance in self.instances.values():
             instance.free()
         self.instances = {}

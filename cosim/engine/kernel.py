@@ -45,7 +45,8 @@ class _Kernel(ctypes.Structure):
                 ("instance_time", _DOUBLES), ("fmi_seconds", _DOUBLES), ("order_one", _INTS), ("order_two", _INTS),
                 ("states", ctypes.POINTER(ctypes.c_void_p)),
                 ("startup_states", ctypes.POINTER(ctypes.c_void_p)), ("guess", _DOUBLES), ("saved_time", _DOUBLES),
-                ("failed_instance", ctypes.c_int), ("failed_call", ctypes.c_int)]
+                ("failed_instance", ctypes.c_int), ("failed_call", ctypes.c_int), ("threads", ctypes.c_int),
+                ("stage_end", _INTS), ("helper", ctypes.c_void_p)]
 
 
 class _Controller(ctypes.Structure):
@@ -82,6 +83,8 @@ def _load() -> ctypes.CDLL:
             getattr(lib, name).argtypes = [K, C, ctypes.c_int, ctypes.c_double, ctypes.c_int, _DOUBLES, _DOUBLES,
                                            _DOUBLES, _DOUBLES]
         lib.table_write_csv.argtypes = [ctypes.c_char_p, ctypes.c_char_p, _DOUBLES, ctypes.c_int, ctypes.c_int]
+        lib.kernel_release.argtypes = [K]
+        lib.kernel_release.restype = None
         for name in ("kernel_initialize", "kernel_record", "kernel_run_fixed", "kernel_run_doubling",
                      "kernel_run_energy", "table_write_csv"):
             getattr(lib, name).restype = ctypes.c_int
@@ -95,6 +98,23 @@ def _ints(values) -> np.ndarray:
 
 def _ptr(array: np.ndarray, kind):
     return array.ctypes.data_as(kind)
+
+
+def stages(sequence: Sequence[str], feeds: dict[str, list[tuple[str, int]]]) -> list[int]:
+    """Per position j of the Gauss-Seidel sequence, where its stage ends: consecutive components
+    none of which feeds another of them (the platform's six drives), which may step concurrently."""
+    sources = {n: {source for source, _ in feeds.get(n, [])} for n in sequence}
+    ends, j = [0] * len(sequence), 0
+    while j < len(sequence):
+        members, end = {sequence[j]}, j + 1
+        while end < len(sequence) and not (sources[sequence[end]] & members) and \
+                not any(sequence[end] in sources[m] for m in members):
+            members.add(sequence[end])
+            end += 1
+        for position in range(j, end):
+            ends[position] = end
+        j = end
+    return ends
 
 
 def _failure_messages(messages: list[LogMessage]) -> list[LogMessage]:
@@ -167,6 +187,7 @@ class Kernel:
         self.n_bonds = len(coupling.bonds)
         sequence = algorithm.sequence if algorithm.kind == "gauss-seidel" and algorithm.sequence else names
         self.sequence = _ints([self.index[n] for n in sequence])
+        self.stage_end = _ints(stages(list(sequence), coupling.feeds))
         bonds = [x for (eo, ei), (fo, fi) in coupling.bonds
                  for x in (self.index[eo[0]], eo[1], self.index[ei[0]], ei[1],
                            self.index[fo[0]], fo[1], self.index[fi[0]], fi[1])]
@@ -188,6 +209,7 @@ class Kernel:
         s = self.setup = _Kernel()
         s.n_instances, s.instances, s.sequence = len(names), instances, _ptr(self.sequence, _INTS)
         s.gauss_seidel, s.order = int(algorithm.kind == "gauss-seidel"), algorithm.order
+        s.threads, s.stage_end = algorithm.threads, _ptr(self.stage_end, _INTS)
         s.keep = max(algorithm.order + 1, 2)
         s.sample_time, s.samples, s.n_sample_values = _ptr(self.sample_time, _DOUBLES), _ptr(self.samples, _DOUBLES), offset
         s.exact_rates, s.new_values = _ptr(self.exact_rates, _DOUBLES), _ptr(self.new_values, _DOUBLES)
@@ -204,6 +226,10 @@ class Kernel:
         self._controller: _Controller | None = None
 
     # -- bookkeeping -----------------------------------------------------------------------------
+
+    def release(self) -> None:
+        """Ends the kernel's second thread (threads = 2), before the instances are freed."""
+        self.library.kernel_release(ctypes.byref(self.setup))
 
     def _call(self, function, *args) -> int:
         logged = {n: len(i.messages) for n, i in self.coupling.instances.items()}

@@ -145,7 +145,8 @@ class SystemPoint:
 
     @staticmethod
     def _settings(values: Mapping[str, Value]) -> dict[str, str]:
-        return {k: str(v) for k, v in values.items() if "." not in k}
+        # a sweep keeps every core busy with points: each steps on one thread unless an axis says
+        return {"threads": "1", **{k: str(v) for k, v in values.items() if "." not in k}}
 
     @staticmethod
     def _with(structure, values: Mapping[str, Value]):

@@ -7,6 +7,7 @@ results up to the last good communication point are written all the same.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass, field
@@ -91,7 +92,7 @@ FIGURES = {"meng2010": ("as Meng et al. 2010, Fig 7", "as Meng et al. 2010, Fig 
 def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
     """The scene's coupling algorithm and macro-step control. Step doubling measures the error on
     the mechanics' outputs to the drives (leg angles and speeds, or lengths and velocities)."""
-    algorithm = default_algorithm(scene.drive, scene.algorithm, scene.order)
+    algorithm = dataclasses.replace(default_algorithm(scene.drive, scene.algorithm, scene.order), threads=scene.threads)
     bounds = dict(step=scene.step, rtol=scene.rtol, h_min=scene.h_min, h_max=scene.h_max)
     if scene.step_control == "doubling":
         return algorithm, StepDoubling(atol={"mechanics": scene.atol or 1e-3}, **bounds)

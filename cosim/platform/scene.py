@@ -13,7 +13,9 @@
                   step doubling, with rollback) | "energy" (ECCO: the power bonds' energy residual),
                   rtol, atol, h_min, h_max (of the adaptive controls; atol in m and rad of the legs'
                   outputs for doubling, in J for energy); startup_time, startup_step (fixed: the
-                  first startup_time seconds at the finer startup_step, for the start-up shock)
+                  first startup_time seconds at the finer startup_step, for the start-up shock);
+                  threads = 2 (the drives of a Gauss-Seidel step on two threads, bit for bit the
+                  same: faster only while the second core is free)
     [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
                   pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
@@ -111,6 +113,7 @@ class Scene:
     outputs_mechanics: list[str] = field(default_factory=list)
     outputs_drive: list[str] | None = None  # None: the drive kind's default
     output_interval: float | None = None
+    threads: int = 1  # 2: the six drives of a Gauss-Seidel step on two threads (a free core needed)
     startup_time: float = 0.0  # [s] the first seconds at the finer startup_step (fixed step control)
     startup_step: float = 0.0
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
@@ -124,7 +127,7 @@ SCHEMA: dict[str, set[str]] = {
     "drive": {"kind", "parameters", "tuning", "parameter_set"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max", "startup_time",
-                 "startup_step"},
+                 "startup_step", "threads"},
     "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
@@ -275,6 +278,9 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     tolerances = {key: number("coupling", coupling, key, default, positive=True)
                   for key, default in (("rtol", 1e-3), ("h_min", 1e-6), ("h_max", 1e-2))}
     atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
+    threads = coupling.get("threads", 1)
+    if threads not in (1, 2) or isinstance(threads, bool):
+        raise fail("coupling", "threads", f"= {threads!r}: use 1, or 2 to step the drives on two threads")
     startup = {key: number("coupling", coupling, key) for key in ("startup_time", "startup_step") if key in coupling}
     for key, value in startup.items():
         if value < 0:
@@ -337,4 +343,4 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                  outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
-                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), **startup)
+                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads, **startup)

@@ -85,7 +85,8 @@ class ScenePoint:
         return ["time", *scene_record(self.scene({}))[1]]
 
     def scene(self, values: Mapping[str, Any]):
-        return load_scene(self.path, {**dict(self.base), **values})
+        # a sweep keeps every core busy with points: each steps on one thread unless an axis says
+        return load_scene(self.path, {"coupling.threads": 1, **dict(self.base), **values})
 
     def check(self, values: Mapping[str, Any]) -> None:
         """Raises SceneError (one line) when the point cannot start: its keys, types and the

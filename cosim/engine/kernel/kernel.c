@@ -4,7 +4,10 @@
  *   - Jacobi: every instance steps from t with inputs extrapolated from its sources' last k + 1
  *     output samples (extrapolation order k = 0, 1, 2), global error O(h^(k+1));
  *   - Gauss-Seidel: instances step in sequence; an input whose source has already stepped is
- *     interpolated through that source's new sample at t + h.
+ *     interpolated through that source's new sample at t + h. A stage of consecutive instances
+ *     that feed none of each other (the platform's six drives) may step on two threads
+ *     (threads = 2): each member reads only what was there before the stage and writes only its
+ *     own slots, so the results are bit for bit the sequential ones.
  *   A source that gives its outputs' time derivatives (fmi2GetRealOutputDerivatives) feeds its
  *   Taylor polynomial at t instead. Input derivatives go to the FMU through
  *   fmi2SetRealInputDerivatives; an FMU that cannot interpolate gets each input held at its
@@ -22,9 +25,13 @@
  * tests/oracle.py is a plain Python transcription of this file that the tests hold it to, bit for
  * bit; it is never used to run anything.
  */
-#define _POSIX_C_SOURCE 199309L /* clock_gettime */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime, nanosleep */
 #include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -90,6 +97,9 @@ typedef struct {
     void **startup_states;            /* [n_instances] saved FMU states of the start-up iteration */
     double *guess, *saved_time;       /* scratch: [n_sample_values], [n_instances] (start-up) */
     int failed_instance, failed_call; /* set when a call fails */
+    int threads;                      /* 2: a stage of independent instances steps on two threads */
+    const int *stage_end;             /* per sequence position j: the stage j belongs to ends before it */
+    void *helper;                     /* the second thread (Helper), made when first needed */
 } Kernel;
 
 static double now(void) {
@@ -98,11 +108,13 @@ static double now(void) {
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+static _Thread_local int on_helper; /* set on the helper thread: its calls' time is the main thread's wait */
+
 #define FMI_CALL(s, k, code, expression)                                                          \
     do {                                                                                           \
-        const double started_ = now();                                                             \
+        const double started_ = on_helper ? 0.0 : now();                                           \
         const int status_ = (expression);                                                          \
-        (s)->fmi_seconds[k] += now() - started_;                                                   \
+        if (!on_helper) (s)->fmi_seconds[k] += now() - started_;                                   \
         if (status_ >= FMI2_ERROR) {                                                               \
             (s)->failed_instance = (k);                                                            \
             (s)->failed_call = (code);                                                             \
@@ -361,6 +373,85 @@ static int start_up(Kernel *s, double t, double h) {
     return push_sample(s, t + h);
 }
 
+/* ---- a stage on two threads ---- */
+
+/* One Gauss-Seidel member: its inputs, its step, its outputs. */
+static int step_member(Kernel *s, int k, double t, double t_new, double h) {
+    if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
+    return do_step(s, k, h) && read_outputs(s, k);
+}
+
+typedef struct {
+    pthread_t thread;
+    atomic_int generation; /* the main thread bumps it to hand out work; -1: quit */
+    atomic_int finished;   /* the generation the helper has finished */
+    Kernel *s;
+    int first, last, status;
+    double t, t_new, h;
+} Helper;
+
+static void *helper_main(void *arg) {
+    Helper *helper = arg;
+    on_helper = 1;
+    int seen = 0;
+    for (;;) {
+        int generation;
+        long spins = 0;
+        while ((generation = atomic_load(&helper->generation)) == seen) {
+            if (++spins > 200000) { /* idle (between the kernel's calls): nap instead of spinning */
+                const struct timespec nap = {0, 20000};
+                nanosleep(&nap, NULL);
+            } else if (spins > 2000) {
+                sched_yield(); /* let whatever shares this core run */
+            }
+        }
+        if (generation < 0) return NULL;
+        seen = generation;
+        int ok = 1;
+        for (int j = helper->first; j < helper->last && ok; j++)
+            ok = step_member(helper->s, helper->s->sequence[j], helper->t, helper->t_new, helper->h);
+        helper->status = ok;
+        atomic_store(&helper->finished, generation);
+    }
+}
+
+/* Sequence positions [j0, j1) (a stage) on two threads: the first half here, the rest on the
+ * helper; the main thread's wait counts as the helper's first member's FMI time. */
+static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, double h) {
+    Helper *helper = s->helper;
+    if (!helper) {
+        helper = calloc(1, sizeof *helper);
+        if (!helper) return 0;
+        helper->s = s;
+        atomic_init(&helper->generation, 0);
+        atomic_init(&helper->finished, 0);
+        if (pthread_create(&helper->thread, NULL, helper_main, helper) != 0) { free(helper); return 0; }
+        s->helper = helper;
+    }
+    helper->first = j0 + (j1 - j0 + 1) / 2;
+    helper->last = j1;
+    helper->t = t, helper->t_new = t_new, helper->h = h;
+    const int generation = atomic_load(&helper->generation) + 1;
+    atomic_store(&helper->generation, generation);
+    int ok = 1;
+    for (int j = j0; j < helper->first && ok; j++) ok = step_member(s, s->sequence[j], t, t_new, h);
+    const double waiting = now();
+    for (long spins = 0; atomic_load(&helper->finished) != generation;)
+        if (++spins > 2000) sched_yield(); /* the helper may be waiting for this core */
+    s->fmi_seconds[s->sequence[helper->first]] += now() - waiting;
+    return ok && helper->status;
+}
+
+/* Ends the helper thread, if there is one. */
+void kernel_release(Kernel *s) {
+    Helper *helper = s->helper;
+    if (!helper) return;
+    atomic_store(&helper->generation, -1);
+    pthread_join(helper->thread, NULL);
+    free(helper);
+    s->helper = NULL;
+}
+
 /* One macro step from t (the master's time) to t + h: the start-up iteration if there is no
  * history yet, otherwise one sweep; the new history sample; the bonds' energy residual (largest
  * into *residual, per bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
@@ -371,10 +462,14 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
     } else {
         memset(s->stepped, 0, (size_t)s->n_instances * sizeof(int));
         if (s->gauss_seidel) {
-            for (int j = 0; j < s->n_instances; j++) {
-                const int k = s->sequence[j];
-                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
-                if (!do_step(s, k, h) || !read_outputs(s, k)) return 0;
+            for (int j = 0; j < s->n_instances;) {
+                const int end = s->threads > 1 && s->stage_end ? s->stage_end[j] : j + 1;
+                if (end - j > 1) {
+                    if (!parallel_stage(s, j, end, t, t_new, h)) return 0;
+                } else if (!step_member(s, s->sequence[j], t, t_new, h)) {
+                    return 0;
+                }
+                j = end;
             }
         } else {
             for (int j = 0; j < s->n_instances; j++) {
