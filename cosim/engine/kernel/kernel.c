@@ -421,11 +421,18 @@ static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, dou
     Helper *helper = s->helper;
     if (!helper) {
         helper = calloc(1, sizeof *helper);
-        if (!helper) return 0;
-        helper->s = s;
-        atomic_init(&helper->generation, 0);
-        atomic_init(&helper->finished, 0);
-        if (pthread_create(&helper->thread, NULL, helper_main, helper) != 0) { free(helper); return 0; }
+        if (helper) {
+            helper->s = s;
+            atomic_init(&helper->generation, 0);
+            atomic_init(&helper->finished, 0);
+            if (pthread_create(&helper->thread, NULL, helper_main, helper) != 0) { free(helper); helper = NULL; }
+        }
+        if (!helper) { /* no second thread to be had: this stage, and the next, one after another */
+            s->threads = 1;
+            for (int j = j0; j < j1; j++)
+                if (!step_member(s, s->sequence[j], t, t_new, h)) return 0;
+            return 1;
+        }
         s->helper = helper;
     }
     helper->first = j0 + (j1 - j0 + 1) / 2;
