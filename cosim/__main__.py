@@ -74,6 +74,10 @@ def _main(argv: list[str] | None = None) -> int:
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
     args = parser.parse_args(argv)
+    out = getattr(args, "out", None)
+    if out is not None and (problem := unwritable(out)):
+        print(f"error: --out {out}: {problem}", file=sys.stderr)
+        return 2
     if args.command == "sweep":
         return run_sweep_file(args.sweep, args.out, args.workers, args.scheduler)
     if args.command == "advise":
@@ -116,6 +120,20 @@ def _main(argv: list[str] | None = None) -> int:
                   f"{args.out}/{scene.path.stem}.csv, .mat, .log" + ("" if args.no_plots else
                                                                     f", plots and the report {scene.path.stem}.html"),
                   args.out)
+
+
+def unwritable(folder: Path) -> str | None:
+    """Why results could not be written into `folder`, or None; checked before a run (nothing is
+    created here), so that nothing computed is lost at its end."""
+    import os
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"cannot write results there ({existing} is not a folder)"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"cannot write results there ({existing} is not writable)"
+    return None
 
 
 def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> int:

@@ -109,3 +109,14 @@ def test_every_warning_is_in_the_log_beside_the_results(tmp_path, capsys):
         assert t == pytest.approx(float(r["step_start"]) + 1e-3, abs=1e-9)
     out = capsys.readouterr().out
     assert f"{len(warnings)} warnings from the FMUs (" in out and "x mechanics: leg # length # m is outside the stroke" in out
+
+
+def test_an_output_folder_that_cannot_be_written_is_one_line_before_the_run(tmp_path, capsys):
+    """--out below a file: one line, exit 2, before anything runs (so nothing computed is lost)."""
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    for command in (["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--no-plots"],
+                    ["sweep", str(ROOT / "sweeps" / "meng_coupling.toml"), "--workers", "0"]):
+        assert main([*command, "--out", str(blocker / "out")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err == f"error: --out {blocker / 'out'}: cannot write results there ({blocker} is not a folder)", err
