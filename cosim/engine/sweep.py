@@ -24,7 +24,6 @@ import math
 import os
 import sys
 import time
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
@@ -187,11 +186,9 @@ def evaluate_task(evaluate: Callable[[Mapping[str, Value]], dict], points: Seque
         try:
             row = dict(evaluate(values))
         except Exception as error:  # a point's failure is its row, never the sweep's end
-            text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-            row = {"status": "failed", "message": f"{type(error).__name__}: {text}" if not isinstance(
-                error, (ValueError, RuntimeError)) else text}
-            if not isinstance(error, (ValueError, RuntimeError, OSError)):
-                row["message"] += " | " + traceback.format_exc(limit=-1).strip().splitlines()[-1]
+            text = str(error).strip().splitlines()[0] if str(error).strip() else ""
+            user = isinstance(error, (ValueError, RuntimeError))  # a value or a run that failed: its own words
+            row = {"status": "failed", "message": text if user and text else f"{type(error).__name__}: {text}"}
         row.setdefault("status", "ok")
         row.setdefault("message", "")
         row["point"], row["wall"] = key, time.perf_counter() - start

@@ -279,7 +279,8 @@ def load_sweep(path: str | Path) -> Sweep:
         raise fail("report", "values", "must be a list of report names")
     for name in wanted:
         if name not in known or name in ("pose_error", "effort_error"):
-            raise fail("report", "values", f"has {name!r}: known reports are {', '.join(known[:5])}")
+            names = [k for k in known if k not in ("pose_error", "effort_error")]
+            raise fail("report", "values", f"has {name!r}: known reports are {', '.join(names)}")
     outputs = report.get("outputs", {})
     if not isinstance(outputs, dict):
         raise fail("report", "outputs", "must be a table of column = [statistics]")
@@ -293,7 +294,6 @@ def load_sweep(path: str | Path) -> Sweep:
         evaluate: ScenePoint | SystemPoint = ScenePoint(str(target), tuple(wanted), output_spec, base)
     else:
         evaluate = SystemPoint(str(target), float(duration) if duration is not None else None, output_spec)
-        wanted = [w for w in wanted if w in SYSTEM_REPORTS]
     _check_points(path, text, evaluate, axes, points)
     recorded = evaluate.recorded()
     for column in outputs:
