@@ -28,15 +28,17 @@
 
 /* Rows every model puts in its table: the internal solver's settings. */
 #define FMU_SOLVER_VARIABLES(X, method, step, rtol, atol)                                          \
-    X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 2,                 \
+    X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 4,                 \
       "Internal ODE solver: 1 = classic Runge-Kutta 4 with fixed step solver.step, "               \
-      "2 = Dormand-Prince 5(4) with error control (solver.rtol, solver.atol), steps <= solver.step") \
+      "2 = Dormand-Prince 5(4) with error control (solver.rtol, solver.atol), steps <= solver.step, " \
+      "3 = Rosenbrock-W ROS34PW2 (order 3, L-stable: no stability limit for stiff models) with "    \
+      "fixed step solver.step, 4 = ROS34PW2 with error control, steps <= solver.step")             \
     X(Real, solver_step, "solver.step", parameter, fixed, "s", step, 1e-7, 1.0,                    \
-      "RK4: the integration step; Dormand-Prince: the largest step")                               \
+      "RK4 and ROS34PW2: the integration step; with error control: the largest step")              \
     X(Real, solver_rtol, "solver.rtol", parameter, fixed, "1", rtol, 1e-14, 0.1,                   \
-      "Relative error tolerance per step (Dormand-Prince)")                                        \
+      "Relative error tolerance per step (methods 2 and 4)")                                      \
     X(Real, solver_atol, "solver.atol", parameter, fixed, "1", atol, 1e-16, 1.0,                   \
-      "Absolute error tolerance per step, in each state's own unit (Dormand-Prince)")              \
+      "Absolute error tolerance per step, in each state's own unit (methods 2 and 4)")            \
     X(Integer, solver_steps, "solver.steps", output, discrete, "", 0, -FMU_INF, FMU_INF,           \
       "Internal solver steps accepted since the start (cost indicator)")                           \
     X(Integer, solver_rejected, "solver.rejected", output, discrete, "", 0, -FMU_INF, FMU_INF,     \

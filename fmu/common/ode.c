@@ -1,7 +1,9 @@
-/* Internal ODE solvers: fixed-step RK4 and adaptive Dormand-Prince 5(4), with state events.
- * See ode.h for the contract. */
+/* Internal ODE solvers: fixed-step RK4, adaptive Dormand-Prince 5(4) and the L-stable
+ * Rosenbrock-W method ROS34PW2 (fixed or adaptive step), with state events. See ode.h for the
+ * contract. */
 #include "ode.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -19,6 +21,171 @@ static const double B1 = 35.0 / 384, B3 = 500.0 / 1113, B4 = 125.0 / 192, B5 = -
 /* Error weights: 5th-order minus embedded 4th-order solution. */
 static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
                     E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
+
+/* Rang & Angermann (2005), ROS34PW2: a 4-stage Rosenbrock-W method of order 3 with an embedded
+ * solution of order 2, L-stable and stiffly accurate (b_i = alpha_4i + gamma_4i); as a W-method it
+ * keeps order 3 with an approximate (here: lagged) Jacobian (tests/models/test_ode.py). Stage i of a step h from (t, y), with gamma_i = sum_j<=i
+ * gamma_ij and alpha_i = sum_j<i alpha_ij:
+ *   (I - h gamma J) k_i = h f(t + alpha_i h, y + sum_j<i alpha_ij k_j) + h J sum_j<i gamma_ij k_j
+ *                         + gamma_i h^2 f_t,
+ *   y_new = y + sum_i b_i k_i,   error estimate sum_i (b_i - b_hat_i) k_i. */
+#define RW_STAGES 4
+static const double RW_GAMMA = 0.435866521508459;
+static const double RW_ALPHA[RW_STAGES][RW_STAGES - 1] = {
+    {0.0, 0.0, 0.0},
+    {0.87173304301691801, 0.0, 0.0},
+    {0.84457060015369423, -0.11299064236484185, 0.0},
+    {0.0, 0.0, 1.0}};
+static const double RW_GAMMA_BELOW[RW_STAGES][RW_STAGES - 1] = {
+    {0.0, 0.0, 0.0},
+    {-0.87173304301691801, 0.0, 0.0},
+    {-0.90338057013044082, 0.054180672388095326, 0.0},
+    {0.24212380706095346, -1.2232505839045147, 0.54526025533510214}};
+static const double RW_B[RW_STAGES] = {0.24212380706095346, -1.2232505839045147, 1.5452602553351020,
+                                       0.435866521508459};
+static const double RW_B_HAT[RW_STAGES] = {0.37810903145819369, -0.096042292212423178, 0.5,
+                                           0.21793326075422950};
+
+/* The linearisation a Rosenbrock-W step uses: J ~ df/dx and f_t ~ df/dt, taken by forward
+ * differences at (t, x) once per call of ode_integrate and again after every event (a W-method
+ * keeps its order with a lagged Jacobian); the LU factors of I - h gamma J for the last h. */
+typedef struct {
+    double jacobian[ODE_MAX_STATES][ODE_MAX_STATES], f_t[ODE_MAX_STATES];
+    double t, x[ODE_MAX_STATES], f[ODE_MAX_STATES]; /* where it was taken, and f there */
+    double lu[ODE_MAX_STATES][ODE_MAX_STATES], lu_h;
+    int pivot[ODE_MAX_STATES], taken, factored;
+    double rhs_calls; /* evaluations since the solver last counted them */
+} Linearization;
+
+static void linearize(const OdeSolver *s, const OdeProblem *p, void *ctx, double t, const double *x,
+                      Linearization *lin) {
+    const int n = p->n_states, n_columns = n - p->n_quadratures;
+    double y[ODE_MAX_STATES], f_perturbed[ODE_MAX_STATES];
+    lin->t = t;
+    memcpy(lin->x, x, sizeof(double) * (size_t)n);
+    p->rhs(ctx, t, x, lin->f);
+    memcpy(y, x, sizeof(double) * (size_t)n);
+    const double scale_floor = s->atol / s->rtol; /* below it a state counts as absolutely small */
+    for (int j = 0; j < n; j++) {
+        if (j >= n_columns) { /* a quadrature: nothing depends on it */
+            for (int i = 0; i < n; i++) lin->jacobian[i][j] = 0.0;
+            continue;
+        }
+        const double delta = sqrt(DBL_EPSILON) * fmax(fabs(x[j]), scale_floor);
+        y[j] = x[j] + delta;
+        p->rhs(ctx, t, y, f_perturbed);
+        const double actual = y[j] - x[j]; /* the increment as represented */
+        for (int i = 0; i < n; i++) lin->jacobian[i][j] = (f_perturbed[i] - lin->f[i]) / actual;
+        y[j] = x[j];
+    }
+    const double dt = sqrt(DBL_EPSILON) * fmax(fabs(t), s->step);
+    p->rhs(ctx, t + dt, x, f_perturbed);
+    const double actual_dt = (t + dt) - t;
+    for (int i = 0; i < n; i++) lin->f_t[i] = (f_perturbed[i] - lin->f[i]) / actual_dt;
+    lin->taken = 1;
+    lin->factored = 0;
+    lin->rhs_calls += n_columns + 2;
+}
+
+/* I - h gamma J is block lower triangular, [A 0; B I], when the last n_quadratures states are
+ * quadratures (their columns of J are zero): LU factors (partial pivoting) of the leading block A
+ * only, in place; 0 if singular. */
+static int factor(int m, Linearization *lin, double h) {
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) lin->lu[i][j] = (i == j ? 1.0 : 0.0) - h * RW_GAMMA * lin->jacobian[i][j];
+    for (int k = 0; k < m; k++) {
+        int best = k;
+        for (int i = k + 1; i < m; i++)
+            if (fabs(lin->lu[i][k]) > fabs(lin->lu[best][k])) best = i;
+        lin->pivot[k] = best;
+        if (!(fabs(lin->lu[best][k]) > 0.0)) return 0;
+        if (best != k) /* the columns from k on: the multipliers stay where they were made (LINPACK) */
+            for (int j = k; j < m; j++) {
+                double swap = lin->lu[k][j];
+                lin->lu[k][j] = lin->lu[best][j];
+                lin->lu[best][j] = swap;
+            }
+        for (int i = k + 1; i < m; i++) {
+            double multiplier = (lin->lu[i][k] /= lin->lu[k][k]);
+            if (multiplier != 0.0)
+                for (int j = k + 1; j < m; j++) lin->lu[i][j] -= multiplier * lin->lu[k][j];
+        }
+    }
+    lin->lu_h = h;
+    lin->factored = 1;
+    return 1;
+}
+
+/* Solves (I - h gamma J) z = b in place: the leading block by the factors, then the quadratures'
+ * rows by substitution, z_q = b_q + h gamma J_q z. */
+static void solve(int n, int m, const Linearization *lin, double *b) {
+    for (int k = 0; k < m; k++) {
+        int r = lin->pivot[k];
+        if (r != k) { double swap = b[k]; b[k] = b[r]; b[r] = swap; }
+        for (int i = k + 1; i < m; i++) b[i] -= lin->lu[i][k] * b[k];
+    }
+    for (int i = m - 1; i >= 0; i--) {
+        double sum = b[i];
+        for (int j = i + 1; j < m; j++) sum -= lin->lu[i][j] * b[j];
+        b[i] = sum / lin->lu[i][i];
+    }
+    for (int i = m; i < n; i++) {
+        double sum = 0.0;
+        for (int j = 0; j < m; j++) sum += lin->jacobian[i][j] * b[j];
+        b[i] += lin->lu_h * RW_GAMMA * sum;
+    }
+}
+
+/* One ROS34PW2 step; returns the scaled error norm (HUGE_VAL, and x_new NaN, if I - h gamma J is
+ * singular). */
+static double rosenbrock_step(const OdeSolver *s, const OdeProblem *p, void *ctx, Linearization *lin,
+                              double t, const double *x, double h, double *x_new) {
+    const int n = p->n_states, m = n - p->n_quadratures;
+    double k[RW_STAGES][ODE_MAX_STATES], y[ODE_MAX_STATES], f[ODE_MAX_STATES], coupled[ODE_MAX_STATES];
+    if (!(lin->factored && lin->lu_h == h) && !factor(m, lin, h)) {
+        for (int i = 0; i < n; i++) x_new[i] = NAN; /* singular: no step */
+        return HUGE_VAL;
+    }
+    const int at_linearization = lin->t == t && memcmp(lin->x, x, sizeof(double) * (size_t)n) == 0;
+    for (int stage = 0; stage < RW_STAGES; stage++) {
+        double alpha = 0.0, gamma = RW_GAMMA;
+        for (int i = 0; i < n; i++) { y[i] = x[i]; coupled[i] = 0.0; }
+        for (int j = 0; j < stage; j++) {
+            alpha += RW_ALPHA[stage][j];
+            gamma += RW_GAMMA_BELOW[stage][j];
+            for (int i = 0; i < n; i++) {
+                y[i] += RW_ALPHA[stage][j] * k[j][i];
+                coupled[i] += RW_GAMMA_BELOW[stage][j] * k[j][i];
+            }
+        }
+        if (stage == 0 && at_linearization) {
+            memcpy(f, lin->f, sizeof(double) * (size_t)n);
+        } else {
+            p->rhs(ctx, t + alpha * h, y, f);
+            lin->rhs_calls += 1;
+        }
+        for (int i = 0; i < n; i++) {
+            double j_coupled = 0.0;
+            if (stage > 0)
+                for (int j = 0; j < m; j++) j_coupled += lin->jacobian[i][j] * coupled[j];
+            k[stage][i] = h * (f[i] + j_coupled) + gamma * h * h * lin->f_t[i];
+        }
+        solve(n, m, lin, k[stage]);
+    }
+    double sum = 0.0;
+    for (int i = 0; i < n; i++) {
+        double step = 0.0, err = 0.0;
+        for (int stage = 0; stage < RW_STAGES; stage++) {
+            step += RW_B[stage] * k[stage][i];
+            err += (RW_B[stage] - RW_B_HAT[stage]) * k[stage][i];
+        }
+        x_new[i] = x[i] + step;
+        double scale = s->atol + s->rtol * fmax(fabs(x[i]), fabs(x_new[i]));
+        sum += (err / scale) * (err / scale);
+    }
+    double norm = sqrt(sum / n);
+    return isfinite(norm) ? norm : HUGE_VAL;
+}
 
 const char *ode_result_text(OdeResult r) {
     switch (r) {
@@ -39,14 +206,17 @@ static int all_finite(int n, const double *x) {
     return 1;
 }
 
-/* One step of length h from (t, x) into x_new. Returns the scaled error norm for DOPRI5
- * (0 for RK4). */
-static double one_step(const OdeSolver *s, const OdeProblem *p, void *ctx, double t,
+/* One step of length h from (t, x) into x_new. Returns the scaled error norm for the adaptive
+ * methods (0 for RK4). */
+static double one_step(const OdeSolver *s, const OdeProblem *p, void *ctx, Linearization *lin, double t,
                        const double *x, double h, double *x_new) {
     const int n = p->n_states;
     double k1[ODE_MAX_STATES], k2[ODE_MAX_STATES], k3[ODE_MAX_STATES], k4[ODE_MAX_STATES],
         k5[ODE_MAX_STATES], k6[ODE_MAX_STATES], k7[ODE_MAX_STATES], y[ODE_MAX_STATES];
     int i;
+
+    if (s->method == ODE_ROSENBROCK || s->method == ODE_ROSENBROCK_ADAPTIVE)
+        return rosenbrock_step(s, p, ctx, lin, t, x, h, x_new);
 
     if (s->method == ODE_RK4) {
         p->rhs(ctx, t, x, k1);
@@ -104,7 +274,7 @@ static int first_crossing(int m, const double *g_a, const double *g_b) {
 /* The step [t, t+h] crossed event k. Finds the shortest step length b such that some event
  * component is >= 0 at the end of a step of length b, to within a small fraction of h, by the
  * Illinois method; writes the state there to x_event. Returns the crossing component. */
-static int locate_event(OdeSolver *s, const OdeProblem *p, void *ctx, double t, const double *x,
+static int locate_event(OdeSolver *s, const OdeProblem *p, void *ctx, Linearization *lin, double t, const double *x,
                         const double *g_start, double h, double *x_event, double *h_event,
                         int k, const double *g_end) {
     const int n = p->n_states, m = p->n_events;
@@ -113,11 +283,11 @@ static int locate_event(OdeSolver *s, const OdeProblem *p, void *ctx, double t, 
     const double tolerance = 1e-7 * h;
     int side = 0;
 
-    one_step(s, p, ctx, t, x, h, x_event); /* b starts at the full step */
+    one_step(s, p, ctx, lin, t, x, h, x_event); /* b starts at the full step */
     for (int iteration = 0; iteration < 60 && b - a > tolerance; iteration++) {
         double c = (a * gb - b * ga) / (gb - ga);
         if (!(c > a && c < b)) c = 0.5 * (a + b);
-        one_step(s, p, ctx, t, x, c, x_trial);
+        one_step(s, p, ctx, lin, t, x, c, x_trial);
         p->events(ctx, t + c, x_trial, g_trial);
         int other = first_crossing(m, g_start, g_trial);
         if (other >= 0) { /* some component has crossed by c: the event is in [a, c] */
@@ -167,9 +337,17 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
 
     if (t_reached) *t_reached = t0;
     if (n < 1 || n > ODE_MAX_STATES || m < 0 || m > ODE_MAX_EVENTS || !(s->step > 0.0) ||
-        (s->method != ODE_RK4 && s->method != ODE_DOPRI5) ||
-        (s->method == ODE_DOPRI5 && !(s->rtol > 0.0 && s->atol > 0.0)))
+        p->n_quadratures < 0 || p->n_quadratures >= n ||
+        s->method < ODE_RK4 || s->method > ODE_ROSENBROCK_ADAPTIVE ||
+        (s->method != ODE_RK4 && !(s->rtol > 0.0 && s->atol > 0.0)))
         return ODE_BAD_SETTINGS;
+    const int rosenbrock = s->method == ODE_ROSENBROCK || s->method == ODE_ROSENBROCK_ADAPTIVE;
+    const int adaptive = s->method == ODE_DOPRI5 || s->method == ODE_ROSENBROCK_ADAPTIVE;
+    /* The error estimates are of order 5 (Dormand-Prince) and 3 (ROS34PW2) in h. */
+    const double error_exponent = rosenbrock ? -1.0 / 3.0 : -0.2;
+    Linearization lin; /* ROS34PW2 only */
+    lin.taken = lin.factored = 0;
+    lin.rhs_calls = 0.0;
     if (m > 0 && (result = handle_events_now(s, p, ctx, t, x, g_start, -1)) != ODE_OK) return result;
 
     const double t_eps = 1e-13 * fmax(1.0, fabs(t1));
@@ -179,7 +357,7 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
         if (++work > ODE_MAX_STEPS) { result = ODE_TOO_MUCH_WORK; break; }
         double remaining = t1 - t, h;
         int reaches_end;
-        if (s->method == ODE_RK4) {
+        if (!adaptive) {
             double steps = ceil(remaining / s->step - 1e-9);
             h = remaining / (steps < 1.0 ? 1.0 : steps);
             reaches_end = steps <= 1.0;
@@ -189,16 +367,21 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
             h = reaches_end ? remaining : planned;
         }
 
-        double error = one_step(s, p, ctx, t, x, h, x_new);
-        s->rhs_calls += (s->method == ODE_RK4) ? 4 : 7;
-        if (s->method == ODE_DOPRI5) {
+        if (rosenbrock && !lin.taken) linearize(s, p, ctx, t, x, &lin);
+        double error = one_step(s, p, ctx, &lin, t, x, h, x_new);
+        s->rhs_calls += (s->method == ODE_RK4) ? 4 : (rosenbrock ? lin.rhs_calls : 7);
+        lin.rhs_calls = 0;
+        if (adaptive) {
             if (error > 1.0 || !all_finite(n, x_new)) {
                 s->rejected += 1;
-                s->h_next = h * (isfinite(error) ? fmax(0.2, 0.9 * pow(error, -0.2)) : 0.2);
+                s->h_next = h * (isfinite(error) ? fmax(0.2, 0.9 * pow(error, error_exponent)) : 0.2);
                 if (s->h_next < 1e-14 * fmax(1.0, fabs(t))) { result = ODE_STEP_TOO_SMALL; break; }
+                /* A rejection may mean the lagged Jacobian no longer fits: retake it here. */
+                if (rosenbrock && (lin.t != t || memcmp(lin.x, x, sizeof(double) * (size_t)n) != 0))
+                    lin.taken = 0;
                 continue;
             }
-            double factor = error > 0.0 ? fmin(5.0, fmax(0.2, 0.9 * pow(error, -0.2))) : 5.0;
+            double factor = error > 0.0 ? fmin(5.0, fmax(0.2, 0.9 * pow(error, error_exponent))) : 5.0;
             double proposal = fmin(s->step, h * factor);
             /* A step cut short to meet t1 says little about the next one; keep the plan. */
             s->h_next = (reaches_end && s->h_next > proposal) ? s->h_next : proposal;
@@ -212,11 +395,12 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
             int k = first_crossing(m, g_start, g_end);
             if (k >= 0) {
                 double h_event;
-                k = locate_event(s, p, ctx, t, x, g_start, h, x_event, &h_event, k, g_end);
+                k = locate_event(s, p, ctx, &lin, t, x, g_start, h, x_event, &h_event, k, g_end);
                 t = (h_event >= h) ? t + h : t + h_event;
                 memcpy(x, x_event, sizeof(double) * (size_t)n);
                 s->steps += 1;
                 if ((result = handle_events_now(s, p, ctx, t, x, g_start, k)) != ODE_OK) break;
+                lin.taken = 0; /* the event changed the model */
                 continue;
             }
             memcpy(g_start, g_end, sizeof(double) * (size_t)m);

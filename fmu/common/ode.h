@@ -8,6 +8,16 @@
  *   ODE_DOPRI5 Dormand-Prince 5(4) embedded pair with local error control
  *              (err_i / (atol + rtol * max(|x_i|, |x_new_i|)), RMS norm <= 1), steps capped at `step`.
  *
+ *   ODE_ROSENBROCK  ROS34PW2 (Rang & Angermann 2005), a linearly implicit Rosenbrock-W method of
+ *              order 3 with fixed steps (as RK4); L-stable and stiffly accurate, so a stiff part
+ *              (a current loop far faster than the step) is damped as the exact solution damps it,
+ *              with no stability limit on the step. Its Jacobian is taken by forward differences
+ *              once per call and after each event (a W-method keeps its order with a lagged
+ *              Jacobian): n - n_quadratures + 2 evaluations of the right-hand side, then 4 per step
+ *              (3 on the step that starts where the Jacobian was taken).
+ *   ODE_ROSENBROCK_ADAPTIVE  the same with error control by its embedded order-2 solution (the
+ *              Jacobian also retaken after a rejection), steps capped at `step`.
+ *
  * State events: a problem may give event functions g(t, x). An event occurs when a component
  * goes from g < 0 to g >= 0 inside a step; the solver locates it by the Illinois variant of
  * regula falsi on the step length (every trial is a full step of the method from the start of
@@ -24,7 +34,7 @@
 #define ODE_MAX_STATES 32
 #define ODE_MAX_EVENTS 8
 
-typedef enum { ODE_RK4 = 1, ODE_DOPRI5 = 2 } OdeMethod;
+typedef enum { ODE_RK4 = 1, ODE_DOPRI5 = 2, ODE_ROSENBROCK = 3, ODE_ROSENBROCK_ADAPTIVE = 4 } OdeMethod;
 
 typedef enum {
     ODE_OK = 0,
@@ -51,13 +61,15 @@ typedef struct {
     int n_events;         /* 0: no events */
     OdeEvents events;
     OdeOnEvent on_event;
+    int n_quadratures;    /* the last n_quadratures states are integrals no derivative reads (energy
+                             accounts): the Rosenbrock-W method skips their Jacobian columns */
 } OdeProblem;
 
 typedef struct {
     int method;           /* OdeMethod */
-    double step;          /* RK4: the step; DOPRI5: the largest step */
-    double rtol, atol;    /* DOPRI5 only */
-    double h_next;        /* DOPRI5: step proposed by the controller for the next step (0: choose) */
+    double step;          /* RK4, ROSENBROCK: the step; the adaptive methods: the largest step */
+    double rtol, atol;    /* the adaptive methods only */
+    double h_next;        /* adaptive: step proposed by the controller for the next step (0: choose) */
     double steps, rejected, events, rhs_calls; /* counters (double: they survive a state copy as data) */
 } OdeSolver;
 

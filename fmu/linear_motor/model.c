@@ -15,7 +15,9 @@
 
 #include <string.h>
 
-enum { CURRENT, INT_POSITION, INT_CURRENT, E_ELECTRICAL, E_COPPER, E_ELECTROMAGNETIC, E_LOSS, E_RIPPLE };
+/* The states; the energy accounts last: they are integrals no derivative reads (N_QUADRATURES). */
+enum { CURRENT, INT_POSITION, INT_CURRENT, E_ELECTRICAL, E_COPPER, E_ELECTROMAGNETIC, E_LOSS, E_RIPPLE,
+       N_QUADRATURES = 5 };
 enum { MODE_POSITION = 1, MODE_FORCE = 2, MODE_VOLTAGE = 3 };
 
 static const double PI = 3.14159265358979323846;
@@ -111,7 +113,7 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
 }
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
-    const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL};
+    const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, N_QUADRATURES};
     if (fmu_integrate(fmu, &problem, fmu, h, 0.0) != fmi2OK) return fmi2Error;
     Signals s;
     evaluate(fmu, fmu->s.time + h, fmu->s.x, &s);

@@ -23,8 +23,9 @@
 
 #include <string.h>
 
-enum { I_D, I_Q, V_D, V_Q, INT_POSITION, INT_SPEED, INT_CURRENT_D, INT_CURRENT_Q,
-       E_ELECTRICAL, E_COPPER, E_MECHANICAL, I_0 };
+/* The states; the energy accounts last: they are integrals no derivative reads (N_QUADRATURES). */
+enum { I_D, I_Q, I_0, V_D, V_Q, INT_POSITION, INT_SPEED, INT_CURRENT_D, INT_CURRENT_Q,
+       E_ELECTRICAL, E_COPPER, E_MECHANICAL, N_QUADRATURES = 3 };
 
 enum { INVERTER_IDEAL = 1, INVERTER_AVERAGED = 2, INVERTER_SWITCHING = 3 };
 enum { MODE_POSITION = 1, MODE_SPEED = 2, MODE_TORQUE = 3 };
@@ -210,7 +211,7 @@ static void commutate(void *ctx, double t, const double *x, int phase) {
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const int switching = fmu->s.v.inverter_model == INVERTER_SWITCHING;
-    const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate};
+    const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate, N_QUADRATURES};
     return fmu_integrate(fmu, &problem, fmu, h, switching ? fmu->s.v.inverter_max_step : 0.0);
 }
 
