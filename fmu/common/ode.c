@@ -46,37 +46,44 @@ static const double RW_B[RW_STAGES] = {0.24212380706095346, -1.2232505839045147,
 static const double RW_B_HAT[RW_STAGES] = {0.37810903145819369, -0.096042292212423178, 0.5,
                                            0.21793326075422950};
 
-/* The linearisation a Rosenbrock-W step uses: J ~ df/dx and f_t ~ df/dt, taken by forward
- * differences at (t, x) once per call of ode_integrate and again after every event (a W-method
- * keeps its order with a lagged Jacobian); the LU factors of I - h gamma J for the last h. */
+/* The linearisation a Rosenbrock-W step uses: J ~ df/dx in the columns of the leading, stiff states
+ * (the model's, or by forward differences; the other columns zero, so the states nothing stiff
+ * depends on are treated explicitly) and f_t ~ df/dt (forward difference), taken at (t, x) once per call of
+ * ode_integrate and again after every event (a W-method keeps its order with any such matrix, and
+ * with a lagged one); the LU factors of I - h gamma J's stiff block for the last h. */
 typedef struct {
     double jacobian[ODE_MAX_STATES][ODE_MAX_STATES], f_t[ODE_MAX_STATES];
     double t, x[ODE_MAX_STATES], f[ODE_MAX_STATES]; /* where it was taken, and f there */
-    double lu[ODE_MAX_STATES][ODE_MAX_STATES], lu_h;
+    double lu[ODE_MAX_STATES][ODE_MAX_STATES], lu_h, inverse_pivot[ODE_MAX_STATES]; /* 1 / U_kk */
     int pivot[ODE_MAX_STATES], taken, factored;
     double rhs_calls; /* evaluations since the solver last counted them */
 } Linearization;
 
+static int stiff_states(const OdeProblem *p) { return p->n_stiff > 0 ? p->n_stiff : p->n_states; }
+
 static void linearize(const OdeSolver *s, const OdeProblem *p, void *ctx, double t, const double *x,
                       Linearization *lin) {
-    const int n = p->n_states, n_columns = n - p->n_quadratures;
+    const int n = p->n_states, m = stiff_states(p);
     double y[ODE_MAX_STATES], f_perturbed[ODE_MAX_STATES];
     lin->t = t;
     memcpy(lin->x, x, sizeof(double) * (size_t)n);
     p->rhs(ctx, t, x, lin->f);
-    memcpy(y, x, sizeof(double) * (size_t)n);
-    const double scale_floor = s->atol / s->rtol; /* below it a state counts as absolutely small */
-    for (int j = 0; j < n; j++) {
-        if (j >= n_columns) { /* a quadrature: nothing depends on it */
-            for (int i = 0; i < n; i++) lin->jacobian[i][j] = 0.0;
-            continue;
+    if (p->jacobian) {
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < m; j++) lin->jacobian[i][j] = 0.0;
+        p->jacobian(ctx, t, x, lin->jacobian);
+    } else {
+        const double scale_floor = s->atol / s->rtol; /* below it a state counts as absolutely small */
+        memcpy(y, x, sizeof(double) * (size_t)n);
+        for (int j = 0; j < m; j++) {
+            const double delta = sqrt(DBL_EPSILON) * fmax(fabs(x[j]), scale_floor);
+            y[j] = x[j] + delta;
+            p->rhs(ctx, t, y, f_perturbed);
+            const double actual = y[j] - x[j]; /* the increment as represented */
+            for (int i = 0; i < n; i++) lin->jacobian[i][j] = (f_perturbed[i] - lin->f[i]) / actual;
+            y[j] = x[j];
         }
-        const double delta = sqrt(DBL_EPSILON) * fmax(fabs(x[j]), scale_floor);
-        y[j] = x[j] + delta;
-        p->rhs(ctx, t, y, f_perturbed);
-        const double actual = y[j] - x[j]; /* the increment as represented */
-        for (int i = 0; i < n; i++) lin->jacobian[i][j] = (f_perturbed[i] - lin->f[i]) / actual;
-        y[j] = x[j];
+        lin->rhs_calls += m;
     }
     const double dt = sqrt(DBL_EPSILON) * fmax(fabs(t), s->step);
     p->rhs(ctx, t + dt, x, f_perturbed);
@@ -84,12 +91,10 @@ static void linearize(const OdeSolver *s, const OdeProblem *p, void *ctx, double
     for (int i = 0; i < n; i++) lin->f_t[i] = (f_perturbed[i] - lin->f[i]) / actual_dt;
     lin->taken = 1;
     lin->factored = 0;
-    lin->rhs_calls += n_columns + 2;
+    lin->rhs_calls += 2;
 }
 
-/* I - h gamma J is block lower triangular, [A 0; B I], when the last n_quadratures states are
- * quadratures (their columns of J are zero): LU factors (partial pivoting) of the leading block A
- * only, in place; 0 if singular. */
+/* LU factors (partial pivoting) of the stiff block of I - h gamma J, in place; 0 if singular. */
 static int factor(int m, Linearization *lin, double h) {
     for (int i = 0; i < m; i++)
         for (int j = 0; j < m; j++) lin->lu[i][j] = (i == j ? 1.0 : 0.0) - h * RW_GAMMA * lin->jacobian[i][j];
@@ -105,8 +110,9 @@ static int factor(int m, Linearization *lin, double h) {
                 lin->lu[k][j] = lin->lu[best][j];
                 lin->lu[best][j] = swap;
             }
+        lin->inverse_pivot[k] = 1.0 / lin->lu[k][k]; /* the solves multiply */
         for (int i = k + 1; i < m; i++) {
-            double multiplier = (lin->lu[i][k] /= lin->lu[k][k]);
+            double multiplier = (lin->lu[i][k] *= lin->inverse_pivot[k]);
             if (multiplier != 0.0)
                 for (int j = k + 1; j < m; j++) lin->lu[i][j] -= multiplier * lin->lu[k][j];
         }
@@ -116,8 +122,9 @@ static int factor(int m, Linearization *lin, double h) {
     return 1;
 }
 
-/* Solves (I - h gamma J) z = b in place: the leading block by the factors, then the quadratures'
- * rows by substitution, z_q = b_q + h gamma J_q z. */
+/* Solves (I - h gamma J) z = b in place. J's columns beyond the stiff block are zero, so the matrix
+ * is block lower triangular, [I - h gamma A, 0; -h gamma B, I]: the stiff block by its factors, then
+ * the other rows by substitution, z_rest = b_rest + h gamma B z_stiff. */
 static void solve(int n, int m, const Linearization *lin, double *b) {
     for (int k = 0; k < m; k++) {
         int r = lin->pivot[k];
@@ -127,7 +134,7 @@ static void solve(int n, int m, const Linearization *lin, double *b) {
     for (int i = m - 1; i >= 0; i--) {
         double sum = b[i];
         for (int j = i + 1; j < m; j++) sum -= lin->lu[i][j] * b[j];
-        b[i] = sum / lin->lu[i][i];
+        b[i] = sum * lin->inverse_pivot[i];
     }
     for (int i = m; i < n; i++) {
         double sum = 0.0;
@@ -140,7 +147,7 @@ static void solve(int n, int m, const Linearization *lin, double *b) {
  * singular). */
 static double rosenbrock_step(const OdeSolver *s, const OdeProblem *p, void *ctx, Linearization *lin,
                               double t, const double *x, double h, double *x_new) {
-    const int n = p->n_states, m = n - p->n_quadratures;
+    const int n = p->n_states, m = stiff_states(p);
     double k[RW_STAGES][ODE_MAX_STATES], y[ODE_MAX_STATES], f[ODE_MAX_STATES], coupled[ODE_MAX_STATES];
     if (!(lin->factored && lin->lu_h == h) && !factor(m, lin, h)) {
         for (int i = 0; i < n; i++) x_new[i] = NAN; /* singular: no step */
@@ -337,7 +344,7 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
 
     if (t_reached) *t_reached = t0;
     if (n < 1 || n > ODE_MAX_STATES || m < 0 || m > ODE_MAX_EVENTS || !(s->step > 0.0) ||
-        p->n_quadratures < 0 || p->n_quadratures >= n ||
+        p->n_stiff < 0 || p->n_stiff > n ||
         s->method < ODE_RK4 || s->method > ODE_ROSENBROCK_ADAPTIVE ||
         (s->method != ODE_RK4 && !(s->rtol > 0.0 && s->atol > 0.0)))
         return ODE_BAD_SETTINGS;

@@ -11,10 +11,13 @@
  *   ODE_ROSENBROCK  ROS34PW2 (Rang & Angermann 2005), a linearly implicit Rosenbrock-W method of
  *              order 3 with fixed steps (as RK4); L-stable and stiffly accurate, so a stiff part
  *              (a current loop far faster than the step) is damped as the exact solution damps it,
- *              with no stability limit on the step. Its Jacobian is taken by forward differences
- *              once per call and after each event (a W-method keeps its order with a lagged
- *              Jacobian): n - n_quadratures + 2 evaluations of the right-hand side, then 4 per step
- *              (3 on the step that starts where the Jacobian was taken).
+ *              with no stability limit on the step. The method's matrix approximates df/dx in the
+ *              columns of the leading n_stiff states (the others' columns zero: states such as slow
+ *              integrators and energy accounts are explicit), the model's own
+ *              (OdeProblem.jacobian) or by forward differences (n_stiff evaluations of the
+ *              right-hand side), taken once per call and after each event (a W-method keeps its
+ *              order 3 with any such matrix, and with a lagged one). Then f and df/dt (2 evaluations) and 4 per step (3 on the step that starts
+ *              where the matrix was taken).
  *   ODE_ROSENBROCK_ADAPTIVE  the same with error control by its embedded order-2 solution (the
  *              Jacobian also retaken after a rejection), steps capped at `step`.
  *
@@ -54,6 +57,9 @@ typedef enum {
 typedef void (*OdeRhs)(void *ctx, double t, const double *x, double *dxdt);
 typedef void (*OdeEvents)(void *ctx, double t, const double *x, double *g);
 typedef void (*OdeOnEvent)(void *ctx, double t, const double *x, int which);
+/* Optional: the model's own approximation of df/dx at (t, x) in the stiff states' columns, written
+ * into the entries it knows of jacobian[0 .. n-1][0 .. n_stiff-1], which the solver has zeroed. */
+typedef void (*OdeJacobian)(void *ctx, double t, const double *x, double jacobian[][ODE_MAX_STATES]);
 
 typedef struct {
     int n_states;
@@ -61,8 +67,9 @@ typedef struct {
     int n_events;         /* 0: no events */
     OdeEvents events;
     OdeOnEvent on_event;
-    int n_quadratures;    /* the last n_quadratures states are integrals no derivative reads (energy
-                             accounts): the Rosenbrock-W method skips their Jacobian columns */
+    int n_stiff;          /* Rosenbrock-W: the leading n_stiff states are implicit (0: all); the
+                             rest (slow integrators, energy accounts) are explicit */
+    OdeJacobian jacobian; /* NULL: the Rosenbrock-W method takes df/dx by forward differences */
 } OdeProblem;
 
 typedef struct {

@@ -23,9 +23,10 @@
 
 #include <string.h>
 
-/* The states; the energy accounts last: they are integrals no derivative reads (N_QUADRATURES). */
-enum { I_D, I_Q, I_0, V_D, V_Q, INT_POSITION, INT_SPEED, INT_CURRENT_D, INT_CURRENT_Q,
-       E_ELECTRICAL, E_COPPER, E_MECHANICAL, N_QUADRATURES = 3 };
+/* The states: first the current loops' (stiff: the Rosenbrock-W solver takes them implicitly),
+ * then the outer loops' integrators and the energy accounts (slow: explicit). */
+enum { I_D, I_Q, I_0, V_D, V_Q, INT_CURRENT_D, INT_CURRENT_Q, N_STIFF,
+       INT_POSITION = N_STIFF, INT_SPEED, E_ELECTRICAL, E_COPPER, E_MECHANICAL };
 
 enum { INVERTER_IDEAL = 1, INVERTER_AVERAGED = 2, INVERTER_SWITCHING = 3 };
 enum { MODE_POSITION = 1, MODE_SPEED = 2, MODE_TORQUE = 3 };
@@ -186,6 +187,60 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     dxdt[E_MECHANICAL] = s.torque * s.speed;
 }
 
+/* The stiff block of df/dx for the Rosenbrock-W solver: the current loops, the inverter and the
+ * winding (Eqs 24-25 with the ACR and the inverter lag), with the limits as they stand at (t, x).
+ * The outer loops' integrators are outside the block (explicit): a W-method keeps its order with
+ * any matrix, and they are slow. */
+static void stiff_jacobian(void *ctx, double t, const double *x, double J[][ODE_MAX_STATES]) {
+    const FmuInstance *fmu = (const FmuInstance *)ctx;
+    const ModelVariables *v = &fmu->s.v;
+    Signals s;
+    evaluate(fmu, t, x, &s, 0);
+    const double R = v->motor_resistance, L_d = v->motor_inductance_d, L_q = v->motor_inductance_q;
+    const double w_r = s.electrical_speed, kp = v->control_current_kp, ki = v->control_current_ki;
+    J[I_D][I_D] = -R / L_d;
+    J[I_D][I_Q] = w_r * L_q / L_d;
+    J[I_Q][I_Q] = -R / L_q;
+    J[I_Q][I_D] = -w_r * L_d / L_q;
+    J[I_0][I_0] = -R / v->motor_inductance_0;
+    /* The energy accounts' rows: P_el = u . i, P_cu = R |i|^2, P_mech = T(i) speed (Eq 26). */
+    const double reluctance = v->motor_pole_pairs * (L_d - L_q);
+    J[E_COPPER][I_D] = 2.0 * R * x[I_D];
+    J[E_COPPER][I_Q] = 2.0 * R * x[I_Q];
+    J[E_COPPER][I_0] = 2.0 * R * x[I_0];
+    J[E_MECHANICAL][I_D] = reluctance * x[I_Q] * s.speed;
+    J[E_MECHANICAL][I_Q] = (v->motor_torque_constant + reluctance * x[I_D]) * s.speed;
+    J[E_ELECTRICAL][I_D] = s.voltage_d;
+    J[E_ELECTRICAL][I_Q] = s.voltage_q;
+    J[E_ELECTRICAL][I_0] = s.voltage_0;
+    if (v->inverter_model == INVERTER_SWITCHING) return; /* the voltages are the switches' */
+
+    /* The current controllers: command = kp (i* - i) + int, zero slope while clamped; then
+     * int' = ki (i* - i) + (ki / kp) (command - raw): clamped, the integrator tracks the limit. */
+    const int axis_current[2] = {I_D, I_Q}, axis_integral[2] = {INT_CURRENT_D, INT_CURRENT_Q};
+    const int axis_voltage[2] = {V_D, V_Q};
+    const int free[2] = {s.command_d == s.command_d_raw, s.command_q == s.command_q_raw};
+    const double inductance[2] = {L_d, L_q};
+    for (int axis = 0; axis < 2; axis++) {
+        const int i = axis_current[axis], integral = axis_integral[axis], u = axis_voltage[axis];
+        const double d_command_d_current = free[axis] ? -kp : 0.0, d_command_d_integral = free[axis] ? 1.0 : 0.0;
+        J[integral][i] = free[axis] ? -ki : 0.0;
+        J[integral][integral] = free[axis] ? 0.0 : -ki / kp;
+        if (v->inverter_model == INVERTER_IDEAL) { /* u = K_v command */
+            J[i][i] += v->inverter_gain * d_command_d_current / inductance[axis];
+            J[i][integral] = v->inverter_gain * d_command_d_integral / inductance[axis];
+            J[E_ELECTRICAL][i] += x[i] * v->inverter_gain * d_command_d_current;
+            J[E_ELECTRICAL][integral] = x[i] * v->inverter_gain * d_command_d_integral;
+        } else { /* tau_v u' = K_v command - u */
+            J[E_ELECTRICAL][u] = x[i];
+            J[i][u] = 1.0 / inductance[axis];
+            J[u][u] = -1.0 / v->inverter_time_constant;
+            J[u][i] = v->inverter_gain * d_command_d_current / v->inverter_time_constant;
+            J[u][integral] = v->inverter_gain * d_command_d_integral / v->inverter_time_constant;
+        }
+    }
+}
+
 /* Hysteresis comparators: phase k with its upper switch open (current falling or free) switches
  * when the error i_k* - i_k reaches +band; with it closed, when the error reaches -band. */
 static void hysteresis_events(void *ctx, double t, const double *x, double *g) {
@@ -211,7 +266,8 @@ static void commutate(void *ctx, double t, const double *x, int phase) {
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const int switching = fmu->s.v.inverter_model == INVERTER_SWITCHING;
-    const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate, N_QUADRATURES};
+    const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate, N_STIFF,
+                                stiff_jacobian};
     return fmu_integrate(fmu, &problem, fmu, h, switching ? fmu->s.v.inverter_max_step : 0.0);
 }
 

@@ -15,7 +15,7 @@ static void oscillator(void *ctx, double t, const double *x, double *dxdt) {
 double probe_oscillator(int method, double step, double rtol, double t_end, int pieces, double *steps,
                         double *rejected) {
     OdeSolver solver = {method, step, rtol, rtol, 0.0, 0, 0, 0, 0};
-    OdeProblem problem = {2, oscillator, 0, 0, 0, 0};
+    OdeProblem problem = {2, oscillator, 0, 0, 0, 0, 0};
     double x[2] = {1.0, 0.0}, t = 0.0;
     for (int i = 0; i < pieces; i++) {
         double t_next = t_end * (i + 1) / pieces;
@@ -51,7 +51,7 @@ static void oscillator_ctx(void *ctx, double t, const double *x, double *dxdt) {
 /* Returns the number of events on [0, t_end]; their times go to times[0..3]. */
 int probe_events(int method, double step, double rtol, double t_end, double *times) {
     OdeSolver solver = {method, step, rtol, rtol, 0.0, 0, 0, 0, 0};
-    OdeProblem problem = {2, oscillator_ctx, 1, threshold, record, 0};
+    OdeProblem problem = {2, oscillator_ctx, 1, threshold, record, 0, 0};
     EventLog log = {{0, 0, 0, 0}, 0, 1.0};
     double x[2] = {1.0, 0.0};
     if (ode_integrate(&solver, &problem, &log, x, 0.0, t_end, 0) != ODE_OK) return -1;
@@ -73,7 +73,7 @@ static void prothero_robinson(void *ctx, double t, const double *x, double *dxdt
 double probe_stiff(int method, double step, double rtol, double lambda, double t_end, int pieces, double *steps,
                    double *rhs_calls) {
     OdeSolver solver = {method, step, rtol, rtol, 0.0, 0, 0, 0, 0};
-    OdeProblem problem = {2, prothero_robinson, 0, 0, 0, 1};
+    OdeProblem problem = {2, prothero_robinson, 0, 0, 0, 1, 0};
     double x[2] = {0.0, 0.0}, t = 0.0;
     for (int i = 0; i < pieces; i++) {
         double t_next = t_end * (i + 1) / pieces;
@@ -103,7 +103,7 @@ static void linear_system(void *ctx, double t, const double *x, double *dxdt) {
 
 int probe_linear(int method, double step, int n, const double *a, double *x, double t_end, int pieces) {
     OdeSolver solver = {method, step, 1e-6, 1e-6, 0.0, 0, 0, 0, 0};
-    OdeProblem problem = {n, linear_system, 0, 0, 0, 0};
+    OdeProblem problem = {n, linear_system, 0, 0, 0, 0, 0};
     LinearSystem system = {n, a};
     double t = 0.0;
     for (int i = 0; i < pieces; i++) {
@@ -125,7 +125,7 @@ static void logistic(void *ctx, double t, const double *x, double *dxdt) {
 
 double probe_logistic(int method, double step, double t_end) {
     OdeSolver solver = {method, step, 1e-6, 1e-6, 0.0, 0, 0, 0, 0};
-    OdeProblem problem = {1, logistic, 0, 0, 0, 0};
+    OdeProblem problem = {1, logistic, 0, 0, 0, 0, 0};
     double x[1] = {0.1};
     if (ode_integrate(&solver, &problem, 0, x, 0.0, t_end, 0) != ODE_OK) return -1.0;
     return fabs(x[0] - 1.0 / (1.0 + 9.0 * exp(-t_end)));

@@ -11,7 +11,7 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
 }
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
-    const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, 0};
+    const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, 0, NULL};
     return fmu_integrate(fmu, &problem, fmu, h, 0.0);
 }
 
