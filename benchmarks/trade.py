@@ -59,7 +59,7 @@ def _overrides(changes: dict) -> dict:
     """A point's changes to the scene as overrides at the scene file's keys."""
     keys = {"algorithm": "coupling.algorithm", "order": "coupling.order", "step": "scene.step",
             "step_control": "coupling.step_control", "rtol": "coupling.rtol", "atol": "coupling.atol",
-            "startup_time": "coupling.startup_time"}
+            "startup_time": "coupling.startup_time", "startup_step": "coupling.startup_step"}
     out = {}
     for name, value in changes.items():
         if name in keys:
@@ -121,7 +121,10 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
                         dict(step_control="energy", rtol=tolerance, atol=tolerance / 10)))
     for name, drive in fidelities.items():
         for factor in (0.5, 1.0):
-            planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", dict(step=h * factor, drive=drive)))
+            changes = dict(step=h * factor, drive=drive)
+            if drive.get("solver.method") == 3 and scene.startup_time:  # one drive step per macro step
+                changes["startup_step"] = h * factor / 16                  # needs the finer start finer
+            planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", changes))
     for name, mechanics in effects.items():
         planned.append((f"{name}, {h * 1e3:g} ms", "ours effects", dict(mechanics=mechanics)))
     if scene.startup_time:  # what the scene's finer start buys
@@ -221,7 +224,9 @@ def main() -> None:
     sumnu = dataclasses.replace(load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), duration=args.probe)
     studies = [  # name, scene, the same as overrides of its file (for the sweep), fidelities, effects
         ("meng", meng, (("scene.duration", args.probe), ("load.pulses", [])), {"ideal inverter": {"inverter.model": 1}, "averaged inverter": {"inverter.model": 2},
-                        "switching inverter": {"inverter.model": 3}},
+                        "switching inverter": {"inverter.model": 3},
+                        "averaged inverter, L-stable drives (ROS34PW2, one step per macro step; start at a sixteenth)":
+                            {"inverter.model": 2, "solver.method": 3, "solver.step": meng.step}},
          {"friction off": {"effects.friction": False}, "actuator inertia off": {"effects.actuator_inertia": False},
           "motor systems off": {"effects.motor_inertia": False}}),
         ("sumnu_case_1", sumnu, (("scene.duration", args.probe),), {"ideal force source": {"effects.electrical": False},
