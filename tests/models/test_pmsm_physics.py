@@ -118,14 +118,16 @@ def test_rk4_energy_residual_converges_at_fourth_order(make_drive):
     assert order == pytest.approx(4.0, abs=0.5), (residuals, order)
 
 
-def test_rosenbrock_energy_residual_converges_at_third_order(make_drive):
+@pytest.mark.parametrize("inverter", [1, 2], ids=["ideal", "averaged"])
+def test_rosenbrock_energy_residual_converges_at_third_order(make_drive, inverter):
     """ROS34PW2 with fixed steps: the energy residual is its global error, which falls at about
     order 3 (fitted over 1e-4 .. 1.25e-5 s: above 2.5, measured 2.8; the start's current limit makes
-    the sequence irregular, 1.2e-2, 1.6e-4, 1.9e-4, 1.6e-5)."""
+    the averaged inverter's sequence irregular, 1.2e-2, 1.6e-4, 1.9e-4, 1.6e-5; the ideal inverter's
+    fit is 3.1)."""
     steps = [1e-4, 5e-5, 2.5e-5, 1.25e-5]
     residuals = []
     for i, h in enumerate(steps):
-        drive = make_drive({"control.mode": 1, "inverter.model": 2, "solver.method": 3, "solver.step": h},
+        drive = make_drive({"control.mode": 1, "inverter.model": inverter, "solver.method": 3, "solver.step": h},
                            name=f"ros_{i}")
         residuals.append(energy_residual(drive, 0.1)[0])
     order = np.polyfit(np.log(steps), np.log(residuals), 1)[0]
@@ -135,7 +137,7 @@ def test_rosenbrock_energy_residual_converges_at_third_order(make_drive):
 def on_inertia(make_drive, settings: dict, name: str) -> np.ndarray | None:
     """The drive on one leg's motor-side inertia (0.0209 kg m^2) tracking a 1 rad, 2 Hz sine at
     1 ms communication steps for 0.3 s: the torque at each step, or None if the solver failed."""
-    drive = make_drive({"inverter.model": 2, **settings}, name=name)
+    drive = make_drive(settings, name=name)
     try:
         result = run_on_inertia(drive, RigidInertia(0.0209), 0.3, 1e-3,
                                 lambda t: {"angle_ref": np.sin(2 * np.pi * 2 * t)})
@@ -144,19 +146,20 @@ def on_inertia(make_drive, settings: dict, name: str) -> np.ndarray | None:
     return result["torque"]
 
 
-@pytest.mark.parametrize("inductance", [6.9e-3, 6.9e-4], ids=["nominal", "a-tenth"])
-def test_rosenbrock_is_stable_at_the_macro_step_where_rk4_is_not(make_drive, inductance):
+@pytest.mark.parametrize("inverter,inductance,rk4_limit", [(2, 6.9e-3, 5e-4), (2, 6.9e-4, 2e-4), (1, 6.9e-4, 2e-4)],
+                         ids=["averaged-nominal", "averaged-a-tenth", "ideal-a-tenth"])
+def test_rosenbrock_is_stable_at_the_macro_step_where_rk4_is_not(make_drive, inverter, inductance, rk4_limit):
     """The current loop's poles (near -5000 1/s nominal, ten times faster with a tenth of the
-    inductance) bound RK4's step: at 0.5 ms (nominal) or 0.2 ms (a tenth) it leaves the solution.
-    ROS34PW2 at the whole 1 ms communication step stays on it: against Dormand-Prince at 1e-10,
-    within 10 % of the peak torque in the start (the reference's step from rest to 12.6 rad/s,
-    a transient of 0.2 ms, shorter than the step) and within 1e-3 after 50 ms (measured 8 % and
-    2.4e-4 nominal, 4 % and 1.4e-4 with a tenth). At 1e-5 s both methods agree with the reference
-    to 1e-4 of the peak (measured 1e-7 .. 9e-6)."""
-    motor = {"motor.inductance_d": inductance, "motor.inductance_q": inductance}
+    inductance) bound RK4's step: at 0.5 ms (nominal, averaged inverter) or 0.2 ms (a tenth) it
+    leaves the solution. ROS34PW2 at the whole 1 ms communication step stays on it: against
+    Dormand-Prince at 1e-10, within 10 % of the peak torque in the start (the reference's step from
+    rest to 12.6 rad/s, a transient of 0.2 ms, shorter than the step) and within 1e-3 after 50 ms
+    (measured 8 % and 2.5e-4 averaged nominal, 4 % and 1.6e-4 averaged with a tenth, 2 % and 1e-4
+    ideal with a tenth). At 1e-5 s both methods agree with the reference to 1e-4 of the peak
+    (measured 1e-7 .. 9e-6)."""
+    motor = {"inverter.model": inverter, "motor.inductance_d": inductance, "motor.inductance_q": inductance}
     reference = on_inertia(make_drive, {**motor, "solver.method": 2, "solver.rtol": 1e-10, "solver.atol": 1e-10}, "ref")
     peak = np.abs(reference).max()
-    rk4_limit = 5e-4 if inductance > 1e-3 else 2e-4
     rk4 = on_inertia(make_drive, {**motor, "solver.method": 1, "solver.step": rk4_limit}, "rk4")
     assert rk4 is None or not np.all(np.abs(rk4 - reference) < peak)
     rosenbrock = on_inertia(make_drive, {**motor, "solver.method": 3, "solver.step": 1e-3}, "ros")
