@@ -24,8 +24,8 @@ static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
 
 /* Rang & Angermann (2005), ROS34PW2: a 4-stage Rosenbrock-W method of order 3 with an embedded
  * solution of order 2, L-stable and stiffly accurate (b_i = alpha_4i + gamma_4i); as a W-method it
- * keeps order 3 with an approximate (here: lagged) Jacobian (tests/models/test_ode.py). Stage i of a step h from (t, y), with gamma_i = sum_j<=i
- * gamma_ij and alpha_i = sum_j<i alpha_ij:
+ * keeps order 3 with an approximate (here: lagged) Jacobian (tests/models/test_ode.py). Stage i of
+ * a step h from (t, y), with gamma_i = sum_j<=i gamma_ij and alpha_i = sum_j<i alpha_ij:
  *   (I - h gamma J) k_i = h f(t + alpha_i h, y + sum_j<i alpha_ij k_j) + h J sum_j<i gamma_ij k_j
  *                         + gamma_i h^2 f_t,
  *   y_new = y + sum_i b_i k_i,   error estimate sum_i (b_i - b_hat_i) k_i. */
@@ -47,8 +47,8 @@ static const double RW_B_HAT[RW_STAGES] = {0.37810903145819369, -0.0960422922124
                                            0.21793326075422950};
 
 /* The linearisation a Rosenbrock-W step uses: J ~ df/dx in the columns of the leading, stiff states
- * (the model's, or by forward differences; the other columns zero, so the states nothing stiff
- * depends on are treated explicitly) and f_t ~ df/dt (forward difference), taken at (t, x) once per call of
+ * (the model's, or by forward differences; the other columns zero, so the other states are
+ * treated explicitly) and f_t ~ df/dt (forward difference), taken at (t, x) once per call of
  * ode_integrate and again after every event (a W-method keeps its order with any such matrix, and
  * with a lagged one); the LU factors of I - h gamma J's stiff block for the last h. */
 typedef struct {

@@ -16,8 +16,9 @@
  *              integrators and energy accounts are explicit), the model's own
  *              (OdeProblem.jacobian) or by forward differences (n_stiff evaluations of the
  *              right-hand side), taken once per call and after each event (a W-method keeps its
- *              order 3 with any such matrix, and with a lagged one). Then f and df/dt (2 evaluations) and 4 per step (3 on the step that starts
- *              where the matrix was taken).
+ *              order 3 with any such matrix, and with a lagged one). Then f and df/dt (2
+ *              evaluations), and 4 per step (3 on the step that starts where the matrix was
+ *              taken).
  *   ODE_ROSENBROCK_ADAPTIVE  the same with error control by its embedded order-2 solution (the
  *              Jacobian also retaken after a rejection), steps capped at `step`.
  *

@@ -3,6 +3,19 @@
 
 #include "ode.h"
 
+/* Integrates x from 0 to t_end in `pieces` equal calls, as FMI communication steps would. */
+static OdeResult integrate_in_pieces(OdeSolver *solver, const OdeProblem *problem, void *ctx, double *x,
+                                     double t_end, int pieces) {
+    double t = 0.0;
+    for (int i = 0; i < pieces; i++) {
+        double t_next = t_end * (i + 1) / pieces;
+        OdeResult r = ode_integrate(solver, problem, ctx, x, t, t_next, 0);
+        if (r != ODE_OK) return r;
+        t = t_next;
+    }
+    return ODE_OK;
+}
+
 /* Harmonic oscillator x'' = -x, x(0) = 1, x'(0) = 0. */
 static void oscillator(void *ctx, double t, const double *x, double *dxdt) {
     (void)ctx; (void)t;
@@ -16,12 +29,8 @@ double probe_oscillator(int method, double step, double rtol, double t_end, int 
                         double *rejected) {
     OdeSolver solver = {method, step, rtol, rtol, 0.0, 0, 0, 0, 0};
     OdeProblem problem = {2, oscillator, 0, 0, 0, 0, 0};
-    double x[2] = {1.0, 0.0}, t = 0.0;
-    for (int i = 0; i < pieces; i++) {
-        double t_next = t_end * (i + 1) / pieces;
-        if (ode_integrate(&solver, &problem, 0, x, t, t_next, 0) != ODE_OK) return -1.0;
-        t = t_next;
-    }
+    double x[2] = {1.0, 0.0};
+    if (integrate_in_pieces(&solver, &problem, 0, x, t_end, pieces) != ODE_OK) return -1.0;
     *steps = solver.steps;
     *rejected = solver.rejected;
     return fmax(fabs(x[0] - cos(t_end)), fabs(x[1] + sin(t_end)));
@@ -74,14 +83,10 @@ double probe_stiff(int method, double step, double rtol, double lambda, double t
                    double *rhs_calls) {
     OdeSolver solver = {method, step, rtol, rtol, 0.0, 0, 0, 0, 0};
     OdeProblem problem = {2, prothero_robinson, 0, 0, 0, 1, 0};
-    double x[2] = {0.0, 0.0}, t = 0.0;
-    for (int i = 0; i < pieces; i++) {
-        double t_next = t_end * (i + 1) / pieces;
-        OdeResult r = ode_integrate(&solver, &problem, &lambda, x, t, t_next, 0);
-        if (r == ODE_NONFINITE) return -2.0;
-        if (r != ODE_OK) return -1.0;
-        t = t_next;
-    }
+    double x[2] = {0.0, 0.0};
+    OdeResult r = integrate_in_pieces(&solver, &problem, &lambda, x, t_end, pieces);
+    if (r == ODE_NONFINITE) return -2.0;
+    if (r != ODE_OK) return -1.0;
     *steps = solver.steps;
     *rhs_calls = solver.rhs_calls;
     if (!isfinite(x[0]) || !isfinite(x[1])) return -2.0;
@@ -105,14 +110,7 @@ int probe_linear(int method, double step, int n, const double *a, double *x, dou
     OdeSolver solver = {method, step, 1e-6, 1e-6, 0.0, 0, 0, 0, 0};
     OdeProblem problem = {n, linear_system, 0, 0, 0, 0, 0};
     LinearSystem system = {n, a};
-    double t = 0.0;
-    for (int i = 0; i < pieces; i++) {
-        double t_next = t_end * (i + 1) / pieces;
-        OdeResult r = ode_integrate(&solver, &problem, &system, x, t, t_next, 0);
-        if (r != ODE_OK) return (int)r;
-        t = t_next;
-    }
-    return 0;
+    return (int)integrate_in_pieces(&solver, &problem, &system, x, t_end, pieces);
 }
 
 /* The logistic equation x' = x (1 - x), x(0) = 0.1: exact x = 1 / (1 + 9 e^-t); its Jacobian
