@@ -17,7 +17,7 @@ def test_advice_on_the_meng_scene():
     loops re-designed for the reduced plant (the default) it runs at 0.5 ms but is about 3 mm off
     (the rotors are a third of each leg's inertia); the actuator inertia costs about 1 mm: neither
     is recommended. The drive torques are judged through the start-up shock: with the scene's
-    finer start the full model at 1 ms keeps them within 1 % of their peak and is recommended;
+    finer start the full model at 1 ms keeps them within 1 % of their peak (a recommendation keeps both);
     without it the shock's first milliseconds are resolved only at fine steps (the error falls
     about fourfold per halved step, 24 % of the peak at 1 ms, 5 % at 0.5 ms, at t of one or two
     steps), and at 1 % nothing is recommended."""
@@ -25,8 +25,11 @@ def test_advice_on_the_meng_scene():
     candidates, info = advise(scene, 1e-4, probe=0.5)
     assert info["convergence"] < 1e-5
     best = recommend(candidates, 1e-4, 0.01)
-    assert best is not None and best.error <= 1e-4 and not best.effects_off and best.step >= 1e-3
+    assert best is not None and best.error <= 1e-4 and not best.effects_off
     assert all(best.wall <= c.wall for c in candidates if within(c, 1e-4, 0.01))
+    # the full model at 1 ms keeps both tolerances (which of it and 0.5 ms, 1200 against 1600 macro
+    # steps on these probes, is measured cheaper depends on the machine's load: not asserted)
+    assert any(c.step == 1e-3 and not c.effects_off and within(c, 1e-4, 0.01) for c in candidates)
     motorless = [c for c in candidates if "effects.motor_inertia" in c.effects_off]
     assert all(c.gains == "designed" for c in motorless)
     assert all(c.gains == "scene's" for c in candidates if not c.effects_off)
