@@ -110,11 +110,18 @@ static double now(void) {
 
 static _Thread_local int on_helper; /* set on the helper thread: its calls' time is the main thread's wait */
 
+/* The time inside the FMUs is taken around each run of consecutive calls (one member's inputs,
+ * step and outputs; one row's reads), not around every call: a clock read costs about as much
+ * as a short FMI call, and the few arithmetic operations between the calls of a run (its inputs'
+ * polynomials) are counted with them. */
+static double clock_start(void) { return on_helper ? 0.0 : now(); }
+static void clock_stop(Kernel *s, int k, double started) {
+    if (!on_helper) s->fmi_seconds[k] += now() - started;
+}
+
 #define FMI_CALL(s, k, code, expression)                                                          \
     do {                                                                                           \
-        const double started_ = on_helper ? 0.0 : now();                                           \
         const int status_ = (expression);                                                          \
-        if (!on_helper) (s)->fmi_seconds[k] += now() - started_;                                   \
         if (status_ >= FMI2_ERROR) {                                                               \
             (s)->failed_instance = (k);                                                            \
             (s)->failed_call = (code);                                                             \
@@ -205,8 +212,12 @@ static int read_outputs(Kernel *s, int k) {
 }
 
 static int read_all_outputs(Kernel *s) {
-    for (int k = 0; k < s->n_instances; k++)
-        if (!read_outputs(s, k)) return 0;
+    for (int k = 0; k < s->n_instances; k++) {
+        const double started = clock_start();
+        const int ok = read_outputs(s, k);
+        clock_stop(s, k, started);
+        if (!ok) return 0;
+    }
     return 1;
 }
 
@@ -214,11 +225,14 @@ static int read_all_outputs(Kernel *s) {
 static int read_rates(Kernel *s) {
     for (int k = 0; k < s->n_instances; k++) {
         const KernelInstance *in = &s->instances[k];
+        if (in->rate_order == 0) continue;
+        const double started = clock_start();
         for (int order = 1; order <= in->rate_order; order++)
             FMI_CALL(s, k, CALL_GET_OUTPUT_DERIVATIVES,
                      in->get_output_derivatives(in->component, in->output_vrs, (size_t)in->n_outputs,
                                                 order == 1 ? s->order_one : s->order_two,
                                                 s->exact_rates + (order - 1) * s->n_sample_values + in->output_offset));
+        clock_stop(s, k, started);
     }
     return 1;
 }
@@ -253,8 +267,10 @@ int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start) {
             for (int i = 0; i < in->n_inputs; i++)
                 s->input_values[in->input_offset + i] =
                     s->new_values[s->instances[in->feed_source[i]].output_offset + in->feed_index[i]];
+            const double started = clock_start();
             FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
                                                        s->input_values + in->input_offset));
+            clock_stop(s, k, started);
         }
         memcpy(s->guess, s->new_values, (size_t)s->n_sample_values * sizeof(double)); /* the old outputs */
         if (!read_all_outputs(s)) return 0;
@@ -296,12 +312,14 @@ static double energy_residual(const Kernel *s, double h, double *bond_energy) {
 }
 
 static int record(Kernel *s, double *row, double t) {
+    const double started = clock_start(); /* the row's reads, counted as the first instance's */
     for (int k = 0; k < s->n_instances; k++) {
         const KernelInstance *in = &s->instances[k];
         if (in->n_record > 0)
             FMI_CALL(s, k, CALL_GET_REAL, in->get_real(in->component, in->record_vrs, (size_t)in->n_record,
                                                        s->record_scratch + in->record_offset));
     }
+    clock_stop(s, 0, started);
     row[0] = t;
     for (int c = 0; c < s->n_columns; c++) row[1 + c] = s->record_scratch[s->column_of[c]];
     return 1;
@@ -317,7 +335,9 @@ static int save_states(Kernel *s, void **states) {
     for (int k = 0; k < s->n_instances; k++) {
         const KernelInstance *in = &s->instances[k];
         states[k] = NULL;
+        const double started = clock_start();
         FMI_CALL(s, k, CALL_GET_STATE, in->get_state(in->component, &states[k]));
+        clock_stop(s, k, started);
     }
     return 1;
 }
@@ -325,7 +345,9 @@ static int save_states(Kernel *s, void **states) {
 static int restore_states(Kernel *s, void **states, const double *saved_instance_time) {
     for (int k = 0; k < s->n_instances; k++) {
         const KernelInstance *in = &s->instances[k];
+        const double started = clock_start();
         FMI_CALL(s, k, CALL_SET_STATE, in->set_state(in->component, states[k]));
+        clock_stop(s, k, started);
     }
     memcpy(s->instance_time, saved_instance_time, (size_t)s->n_instances * sizeof(double));
     return 1;
@@ -355,8 +377,10 @@ static int start_up(Kernel *s, double t, double h) {
     for (int sweep = 0; sweep < SWEEPS; sweep++) {
         memcpy(guess, s->new_values, (size_t)s->n_sample_values * sizeof(double));
         for (int k = 0; k < s->n_instances; k++) {
-            if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t + h, 1)) { free_states(s, s->startup_states); return 0; }
-            if (!do_step(s, k, h)) { free_states(s, s->startup_states); return 0; }
+            const double started = clock_start();
+            const int ok = (s->instances[k].n_inputs == 0 || set_inputs(s, k, t, t + h, 1)) && do_step(s, k, h);
+            clock_stop(s, k, started);
+            if (!ok) { free_states(s, s->startup_states); return 0; }
         }
         /* the new outputs: read into new_values only after every instance stepped (set_inputs
          * reads the guess from new_values) */
@@ -377,8 +401,11 @@ static int start_up(Kernel *s, double t, double h) {
 
 /* One Gauss-Seidel member: its inputs, its step, its outputs. */
 static int step_member(Kernel *s, int k, double t, double t_new, double h) {
-    if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
-    return do_step(s, k, h) && read_outputs(s, k);
+    const double started = clock_start();
+    const int ok = (s->instances[k].n_inputs == 0 || set_inputs(s, k, t, t_new, s->order)) && do_step(s, k, h) &&
+                   read_outputs(s, k);
+    clock_stop(s, k, started);
+    return ok;
 }
 
 typedef struct {
@@ -481,12 +508,18 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
         } else {
             for (int j = 0; j < s->n_instances; j++) {
                 const int k = s->sequence[j];
-                if (s->instances[k].n_inputs > 0 && !set_inputs(s, k, t, t_new, s->order)) return 0;
+                const double started = clock_start();
+                const int ok = s->instances[k].n_inputs == 0 || set_inputs(s, k, t, t_new, s->order);
+                clock_stop(s, k, started);
+                if (!ok) return 0;
             }
-            for (int j = 0; j < s->n_instances; j++)
-                if (!do_step(s, s->sequence[j], h)) return 0;
-            for (int j = 0; j < s->n_instances; j++)
-                if (!read_outputs(s, s->sequence[j])) return 0;
+            for (int j = 0; j < s->n_instances; j++) {
+                const int k = s->sequence[j];
+                const double started = clock_start();
+                const int ok = do_step(s, k, h) && read_outputs(s, k);
+                clock_stop(s, k, started);
+                if (!ok) return 0;
+            }
         }
         if (!push_sample(s, t_new)) return 0;
     }
