@@ -49,7 +49,7 @@ def load() -> ctypes.CDLL:
     dll.platform_layout_from_joints.restype = ctypes.c_int
     dll.platform_leg_lengths.argtypes = [P(Platform), P(D), P(D)]
     dll.platform_legs.argtypes = [P(Platform), P(D), P(LegGeometry)]
-    dll.platform_derivatives.argtypes = [P(Platform), P(D), P(D), P(D), P(D), P(D), P(Diagnostics)]
+    dll.platform_derivatives.argtypes = [P(Platform), P(D), P(D), P(D), ctypes.c_void_p, P(D), P(D), P(Diagnostics)]
     dll.platform_derivatives.restype = ctypes.c_int
     dll.platform_inverse_dynamics.argtypes = [P(Platform), P(D), P(D), P(D), P(D), P(D)]
     dll.platform_inverse_dynamics.restype = ctypes.c_int
@@ -144,8 +144,8 @@ class Core:
 
     def derivatives(self, x, torque=np.zeros(6), force=np.zeros(6), wrench=np.zeros(6)):
         dx, diag = (D * 13)(), Diagnostics()
-        status = self.dll.platform_derivatives(ctypes.byref(self.p), arr(x), arr(torque), arr(force), arr(wrench),
-                                               dx, ctypes.byref(diag))
+        status = self.dll.platform_derivatives(ctypes.byref(self.p), arr(x), arr(torque), arr(force), None,
+                                               arr(wrench), dx, ctypes.byref(diag))
         assert status == 0
         return np.array(dx[:]), diag
 

@@ -144,6 +144,13 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->force_friction = s.friction + s.damping;
     v->force_ripple = s.ripple;
     v->force_ref = s.force_command;
+    /* The interface Jacobian: the PID's derivative term moves the force command by -K_d per m/s
+     * while neither the force nor the current limit holds it; the current loop (or the ideal force
+     * source) delivers it. */
+    const int pid_free = v->control_mode == MODE_POSITION && s.force_command == s.force_raw &&
+                         fabs(s.force_command / v->motor_force_constant) <= v->limit_current;
+    v->force_velocity_slope = -((pid_free ? v->control_position_kd : 0.0) + v->motor_damping +
+                                (v->effects_friction ? v->friction_viscous : 0.0));
     v->current = s.current;
     v->voltage = s.voltage;
     v->power_electrical = v->effects_electrical ? power_scale * s.voltage * s.current : s.force_em * s.velocity;

@@ -19,6 +19,8 @@ enum { E_DRIVE = PLATFORM_STATES, E_TRANSMISSION, E_FRICTION, E_LOAD };
 #define LEG_VRS(field) \
     {VR_leg1_##field, VR_leg2_##field, VR_leg3_##field, VR_leg4_##field, VR_leg5_##field, VR_leg6_##field}
 static const int VR_PLANT_INERTIA[] = LEG_VRS(plant_inertia), VR_PLANT_STATIC_FORCE[] = LEG_VRS(plant_static_force);
+static const int VR_TORQUE_SPEED_SLOPE[] = LEG_VRS(torque_speed_slope), VR_SPEED_SEEN[] = LEG_VRS(speed_seen),
+                 VR_FORCE_VELOCITY_SLOPE[] = LEG_VRS(force_velocity_slope), VR_VELOCITY_SEEN[] = LEG_VRS(velocity_seen);
 static const int VR_TORQUE[] = LEG_VRS(torque), VR_FORCE[] = LEG_VRS(force), VR_LENGTH[] = LEG_VRS(length),
                  VR_VELOCITY[] = LEG_VRS(velocity), VR_ANGLE[] = LEG_VRS(angle), VR_SPEED[] = LEG_VRS(speed),
                  VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref);
@@ -95,11 +97,15 @@ static void initial_state(const ModelVariables *v, double *x) {
  * load load.body.* turned by the platform's orientation R (force and torque alike: Eq 23's F_e and
  * M_e are base-frame vectors at the platform origin). */
 static void inputs_at(const FmuInstance *fmu, double t, const double *x, double torque[6], double force[6],
-                      double wrench[6]) {
+                      PlatformDriveSlopes *slopes, double wrench[6]) {
     double body[6], R[9];
     for (int i = 0; i < 6; i++) {
         torque[i] = fmu_input_at(fmu, VR_TORQUE[i], t);
         force[i] = fmu_input_at(fmu, VR_FORCE[i], t);
+        slopes->torque_speed_slope[i] = fmu_input_at(fmu, VR_TORQUE_SPEED_SLOPE[i], t);
+        slopes->speed_seen[i] = fmu_input_at(fmu, VR_SPEED_SEEN[i], t);
+        slopes->force_velocity_slope[i] = fmu_input_at(fmu, VR_FORCE_VELOCITY_SLOPE[i], t);
+        slopes->velocity_seen[i] = fmu_input_at(fmu, VR_VELOCITY_SEEN[i], t);
         wrench[i] = fmu_input_at(fmu, VR_WRENCH[i], t);
         body[i] = fmu_input_at(fmu, VR_BODY_WRENCH[i], t);
     }
@@ -114,9 +120,10 @@ static void inputs_at(const FmuInstance *fmu, double t, const double *x, double 
 static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     const FmuInstance *fmu = (const FmuInstance *)ctx;
     double torque[6], force[6], wrench[6];
+    PlatformDriveSlopes slopes;
     PlatformDiagnostics d;
-    inputs_at(fmu, t, x, torque, force, wrench);
-    if (platform_derivatives(&fmu->s.internal.platform, x, torque, force, wrench, dxdt, &d) != 0) {
+    inputs_at(fmu, t, x, torque, force, &slopes, wrench);
+    if (platform_derivatives(&fmu->s.internal.platform, x, torque, force, &slopes, wrench, dxdt, &d) != 0) {
         for (int k = 0; k < MODEL_N_STATES; k++) dxdt[k] = NAN; /* the solver reports it */
         return;
     }
@@ -242,8 +249,9 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->pose_roll = euler[0]; v->pose_pitch = euler[1]; v->pose_yaw = euler[2];
     v->twist_vx = x[7]; v->twist_vy = x[8]; v->twist_vz = x[9];
     v->twist_wx = x[10]; v->twist_wy = x[11]; v->twist_wz = x[12];
-    inputs_at(fmu, t, x, torque, force, wrench);
-    if (platform_derivatives(p, x, torque, force, wrench, dxdt, &d) != 0) d.drive_power = NAN;
+    PlatformDriveSlopes slopes;
+    inputs_at(fmu, t, x, torque, force, &slopes, wrench);
+    if (platform_derivatives(p, x, torque, force, &slopes, wrench, dxdt, &d) != 0) d.drive_power = NAN;
     v->energy_kinetic = d.kinetic;
     v->energy_potential = d.potential;
     v->power_drive = d.drive_power;

@@ -395,15 +395,23 @@ static void assemble(const Platform *p, const double *x, const double wrench[6],
     }
 }
 
-int platform_derivatives(const Platform *p, const double *x, const double torque[PLATFORM_LEGS],
-                         const double force[PLATFORM_LEGS], const double wrench[6], double *dxdt,
-                         PlatformDiagnostics *diag) {
+int platform_derivatives(const Platform *p, const double *x, const double torque_in[PLATFORM_LEGS],
+                         const double force_in[PLATFORM_LEGS], const PlatformDriveSlopes *slopes,
+                         const double wrench[6], double *dxdt, PlatformDiagnostics *diag) {
     double M[36], rhs[6], accel[6];
     LegGeometry legs[PLATFORM_LEGS];
     PlatformDiagnostics local;
     if (!diag) diag = &local;
     assemble(p, x, wrench, M, rhs, legs, diag);
-    double drive_power = 0.0, transmission_loss = 0.0;
+    double drive_power = 0.0, transmission_loss = 0.0, torque[PLATFORM_LEGS], force[PLATFORM_LEGS];
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        torque[i] = torque_in[i];
+        force[i] = force_in[i];
+        if (slopes) { /* the drives' interface Jacobians (see platform.h) */
+            torque[i] += slopes->torque_speed_slope[i] * (p->screw_ratio * legs[i].velocity - slopes->speed_seen[i]);
+            force[i] += slopes->force_velocity_slope[i] * (legs[i].velocity - slopes->velocity_seen[i]);
+        }
+    }
     for (int i = 0; i < PLATFORM_LEGS; i++) {
         /* Eq 22: the screw turns motor torque into leg force K_FT T = eta i_theta T */
         const double F = p->force_torque * torque[i] + force[i];

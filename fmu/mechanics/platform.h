@@ -105,12 +105,23 @@ typedef struct {
     int singular;               /* the mass matrix did not factorise */
 } PlatformDiagnostics;
 
-/* dx/dt for motor torques (screw legs), direct axial forces and the external wrench
- * [F (3), M (3)] at the platform origin, base frame. Returns 0, or -1 if the mass matrix is not
- * positive definite (diag may be NULL). */
+/* The drives' interface Jacobians over a co-simulation step (Sicklinger et al. 2014): each drive
+ * computed its torque (force) for the motor speed (extension rate) it was given, speed_seen; the
+ * leg feels torque + torque_speed_slope (w_m - speed_seen) at its actual speed w_m, and likewise
+ * force + force_velocity_slope (L_dot - velocity_seen). The correction vanishes where the drive saw
+ * the actual speed; where it did not, the drive's damping acts on the actual speed, inside the
+ * mechanics' integration, instead of on an extrapolated one. */
+typedef struct {
+    double torque_speed_slope[PLATFORM_LEGS], speed_seen[PLATFORM_LEGS];      /* [N m s/rad], [rad/s] */
+    double force_velocity_slope[PLATFORM_LEGS], velocity_seen[PLATFORM_LEGS]; /* [N s/m], [m/s] */
+} PlatformDriveSlopes;
+
+/* dx/dt for motor torques (screw legs), direct axial forces (with the drives' slopes, or NULL) and
+ * the external wrench [F (3), M (3)] at the platform origin, base frame. Returns 0, or -1 if the
+ * mass matrix is not positive definite (diag may be NULL). */
 int platform_derivatives(const Platform *p, const double *x, const double torque[PLATFORM_LEGS],
-                         const double force[PLATFORM_LEGS], const double wrench[6], double *dxdt,
-                         PlatformDiagnostics *diag);
+                         const double force[PLATFORM_LEGS], const PlatformDriveSlopes *slopes,
+                         const double wrench[6], double *dxdt, PlatformDiagnostics *diag);
 
 /* Motor torques that make the platform follow pose(t) with the given first and second time
  * derivatives (of x, y, z, roll, pitch, yaw), under the external wrench. Returns 0, or -1 at a

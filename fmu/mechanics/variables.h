@@ -30,6 +30,16 @@ X(Real, leg##i##_torque, "leg[" #i "].torque", input, continuous, "N.m", 0.0, -F
   "Motor electromagnetic torque on the screw of leg " #i " (PMSM drive)") \
 X(Real, leg##i##_force, "leg[" #i "].force", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
   "Axial force of a direct drive on leg " #i " (linear motor); added to the screw's force") \
+X(Real, leg##i##_torque_speed_slope, "leg[" #i "].torque_speed_slope", input, continuous, "N.m.s/rad", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian of the drive on leg " #i ": d torque / d speed (the drive's output torque_speed_slope); " \
+  "the screw feels torque + slope (speed - speed_seen), so the coupling is implicit in the drive's damping") \
+X(Real, leg##i##_speed_seen, "leg[" #i "].speed_seen", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "The motor speed the drive on leg " #i " was given over the step (wired from this FMU's own leg[" #i "].speed)") \
+X(Real, leg##i##_force_velocity_slope, "leg[" #i "].force_velocity_slope", input, continuous, "N.s/m", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian of the direct drive on leg " #i ": d force / d velocity (the linear motor's output " \
+  "force_velocity_slope); the leg feels force + slope (velocity - velocity_seen)") \
+X(Real, leg##i##_velocity_seen, "leg[" #i "].velocity_seen", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, \
+  "The extension rate the direct drive on leg " #i " was given over the step (wired from leg[" #i "].velocity)") \
 X(Real, leg##i##_length, "leg[" #i "].length", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, \
   "Length of leg " #i ", lower to upper joint (Eq 2)") \
 X(Real, leg##i##_velocity, "leg[" #i "].velocity", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, \

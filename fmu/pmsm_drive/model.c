@@ -309,6 +309,13 @@ void model_compute_outputs(FmuInstance *fmu) {
         v->current_error_max = fmax(v->current_error_max, fabs(s.phase_current_ref[k] - s.phase_current[k]));
     v->speed_ref = s.speed_ref;
     v->current_ref_q = s.current_ref_q;
+    /* The interface Jacobian: the speed loop's i_q* = Kp_w (w* - w) + ... moves the torque (Eq 26) by
+     * dT/di_q = P (psi_r + (L_d - L_q) i_d) per ampere while neither limit holds it. */
+    const int speed_loop_free = v->control_mode != MODE_TORQUE && s.current_ref_q == s.current_ref_q_raw;
+    v->torque_speed_slope = speed_loop_free ? -(v->motor_torque_constant + v->motor_pole_pairs *
+                                                (v->motor_inductance_d - v->motor_inductance_q) * x[I_D]) *
+                                                  v->control_speed_kp
+                                            : 0.0;
     v->inverter_switchings = fmu->s.internal.switchings;
 }
 
