@@ -142,7 +142,7 @@ class CouplingAlgorithm(ABC):
         (outputs at t and t + h against the inputs as set over the step), by the trapezoidal rule."""
         (_, before, _), (_, after, _) = self.history.samples[-2], self.history.samples[-1]
         residuals, transferred = [], []
-        for (effort_out, effort_in), (flow_out, flow_in) in coupling.bonds:
+        for ((effort_out, effort_in), (flow_out, flow_in)), slope_in in zip(coupling.bonds, coupling.bond_slopes):
             def seen(target, dt):
                 values, rates, curvatures = self.inputs_set[target[0]]
                 k = target[1]
@@ -151,7 +151,11 @@ class CouplingAlgorithm(ABC):
             f0, f1 = before[flow_out[0]][flow_out[1]], after[flow_out[0]][flow_out[1]]
             # the effort side sees the flow it was given; the flow side the effort it was given
             given_side = 0.5 * h * (e0 * seen(flow_in, 0.0) + e1 * seen(flow_in, h))
-            taken_side = 0.5 * h * (seen(effort_in, 0.0) * f0 + seen(effort_in, h) * f1)
+            felt_0, felt_1 = seen(effort_in, 0.0), seen(effort_in, h)
+            if slope_in is not None:  # the flow's side felt effort + slope (flow - the flow the effort's side saw)
+                felt_0 += seen(slope_in, 0.0) * (f0 - seen(flow_in, 0.0))
+                felt_1 += seen(slope_in, h) * (f1 - seen(flow_in, h))
+            taken_side = 0.5 * h * (felt_0 * f0 + felt_1 * f1)
             residuals.append(given_side - taken_side)
             transferred.append(0.5 * (abs(given_side) + abs(taken_side)))
         self.bond_energies = (np.array(residuals), np.array(transferred))

@@ -43,9 +43,11 @@ class Coupling:
             return ((c.source[0], self.sources[c.source[0]].index(c.source[1])),
                     (c.target[0], self.input_names[c.target[0]].index(c.target[1])))
         for bond in bonds:
-            if bond.effort not in connections or bond.flow not in connections:
-                raise KeyError(f"bond {bond}: both of its connections must be among the coupling's connections")
+            if any(c is not None and c not in connections for c in (bond.effort, bond.flow, bond.slope)):
+                raise KeyError(f"bond {bond}: its connections must be among the coupling's connections")
         self.bonds = [(ends(b.effort), ends(b.flow)) for b in bonds]
+        # per bond, (target, index) of the input that takes the effort's slope, or None
+        self.bond_slopes = [ends(b.slope)[1] if b.slope is not None else None for b in bonds]
         self.interpolating = {n: (interpolating or {}).get(n, self.instances[n].can_interpolate_inputs)
                               for n in self.names}
         # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order

@@ -188,9 +188,10 @@ class Kernel:
         sequence = algorithm.sequence if algorithm.kind == "gauss-seidel" and algorithm.sequence else names
         self.sequence = _ints([self.index[n] for n in sequence])
         self.stage_end = _ints(stages(list(sequence), coupling.feeds))
-        bonds = [x for (eo, ei), (fo, fi) in coupling.bonds
+        bonds = [x for ((eo, ei), (fo, fi)), slope in zip(coupling.bonds, coupling.bond_slopes)
                  for x in (self.index[eo[0]], eo[1], self.index[ei[0]], ei[1],
-                           self.index[fo[0]], fo[1], self.index[fi[0]], fi[1])]
+                           self.index[fo[0]], fo[1], self.index[fi[0]], fi[1],
+                           *((self.index[slope[0]], slope[1]) if slope else (-1, -1)))]
         self.bonds = _ints(bonds or [0])
         n, m = max(offset, 1), max(input_offset, 1)
         self.sample_time, self.samples = np.zeros(3), np.zeros((3, n))

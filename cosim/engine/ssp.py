@@ -156,7 +156,8 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     for name, value in structure.settings.items():
         etree.SubElement(run, _q(COSIM, "Setting"), name=name, value=str(value))
     for bond in structure.bonds:
-        etree.SubElement(run, _q(COSIM, "PowerBond"), effort=str(bond.effort), flow=str(bond.flow))
+        etree.SubElement(run, _q(COSIM, "PowerBond"), effort=str(bond.effort), flow=str(bond.flow),
+                         **({"slope": str(bond.slope)} if bond.slope else {}))
     return root, parameter_sets
 
 
@@ -292,9 +293,10 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
             settings = {s.get("name"): s.get("value") for s in run.findall("cosim:Setting", NS)}
             for b in run.findall("cosim:PowerBond", NS):
                 effort, flow = (_connection(b.get(k, ""), f"{where}:{b.sourceline}") for k in ("effort", "flow"))
-                if effort not in connections or flow not in connections:
+                slope = _connection(b.get("slope"), f"{where}:{b.sourceline}") if b.get("slope") else None
+                if any(c is not None and c not in connections for c in (effort, flow, slope)):
                     raise SspError(f"{where}:{b.sourceline}: power bond of connections that the system lacks")
-                bonds.append(Bond(effort, flow))
+                bonds.append(Bond(effort, flow, slope))
     names = [c.name for c in components]
     for c in connections:
         for component, _ in (c.source, c.target):

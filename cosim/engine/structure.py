@@ -30,9 +30,13 @@ class Connection:
 @dataclass(frozen=True)
 class Bond:
     """A power bond: an effort (torque, force) and a flow (speed, velocity) connection whose product
-    is the power one side gives the other (ECCO, Sadjina et al. 2017)."""
+    is the power one side gives the other (ECCO, Sadjina et al. 2017). slope: where the effort's
+    side also sends d effort / d flow (its interface Jacobian) to the flow's side, which then feels
+    effort + slope (flow - the flow the effort's side was given); the energy it receives is reckoned
+    so."""
     effort: Connection
     flow: Connection
+    slope: Connection | None = None
 
 
 @dataclass

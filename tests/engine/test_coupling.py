@@ -22,12 +22,22 @@ CONNECTIONS = [
     Connection(("coupling", "force"), ("mass", "force")),
 ]
 BONDS = [Bond(effort=CONNECTIONS[2], flow=CONNECTIONS[1])]  # force x velocity of mass 1
+# The interface Jacobian: the coupling FMU's d force / d x1 and d force / d v1 go to the mass, with
+# x1 and v1 as the coupling FMU was given them (the mass's own outputs wired back to it: every
+# algorithm hands both the same extrapolation), so the mass feels F + s_x (x1 - x1_seen) + s_v (v1 - v1_seen).
+SLOPES = [
+    Connection(("coupling", "force_position_slope"), ("mass", "force_position_slope")),
+    Connection(("coupling", "force_velocity_slope"), ("mass", "force_velocity_slope")),
+    Connection(("mass", "position"), ("mass", "position_seen")),
+    Connection(("mass", "velocity"), ("mass", "velocity_seen")),
+]
 
 
-def oscillator(stop_time: float = 1.0) -> SystemStructure:
+def oscillator(stop_time: float = 1.0, interface_jacobian: bool = False) -> SystemStructure:
+    bonds = [Bond(effort=CONNECTIONS[2], flow=CONNECTIONS[1], slope=SLOPES[1])] if interface_jacobian else BONDS
     return SystemStructure("oscillator", [Component("mass", fmu_path("oscillator_mass", test=True)),
                                           Component("coupling", fmu_path("oscillator_coupling", test=True))],
-                           CONNECTIONS, BONDS, Experiment(0.0, stop_time, 1e-3))
+                           CONNECTIONS + (SLOPES if interface_jacobian else []), bonds, Experiment(0.0, stop_time, 1e-3))
 
 
 def algorithm(kind: str, order: int) -> Algorithm:
@@ -44,9 +54,9 @@ def exact_position_1(t: float) -> float:
 
 
 def coupled_run(settings: Algorithm, steps: int, stop_time: float = 1.0, interpolating: bool = True,
-                control=None) -> tuple[float, Execution]:
+                control=None, interface_jacobian: bool = False) -> tuple[float, Execution]:
     """|x1(stop) - exact| of a run of the oscillator, and the (freed) execution."""
-    execution = Execution(oscillator(stop_time), settings, control or FixedStep(stop_time / steps),
+    execution = Execution(oscillator(stop_time, interface_jacobian), settings, control or FixedStep(stop_time / steps),
                           [("mass", "position")], clock="mass",
                           interpolating=None if interpolating else {"mass": False, "coupling": False})
     try:
@@ -71,6 +81,23 @@ def test_global_error_converges_with_order_k_plus_1(kind, order):
     errors = np.array([coupled_error(algorithm(kind, order), n) for n in steps])
     slope = np.polyfit(np.log(1.0 / steps), np.log(errors), 1)[0]
     assert slope == pytest.approx(order + 1, abs=0.15), (errors, slope)
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+@pytest.mark.parametrize("kind", ["jacobi", "gauss-seidel"])
+def test_interface_jacobian_keeps_the_order_and_lowers_the_error(kind, order):
+    """With the coupling FMU's interface Jacobian (d force / d x1 = -kc, d force / d v1 = -dc) applied
+    by the mass against the x1 and v1 the coupling FMU was given, the global error still converges
+    with order k + 1 (within 0.15, h = 1/200 ... 1/1600 s) and is smaller at every step than
+    without it: the mass integrates the coupling's own stiffness and damping on its side, and only
+    mass 2's motion is still taken from an extrapolated x1 (measured: Gauss-Seidel order 0 10x
+    smaller, Jacobi order 0 2.8x, orders 1 and 2 1.15-1.3x)."""
+    steps = np.array([200, 400, 800, 1600])
+    errors = np.array([coupled_error(algorithm(kind, order), n, interface_jacobian=True) for n in steps])
+    slope = np.polyfit(np.log(1.0 / steps), np.log(errors), 1)[0]
+    assert slope == pytest.approx(order + 1, abs=0.15), (errors, slope)
+    plain = np.array([coupled_error(algorithm(kind, order), n) for n in steps])
+    assert np.all(errors < plain / 1.1), (errors, plain)
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])

@@ -16,9 +16,11 @@ from cosim.engine.ssp import SspError, read_ssp, validate, write_ssp
 from test_coupling import oscillator
 
 
-@pytest.fixture
-def archive(tmp_path):
-    system = oscillator(0.5)
+@pytest.fixture(params=[False, True], ids=["plain", "interface-jacobian"])
+def archive(tmp_path, request):
+    """The oscillator, plain and with the coupling FMU's interface Jacobian (an FMU's outputs wired
+    back to its own inputs, and the bond's slope in the annotation)."""
+    system = oscillator(0.5, interface_jacobian=request.param)
     system.components[0].parameters = {"mass": 2.0}
     system.settings = to_strings(Algorithm("gauss-seidel", 1, ("coupling", "mass")), FixedStep(1e-3))
     return system, write_ssp(system, tmp_path / "oscillator.ssp")

@@ -86,7 +86,8 @@ typedef struct {
     int n_inputs_total;
     double *input_values, *input_rates, *input_curvatures; /* as set over the current step */
     int n_bonds;
-    const int *bonds;                 /* per bond 8 ints: effort (source, index), (target, index); flow (same) */
+    const int *bonds;                 /* per bond 10 ints: effort (source, index), (target, index); flow (same);
+                                         the input taking the effort's slope (target, index), or -1, -1 */
     int n_columns;
     const int *column_of;             /* per recorded column: index in the record scratch */
     double *record_scratch;
@@ -286,20 +287,27 @@ int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start) {
 /* _energy_residual: the largest |energy residual| of the bonds over the step just taken; per bond,
  * the residual and the energy transferred into bond_energy (2 per bond) if it is not NULL. Each
  * side's power is taken as it saw it: the outputs at t and t + h against the inputs as set over
- * the step, integrated by the trapezoidal rule. */
+ * the step, integrated by the trapezoidal rule. A bond with a slope (an interface Jacobian): the
+ * flow's side felt effort + slope (its flow - the flow the effort's side was given). */
 static double energy_residual(const Kernel *s, double h, double *bond_energy) {
     const double *before = s->samples + (s->n_samples - 2) * s->n_sample_values;
     const double *after = s->samples + (s->n_samples - 1) * s->n_sample_values;
     double largest = 0.0;
     for (int b = 0; b < s->n_bonds; b++) {
-        const int *bond = s->bonds + 8 * b;
+        const int *bond = s->bonds + 10 * b;
         const int effort_out = s->instances[bond[0]].output_offset + bond[1];
         const int effort_in = s->instances[bond[2]].input_offset + bond[3];
         const int flow_out = s->instances[bond[4]].output_offset + bond[5];
         const int flow_in = s->instances[bond[6]].input_offset + bond[7];
 #define SEEN(i, dt) (s->input_values[i] + s->input_rates[i] * (dt) + 0.5 * s->input_curvatures[i] * (dt) * (dt))
         const double given = 0.5 * h * (before[effort_out] * SEEN(flow_in, 0.0) + after[effort_out] * SEEN(flow_in, h));
-        const double taken = 0.5 * h * (SEEN(effort_in, 0.0) * before[flow_out] + SEEN(effort_in, h) * after[flow_out]);
+        double felt_before = SEEN(effort_in, 0.0), felt_after = SEEN(effort_in, h);
+        if (bond[8] >= 0) {
+            const int slope_in = s->instances[bond[8]].input_offset + bond[9];
+            felt_before += SEEN(slope_in, 0.0) * (before[flow_out] - SEEN(flow_in, 0.0));
+            felt_after += SEEN(slope_in, h) * (after[flow_out] - SEEN(flow_in, h));
+        }
+        const double taken = 0.5 * h * (felt_before * before[flow_out] + felt_after * after[flow_out]);
 #undef SEEN
         const double residual = fabs(given - taken);
         if (residual > largest || isnan(residual)) largest = residual;

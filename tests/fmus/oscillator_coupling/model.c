@@ -27,6 +27,8 @@ void model_initialize(FmuInstance *fmu) {
 
 void model_compute_outputs(FmuInstance *fmu) {
     fmu->s.v.force = coupling_force(fmu, fmu->s.time, fmu->s.x);
+    fmu->s.v.force_position_slope = -fmu->s.v.coupling_stiffness;
+    fmu->s.v.force_velocity_slope = -fmu->s.v.coupling_damping;
     fmu->s.v.position = fmu->s.x[0];
 }
 

@@ -14,6 +14,10 @@ typedef struct { int unused; } ModelInternal;
 X(Real, position_1, "position_1", input, continuous, "m", 0.0, -FMU_INF, FMU_INF, "Position of mass 1") \
 X(Real, velocity_1, "velocity_1", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Velocity of mass 1") \
 X(Real, force, "force", output, continuous, "N", 0.0, -FMU_INF, FMU_INF, "Coupling force on mass 1") \
+X(Real, force_position_slope, "force_position_slope", output, continuous, "N/m", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian d force / d position_1 = -kc") \
+X(Real, force_velocity_slope, "force_velocity_slope", output, continuous, "N.s/m", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian d force / d velocity_1 = -dc") \
 X(Real, position, "position", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, "Position x2") \
 X(Real, mass, "mass", parameter, fixed, "kg", 1.0, 0.0, FMU_INF, "m2") \
 X(Real, stiffness, "stiffness", parameter, fixed, "N/m", 10.0, 0.0, FMU_INF, "k2") \

@@ -1,4 +1,5 @@
-/* Test FMU: m1 x1'' = -k1 x1 - d1 x1' + F (see variables.h). */
+/* Test FMU: m1 x1'' = -k1 x1 - d1 x1' + F (see variables.h), with F corrected by the coupling FMU's
+ * interface Jacobian where it is wired: F + s_x (x1 - x1_seen) + s_v (v1 - v1_seen). */
 #include "fmu_common.h"
 
 #include <string.h>
@@ -7,7 +8,10 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     const FmuInstance *fmu = (const FmuInstance *)ctx;
     const ModelVariables *v = &fmu->s.v;
     dxdt[0] = x[1];
-    dxdt[1] = (-v->stiffness * x[0] - v->damping * x[1] + fmu_input_at(fmu, VR_force, t)) / v->mass;
+    const double force = fmu_input_at(fmu, VR_force, t) +
+                         fmu_input_at(fmu, VR_force_position_slope, t) * (x[0] - fmu_input_at(fmu, VR_position_seen, t)) +
+                         fmu_input_at(fmu, VR_force_velocity_slope, t) * (x[1] - fmu_input_at(fmu, VR_velocity_seen, t));
+    dxdt[1] = (-v->stiffness * x[0] - v->damping * x[1] + force) / v->mass;
 }
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {

@@ -11,6 +11,12 @@
 typedef struct { int unused; } ModelInternal;
 #define MODEL_VARIABLES(X) \
 X(Real, force, "force", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, "Coupling force on the mass") \
+X(Real, force_position_slope, "force_position_slope", input, continuous, "N/m", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian d force / d x1 from the coupling FMU: the mass feels force + slope (x1 - position_seen)") \
+X(Real, position_seen, "position_seen", input, continuous, "m", 0.0, -FMU_INF, FMU_INF, "x1 as the coupling FMU was given it") \
+X(Real, force_velocity_slope, "force_velocity_slope", input, continuous, "N.s/m", 0.0, -FMU_INF, FMU_INF, \
+  "Interface Jacobian d force / d v1: the mass feels force + slope (v1 - velocity_seen) too") \
+X(Real, velocity_seen, "velocity_seen", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "v1 as the coupling FMU was given it") \
 X(Real, position, "position", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, "Position x1") \
 X(Real, velocity, "velocity", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Velocity v1") \
 X(Real, mass, "mass", parameter, fixed, "kg", 1.0, 0.0, FMU_INF, "m1") \
