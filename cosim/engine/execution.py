@@ -135,13 +135,25 @@ class Execution:
             raise NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
 
     def _fixed_batches(self, stop_time: float):
-        h = self.control.step
+        """The regular steps from now to stop_time, those of the finer start and of the windows
+        taken at startup_step instead, landing on the regular grid."""
+        h, control = self.control.step, self.control
         n = int(round((stop_time - self.time) / h))
-        if self.control.startup_time > 0.0:  # the start at the finer step, landing on the regular grid
-            regular = min(n, int(round(self.control.startup_time / h)))
-            yield from self._batches(self.control.startup_step, regular * int(round(h / self.control.startup_step)))
-            n -= regular
-        yield from self._batches(h, n)
+        fine = np.zeros(n, dtype=bool)  # per regular step: taken at the finer step
+        if control.startup_time > 0.0:
+            fine[:int(round(control.startup_time / h))] = True
+        for start, end in control.windows:
+            first = max(0, math.floor((start - self.time) / h + 1e-9))
+            last = min(n, math.ceil((end - self.time) / h - 1e-9))
+            fine[first:max(first, last)] = True
+        per = int(round(h / control.startup_step)) if control.startup_time > 0.0 else 1
+        k = 0
+        while k < n:  # runs of equal kind
+            end = k + 1
+            while end < n and fine[end] == fine[k]:
+                end += 1
+            yield from (self._batches(control.startup_step, (end - k) * per) if fine[k] else self._batches(h, end - k))
+            k = end
 
     def _batches(self, h: float, n: int):
         done, size = 0, 100  # small batches first: a divergence shows early

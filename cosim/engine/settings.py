@@ -55,13 +55,21 @@ def _positive(name: str, value: float) -> None:
 class FixedStep:
     """Macro steps of `step`; the first `startup_time` seconds (a whole number of steps) at the
     finer `startup_step` (a whole fraction of the step), so that the start-up shock of the drives'
-    efforts is resolved where it is steep (0: no finer start)."""
+    efforts is resolved where it is steep (0: no finer start). `windows`: further (start, end)
+    intervals [s] taken at the finer step too (where an input is known to jump, such as a load
+    pulse's edges), widened to the regular steps they touch."""
     step: float
     startup_time: float = 0.0
     startup_step: float = 0.0
+    windows: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self):
         _positive("step", self.step)
+        for window in self.windows:
+            if not (len(window) == 2 and all(math.isfinite(t) for t in window) and window[0] < window[1]):
+                raise SettingsError(f"window {window!r}: a (start, end) pair with start < end")
+        if self.windows and self.startup_time == 0.0:
+            raise SettingsError("windows need startup_step, the finer step they are taken at (and a startup_time)")
         if self.startup_time == 0.0:
             return
         _positive("startup_time", self.startup_time)
@@ -134,6 +142,10 @@ def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
     for name, value in asdict(control).items():
         if name == "force_reject" or (name.startswith("startup_") and not getattr(control, "startup_time", 0.0)):
             continue
+        if name == "windows":
+            if value:
+                out[name] = " ".join(f"{a!r}:{b!r}" for a, b in value)
+            continue
         if isinstance(value, Mapping):
             value = " ".join(f"{k}={v!r}" for k, v in value.items())
         out[name] = repr(value) if isinstance(value, float) else str(value)
@@ -167,6 +179,8 @@ def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algori
         for key, text in values.items():
             if key == "atol" and "=" in text:
                 args[key] = {k: float(v) for k, v in (item.split("=", 1) for item in text.split())}
+            elif key == "windows":
+                args[key] = tuple(tuple(float(t) for t in item.split(":", 1)) for item in text.split())
             else:
                 args[key] = float(text)
         return algorithm, cls(**args)

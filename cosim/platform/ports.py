@@ -22,12 +22,17 @@ class DriveWiring:
     velocity: tuple[str, str]
     effort: tuple[str, str]     # (drive output, mechanics input)
     outputs: tuple[str, ...]    # recorded per drive by default: effort, speed or velocity, current
+    # The interface Jacobian: (drive output d effort / d flow, mechanics input for it, mechanics
+    # input for the flow the drive was given over the step)
+    slope: tuple[str, str, str]
 
 
 DRIVES = {
     "pmsm": DriveWiring("pmsm_drive", ("leg[{i}].angle_ref", "angle_ref"), ("leg[{i}].angle", "angle"),
-                        ("leg[{i}].speed", "speed"), ("torque", "leg[{i}].torque"), ("torque", "speed", "current.q")),
+                        ("leg[{i}].speed", "speed"), ("torque", "leg[{i}].torque"), ("torque", "speed", "current.q"),
+                        ("torque_speed_slope", "leg[{i}].torque_speed_slope", "leg[{i}].speed_seen")),
     "linear": DriveWiring("linear_motor", ("leg[{i}].length_ref", "position_ref"), ("leg[{i}].length", "position"),
                           ("leg[{i}].velocity", "velocity"), ("force", "leg[{i}].force"),
-                          ("force", "velocity", "current")),
+                          ("force", "velocity", "current"),
+                          ("force_velocity_slope", "leg[{i}].force_velocity_slope", "leg[{i}].velocity_seen")),
 }

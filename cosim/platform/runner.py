@@ -103,7 +103,10 @@ def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
         # of the step that is no longer than startup_step (a run at a finer step needs no finer start)
         per = math.ceil(scene.step / scene.startup_step - 1e-9)
         steps = math.ceil(scene.startup_time / scene.step - 1e-9)
-        return algorithm, FixedStep(scene.step, steps * scene.step, scene.step / per)
+        # and the edge_time after each load pulse's edges, where the drives answer a jumping load
+        windows = tuple((edge, edge + scene.edge_time) for pulse in scene.pulses for edge in (pulse.start, pulse.end)
+                        if scene.edge_time > 0.0 and edge < scene.duration)
+        return algorithm, FixedStep(scene.step, steps * scene.step, scene.step / per, windows)
     return algorithm, FixedStep(scene.step)
 
 
@@ -151,7 +154,8 @@ def scene_structure(scene: Scene, designed: list[dict] | None | bool = False) ->
         designed, _ = scene_design(scene)
     structure = platform_structure(scene.drive, mechanics_values, drive_values if designed is None else {},
                                    scene_trajectory(scene), leg_values=designed, name=scene.path.stem,
-                                   experiment=Experiment(0.0, scene.duration, scene.step))
+                                   experiment=Experiment(0.0, scene.duration, scene.step),
+                                   interface_jacobian=scene.interface_jacobian)
     algorithm, control = scene_settings(scene)
     structure.settings = to_strings(algorithm, control)
     record, names = scene_record(scene)

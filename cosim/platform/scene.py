@@ -14,8 +14,12 @@
                   rtol, atol, h_min, h_max (of the adaptive controls; atol in m and rad of the legs'
                   outputs for doubling, in J for energy); startup_time, startup_step (fixed: the
                   first startup_time seconds at the finer startup_step, for the start-up shock);
+                  edge_time (fixed, with startup_step: the edge_time seconds after each load pulse's
+                  edges at startup_step too, for the drives' answer to a jumping load);
                   threads = 2 (the drives of a Gauss-Seidel step on two threads, bit for bit the
-                  same: faster only while the second core is free)
+                  same: faster only while the second core is free); interface_jacobian = true (each
+                  drive's slope d effort / d flow goes to the mechanics with the flow the drive saw:
+                  the drives' damping integrated implicitly, stable at longer steps)
     [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
                   pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
@@ -116,6 +120,8 @@ class Scene:
     threads: int = 1  # 2: the six drives of a Gauss-Seidel step on two threads (a free core needed)
     startup_time: float = 0.0  # [s] the first seconds at the finer startup_step (fixed step control)
     startup_step: float = 0.0
+    edge_time: float = 0.0  # [s] after each load pulse's edges at startup_step too
+    interface_jacobian: bool = False  # the drives' slopes d effort / d flow wired to the mechanics
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
     drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
     overrides: dict[str, Any] = field(default_factory=dict)  # the dotted keys load_scene set over the file
@@ -127,7 +133,7 @@ SCHEMA: dict[str, set[str]] = {
     "drive": {"kind", "parameters", "tuning", "parameter_set"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max", "startup_time",
-                 "startup_step", "threads"},
+                 "startup_step", "edge_time", "threads", "interface_jacobian"},
     "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
@@ -281,6 +287,13 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     threads = coupling.get("threads", 1)
     if threads not in (1, 2) or isinstance(threads, bool):
         raise fail("coupling", "threads", f"= {threads!r}: use 1, or 2 to step the drives on two threads")
+    interface_jacobian = coupling.get("interface_jacobian", False)
+    if not isinstance(interface_jacobian, bool):
+        raise fail("coupling", "interface_jacobian", f"= {interface_jacobian!r}: use true or false")
+    if interface_jacobian and order == 0:
+        raise fail("coupling", "interface_jacobian", "= true needs coupling.order 1 or 2: with inputs held over the "
+                   "step the speed a drive was given is off by O(h), and the slope's correction then carries "
+                   "energy its drive did not account for (more than the divergence monitor allows)")
     startup = {key: number("coupling", coupling, key) for key in ("startup_time", "startup_step") if key in coupling}
     for key, value in startup.items():
         if value < 0:
@@ -289,6 +302,11 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         startup = {}  # no finer start
     elif "startup_step" not in startup:
         raise fail("coupling", "startup_time", "needs startup_step, the finer step of the start")
+    if "edge_time" in coupling:
+        startup["edge_time"] = number("coupling", coupling, "edge_time")
+        if startup["edge_time"] < 0 or ("startup_step" not in startup and startup["edge_time"] > 0):
+            raise fail("coupling", "edge_time", f"= {startup['edge_time']!r} must not be negative, and needs "
+                       "startup_time and startup_step (the finer step it is taken at)")
 
     trajectory = {}
     signals = dict(data.get("trajectory", {}))
@@ -343,4 +361,5 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                  algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                  interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                  outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
-                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads, **startup)
+                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads,
+                 interface_jacobian=interface_jacobian, **startup)

@@ -31,9 +31,12 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
                        drive_values: Mapping[str, object] | None = None,
                        trajectory_values: Mapping[str, object] | None = None,
                        leg_values: Sequence[Mapping[str, object]] | None = None, name: str = "platform",
-                       experiment: Experiment | None = None) -> SystemStructure:
+                       experiment: Experiment | None = None, interface_jacobian: bool = False) -> SystemStructure:
     """Trajectory, mechanics and six drives of one kind with these parameter values (leg_values:
-    per drive, on top of drive_values, e.g. each leg's force feedforward)."""
+    per drive, on top of drive_values, e.g. each leg's force feedforward). interface_jacobian: each
+    drive's slope d effort / d flow feeds the mechanics, with the flow the drive was given (the
+    mechanics' own flow output wired back to its `*_seen` input: every coupling algorithm hands both
+    the same extrapolation), so the mechanics integrates the drives' damping implicitly."""
     if drive not in DRIVES:
         raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
     wiring = DRIVES[drive]
@@ -49,7 +52,14 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
             connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
         connections.append(Connection((instance, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
-        bonds.append(Bond(effort=connections[-1], flow=connections[-2]))  # torque x speed, force x velocity
+        effort, flow, slope = connections[-1], connections[-2], None  # torque x speed, force x velocity
+        if interface_jacobian:
+            slope_output, slope_input, seen_input = wiring.slope
+            slope = Connection((instance, slope_output), ("mechanics", slope_input.format(i=i)))
+            connections.append(slope)
+            connections.append(Connection(("mechanics", wiring.velocity[0].format(i=i)),
+                                          ("mechanics", seen_input.format(i=i))))
+        bonds.append(Bond(effort, flow, slope))
     return SystemStructure(name, components, connections, bonds, experiment or Experiment())
 
 
@@ -118,10 +128,12 @@ def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mappin
              drive_values: Mapping[str, object] | None = None,
              trajectory_values: Mapping[str, object] | None = None, mechanics_outputs: Sequence[str] = (),
              drive_outputs: Sequence[str] = (), order: int = 1, algorithm: str = "gauss-seidel",
-             divergence_ratio: float | None = 0.05, leg_values: Sequence[Mapping[str, object]] | None = None) -> Run:
+             divergence_ratio: float | None = 0.05, leg_values: Sequence[Mapping[str, object]] | None = None,
+             interface_jacobian: bool = False) -> Run:
     """A platform run at a fixed step in one call (for studies and tests): the pose and reference
     and the chosen outputs recorded. leg_values: per drive, on top of drive_values."""
     from ..engine import FixedStep
-    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values)
+    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,
+                                   interface_jacobian=interface_jacobian)
     return run(structure, default_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
                columns(drive, mechanics_outputs, drive_outputs), divergence_ratio)

@@ -55,6 +55,9 @@ def test_a_wrong_key_is_named_with_its_line(tmp_path, extra, message):
     (BASE.replace('kind = "pmsm"', 'kind = "hydraulic"'), ":4: 'drive.kind' = 'hydraulic' is not a drive kind"),
     (BASE.replace("duration = 1.0", "duration = -1"), ":2: 'scene.duration' = -1 must be a positive number"),
     (BASE.replace("duration = 1.0", 'duration = "long"'), ":2: 'scene.duration' = 'long'"),
+    (BASE.replace("order = 1", "order = 1\ninterface_jacobian = 1"), ":7: 'coupling.interface_jacobian' = 1: use true"),
+    (BASE.replace("order = 1", "order = 0\ninterface_jacobian = true"),
+     ":7: 'coupling.interface_jacobian' = true needs coupling.order 1 or 2"),
 ])
 def test_a_wrong_value_is_named_with_its_line(tmp_path, text, message):
     with pytest.raises(SceneError) as error:
