@@ -144,13 +144,24 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->force_friction = s.friction + s.damping;
     v->force_ripple = s.ripple;
     v->force_ref = s.force_command;
-    /* The interface Jacobian: the PID's derivative term moves the force command by -K_d per m/s
-     * while neither the force nor the current limit holds it; the current loop (or the ideal force
-     * source) delivers it. */
+    /* The interface Jacobian d force / d velocity over a step of a few current-loop time constants:
+     * the PID's derivative term moves the current reference by -K_d / K_f per m/s while neither the
+     * force nor the current limit holds it, and the current follows its reference; with the
+     * winding, the back-EMF K_e v (Eq 4.30) pushes the current by -K_e / (Kp_c + R) per m/s at once,
+     * which the current PI's integrator takes back only later; a clamped voltage (or voltage mode)
+     * opens the loop, and the winding's L/R then answers more slowly than a step (left out). Then
+     * the damping and viscous friction; the smoothed Coulomb and Stribeck friction are left out
+     * (their slope at rest is the smoothing's, far stiffer than the mechanics' step could take). */
     const int pid_free = v->control_mode == MODE_POSITION && s.force_command == s.force_raw &&
                          fabs(s.force_command / v->motor_force_constant) <= v->limit_current;
-    v->force_velocity_slope = -((pid_free ? v->control_position_kd : 0.0) + v->motor_damping +
-                                (v->effects_friction ? v->friction_viscous : 0.0));
+    const double d_current_ref = pid_free ? -v->control_position_kd / v->motor_force_constant : 0.0;
+    double d_current = d_current_ref;
+    if (v->effects_electrical)
+        d_current = (v->control_mode == MODE_VOLTAGE || s.voltage != s.voltage_raw)
+                        ? 0.0
+                        : d_current_ref - v->motor_back_emf_constant / (v->control_current_kp + v->motor_resistance);
+    v->force_velocity_slope = v->motor_force_constant * d_current - v->motor_damping -
+                              (v->effects_friction ? v->friction_viscous : 0.0);
     v->current = s.current;
     v->voltage = s.voltage;
     v->power_electrical = v->effects_electrical ? power_scale * s.voltage * s.current : s.force_em * s.velocity;

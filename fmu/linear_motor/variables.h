@@ -42,10 +42,11 @@ X(Real, force_ripple, "force.ripple", output, continuous, "N", 0.0, -FMU_INF, FM
 X(Real, force_ref, "force_ref", output, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
   "Force command after the force limit (position controller plus force_ff)") \
 X(Real, force_velocity_slope, "force_velocity_slope", output, continuous, "N.s/m", 0.0, -FMU_INF, FMU_INF, \
-  "Interface Jacobian: d force / d velocity with the current loop settled and the limits as they stand, " \
-  "-(K_d + B_l + f_v) (the PID's derivative term while no limit holds it, the damping and viscous friction; " \
-  "the smoothed Coulomb and Stribeck friction are left out, their slope at rest is the smoothing's); wired to " \
-  "the mechanics' leg[i].force_velocity_slope it makes the coupling implicit in that damping") \
+  "Interface Jacobian: d force / d velocity over a step of a few current-loop time constants, the limits as " \
+  "they stand: -K_d - K_f K_e / (Kp_c + R) - B_l - f_v (the PID's derivative term while no limit holds it, " \
+  "the back-EMF through the current loop, the damping and viscous friction; -K_d - B_l - f_v for the ideal " \
+  "force source; the smoothed Coulomb and Stribeck friction are left out, their slope at rest is the " \
+  "smoothing's); wired to the mechanics' leg[i].force_velocity_slope it makes the coupling implicit in it") \
 X(Real, current, "current", output, continuous, "A", 0.0, -FMU_INF, FMU_INF, "Winding current i") \
 X(Real, voltage, "voltage", output, continuous, "V", 0.0, -FMU_INF, FMU_INF, "Winding voltage V applied") \
 X(Real, power_electrical, "power.electrical", output, continuous, "W", 0.0, -FMU_INF, FMU_INF, \

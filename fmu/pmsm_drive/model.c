@@ -309,13 +309,26 @@ void model_compute_outputs(FmuInstance *fmu) {
         v->current_error_max = fmax(v->current_error_max, fabs(s.phase_current_ref[k] - s.phase_current[k]));
     v->speed_ref = s.speed_ref;
     v->current_ref_q = s.current_ref_q;
-    /* The interface Jacobian: the speed loop's i_q* = Kp_w (w* - w) + ... moves the torque (Eq 26) by
-     * dT/di_q = P (psi_r + (L_d - L_q) i_d) per ampere while neither limit holds it. */
+    /* The interface Jacobian d torque / d speed over a step of a few current-loop time constants:
+     * the speed loop moves i_q* by -Kp_w per rad/s while neither limit holds it, and the current
+     * follows its reference (the ACR's zero cancels the winding's pole); the back-EMF K_m w (Eq 25)
+     * pushes the current by -K_m / (K_v Kp_c + R) per rad/s at once, which the ACR's integrator
+     * takes back only over L/R (10 ms). The torque moves by dT/di_q = P (psi_r + (L_d - L_q) i_d)
+     * (Eq 26) per ampere. The hysteresis inverter holds the current at its reference; a clamped
+     * voltage opens the loop, and the winding's L/R then answers more slowly than a step (left out). */
     const int speed_loop_free = v->control_mode != MODE_TORQUE && s.current_ref_q == s.current_ref_q_raw;
-    v->torque_speed_slope = speed_loop_free ? -(v->motor_torque_constant + v->motor_pole_pairs *
-                                                (v->motor_inductance_d - v->motor_inductance_q) * x[I_D]) *
-                                                  v->control_speed_kp
-                                            : 0.0;
+    const double d_current_ref = speed_loop_free ? -v->control_speed_kp : 0.0;
+    double d_current;
+    if (v->inverter_model == INVERTER_SWITCHING) {
+        d_current = d_current_ref;
+    } else if (s.command_q != s.command_q_raw) {
+        d_current = 0.0;
+    } else {
+        d_current = d_current_ref - v->motor_torque_constant /
+                                        (v->inverter_gain * v->control_current_kp + v->motor_resistance);
+    }
+    v->torque_speed_slope = (v->motor_torque_constant + v->motor_pole_pairs *
+                             (v->motor_inductance_d - v->motor_inductance_q) * x[I_D]) * d_current;
     v->inverter_switchings = fmu->s.internal.switchings;
 }
 

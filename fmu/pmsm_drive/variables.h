@@ -66,9 +66,10 @@ X(Real, speed_ref, "speed_ref", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_
 X(Real, current_ref_q, "current_ref.q", output, continuous, "A", 0.0, -FMU_INF, FMU_INF, \
   "q-current reference after the current limit") \
 X(Real, torque_speed_slope, "torque_speed_slope", output, continuous, "N.m.s/rad", 0.0, -FMU_INF, FMU_INF, \
-  "Interface Jacobian: d torque / d speed with the current loop settled and the limits as they stand, " \
-  "-(K_m + P (L_d - L_q) i_d) Kp_w (0 while the current limit holds, and in torque mode); wired to the " \
-  "mechanics' leg[i].torque_speed_slope it makes the coupling implicit in the speed loop's damping") \
+  "Interface Jacobian: d torque / d speed over a step of a few current-loop time constants, the limits as " \
+  "they stand: -(K_m + P (L_d - L_q) i_d) (Kp_w + K_m / (K_v Kp_c + R)) (the speed loop's gain, while the " \
+  "current limit leaves it free, and the back-EMF's through the current loop); wired to the mechanics' " \
+  "leg[i].torque_speed_slope it makes the coupling implicit in that damping") \
 X(Integer, inverter_switchings, "inverter.switchings", output, discrete, "", 0, -FMU_INF, FMU_INF, \
   "Number of commutations of the switching inverter since the start") \
 \
