@@ -1,5 +1,6 @@
 """The speed-accuracy trade (issue 7), in one run: coupling algorithm x extrapolation order x macro
-step (fixed and adaptive) x drive fidelity x mechanics effects, on the Meng scene and on a fast
+step (fixed and adaptive) x drive fidelity x mechanics effects x the interface-Jacobian coupling
+(each drive's d effort / d flow applied in the mechanics), on the Meng scene and on a fast
 small scene (Sumnu's case I, linear motors), next to libcosim stepping the same FMUs (fixed step,
 and its ECCO algorithm with a power bond per drive).
 
@@ -59,7 +60,8 @@ def _overrides(changes: dict) -> dict:
     """A point's changes to the scene as overrides at the scene file's keys."""
     keys = {"algorithm": "coupling.algorithm", "order": "coupling.order", "step": "scene.step",
             "step_control": "coupling.step_control", "rtol": "coupling.rtol", "atol": "coupling.atol",
-            "startup_time": "coupling.startup_time", "startup_step": "coupling.startup_step"}
+            "startup_time": "coupling.startup_time", "startup_step": "coupling.startup_step",
+            "interface_jacobian": "coupling.interface_jacobian"}
     out = {}
     for name, value in changes.items():
         if name in keys:
@@ -127,6 +129,14 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
             planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", changes))
     for name, mechanics in effects.items():
         planned.append((f"{name}, {h * 1e3:g} ms", "ours effects", dict(mechanics=mechanics)))
+    for algorithm, order in (("gauss-seidel", 1), ("gauss-seidel", 2), ("jacobi", 1)):  # the drives' slopes applied
+        for factor in (0.5, 1.0, 2.0):
+            planned.append((f"interface Jacobian, {algorithm} {order}, {h * factor * 1e3:g} ms", "ours interface Jacobian",
+                            dict(algorithm=algorithm, order=order, step=h * factor, interface_jacobian=True)))
+    planned.append((f"interface Jacobian, gauss-seidel 1, {2 * h * 1e3:g} ms, drives' RK4 at {h * 0.2e3:g} ms, "
+                    f"mechanics' at {2 * h * 1e3:g} ms", "ours interface Jacobian",
+                    dict(step=2 * h, interface_jacobian=True, drive={"solver.step": h * 0.2},
+                         mechanics={"solver.step": 2 * h})))
     if scene.startup_time:  # what the scene's finer start buys
         for factor in (0.5, 1.0):
             planned.append((f"gauss-seidel 1, {h * factor * 1e3:g} ms, no finer start", "ours fixed",
@@ -204,7 +214,8 @@ def plot(points: list[Point], path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(9, 6))
     for family, marker in (("ours fixed", "o"), ("ours doubling", "s"), ("ours energy", "D"), ("ours fidelity", "^"),
-                           ("ours effects", "v"), ("libcosim fixed", "x"), ("libcosim ECCO", "+")):
+                           ("ours effects", "v"), ("ours interface Jacobian", "*"), ("libcosim fixed", "x"),
+                           ("libcosim ECCO", "+")):
         chosen = [p for p in points if p.family == family and not p.diverged]
         if chosen:
             ax.loglog([p.wall for p in chosen], [p.error for p in chosen], marker, ls="", label=family, ms=6)
