@@ -3,7 +3,7 @@ of our master with its errors against a converged reference, and libcosim (libco
 Simulation Platform's engine) stepping the same eight FMUs with the same connections at the scene's
 step.
 
-Configurations: the shipped scene (Gauss-Seidel order 1 at 1 ms, the first 0.1 s at an eighth);
+Configurations: the paper's scene (Gauss-Seidel order 1 at 1 ms, the first 0.1 s at an eighth);
 the same with the drives on two threads; with the drives on the L-stable ROS34PW2 at the macro
 step; and scenes/meng_eq35_fast.toml, the same scene with fast numerics: the interface-Jacobian
 coupling (each drive's d torque / d speed applied in the mechanics) at 2 ms, the start and the
@@ -48,9 +48,9 @@ TORQUES = [f"torque[{i}]" for i in range(1, 7)]
 POSES = [f"pose.{a}" for a in POSE]
 FAST = ROOT / "scenes" / "meng_eq35_fast.toml"  # the same scene with the fast numerics
 CONFIGURATIONS = [  # label, scene file, overrides
-    ("the shipped scene (Gauss-Seidel order 1, 1 ms, the step kernel)", SCENE, {}),
-    ("the shipped scene, the drives on two threads (`[coupling] threads = 2`)", SCENE, {"coupling.threads": 2}),
-    ("the drives on ROS34PW2 at the macro step, the start at a sixteenth", SCENE,
+    ("scenes/meng_eq35.toml, the paper's scene (Gauss-Seidel order 1, 1 ms)", SCENE, {}),
+    ("the paper's scene, the drives on two threads (`[coupling] threads = 2`)", SCENE, {"coupling.threads": 2}),
+    ("the paper's scene, the drives on ROS34PW2 at the macro step, the start at a sixteenth", SCENE,
      {'drive.parameters."solver.method"': 3, 'drive.parameters."solver.step"': 1e-3, "coupling.startup_step": 6.25e-5}),
     ("scenes/meng_eq35_fast.toml: interface Jacobian at 2 ms, start and impact edges at 1/16, drives' RK4 at "
      "0.2 ms, mechanics' at 2 ms", FAST, {}),
@@ -94,12 +94,12 @@ def main() -> None:
             end_to_end.append(time.perf_counter() - began)
     ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}), plots=False)[0]
     final = np.array([ours[f"pose.{a}"][-1] for a in POSE])
-    lines += ["", f"Ratios in this run: libcosim's wall / the shipped scene's {peer.wall / shipped.wall:.1f}, / the fast "
+    lines += ["", f"Ratios in this run: libcosim's wall / the paper's scene's {peer.wall / shipped.wall:.1f}, / the fast "
               f"scene's {peer.wall / fast.wall:.1f} (libcosim at 1 ms is {np.abs(final - peer.pose).max():.1e} "
               "from our final pose: its coupling error; benchmarks/trade.py compares the engines at equal error); the "
-              f"fast scene / the shipped scene {fast.wall / shipped.wall:.2f} in wall time. End to end, `python -m "
+              f"fast scene / the paper's scene {fast.wall / shipped.wall:.2f} in wall time. End to end, `python -m "
               f"cosim run scenes/meng_eq35.toml --no-plots` takes {min(end_to_end):.2f} s [goal < 1 s], "
-              f"{shipped.wall / min(end_to_end):.2f} of it stepping. The shipped scene "
+              f"{shipped.wall / min(end_to_end):.2f} of it stepping. The paper's scene "
               "keeps 1 ms because the same settings, one `kind` line away on linear motors "
               "(scenes/meng_eq35_linear.toml), lose accuracy there (README, Step control)."]
     print("\n".join(lines))

@@ -9,7 +9,9 @@ The reference is the scene with every effect on, its own drive fidelity, at a qu
 (its convergence is shown: the difference to half the step must be well under the tolerance).
 Candidates: macro steps of 1/2, 1, 2 and 4 times the scene's; each subset of the mechanics' effect
 switches (motor systems, actuator inertia, friction); the drive's fidelity (PMSM: ideal or averaged
-inverter; linear motor: with or without its electrical dynamics). A candidate the divergence
+inverter; linear motor: with or without its electrical dynamics); and, for the full model at 1, 2
+and 4 times the step, the interface-Jacobian coupling (where the scene extrapolates and does not
+use it already). A candidate the divergence
 monitor stops is listed as diverged, never recommended. Meng's Table 5 asks one instance of this
 question: what leaving out the motor systems costs.
 """
@@ -48,11 +50,13 @@ class Candidate:
     macro_steps: int = 0
     diverged: str | None = None
     gains: str = "scene's"  # or "designed": the drives' loops designed for this candidate's reduced plant
+    interface_jacobian: bool = False  # the drives' slopes applied in the mechanics
 
     @property
     def label(self) -> str:
         off = ", ".join(e.split(".")[1] for e in self.effects_off) or "-"
-        return f"{self.step * 1e3:g} ms | off: {off} | {self.fidelity} | {self.gains} gains"
+        coupling = " | interface Jacobian" if self.interface_jacobian else ""
+        return f"{self.step * 1e3:g} ms | off: {off} | {self.fidelity} | {self.gains} gains{coupling}"
 
 
 def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: float) -> Scene:
@@ -62,10 +66,11 @@ def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: fl
                                drive_parameters=drive, step_control="fixed")
 
 
-def _point(scene: Scene, factor: float, effects_off, fidelity: str, redesign: bool) -> dict:
+def _point(scene: Scene, factor: float, effects_off, fidelity: str, interface_jacobian: bool, redesign: bool) -> dict:
     """A candidate as a sweep point: overrides at the scene's keys; with `redesign`, a reduced
     model's drives get loops designed for its plant (tuning "auto")."""
-    point = {"scene.step": scene.step * factor, "drive.tuning": "auto" if redesign and effects_off else scene.tuning}
+    point = {"scene.step": scene.step * factor, "drive.tuning": "auto" if redesign and effects_off else scene.tuning,
+             "coupling.interface_jacobian": interface_jacobian or scene.interface_jacobian}
     for effect in EFFECTS:
         point[f'mechanics.parameters."{effect}"'] = False if effect in effects_off else \
             scene.mechanics_parameters.get(effect, True)
@@ -92,7 +97,9 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
     half, _ = run_scene(_variant(scene, scene.step / 2, (), own, duration))
     convergence = _pose_difference(half, reference)
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
-    plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive]))
+    plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive], (False,)))
+    if scene.order > 0 and not scene.interface_jacobian:
+        plan += list(itertools.product((1, 2, 4), [()], FIDELITY[scene.drive], (True,)))
     evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "steps", "stepping_wall"),
                           base=(*scene.overrides.items(), ("scene.duration", duration),
                                 ("coupling.step_control", "fixed")),
@@ -105,9 +112,10 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
 
     rows = sweep(points, "advise")
     candidates = []
-    for (factor, off, fidelity), row in zip(plan, rows):
+    for (factor, off, fidelity, slopes), row in zip(plan, rows):
         candidate = Candidate(scene.step * factor, off, fidelity,
-                              gains="designed" if points[len(candidates)]["drive.tuning"] == "auto" else "scene's")
+                              gains="designed" if points[len(candidates)]["drive.tuning"] == "auto" else "scene's",
+                              interface_jacobian=slopes or scene.interface_jacobian)
         if row["status"] == "ok":
             candidate.error, candidate.effort_error = row["pose_error"], row["effort_error"]
             candidate.effort_error_time = row["effort_error_time"]
@@ -140,10 +148,11 @@ def write_csv(candidates: list[Candidate], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["step_ms", "effects_off", "fidelity", "gains", "pose_error", "effort_error", "wall_s",
-                         "macro_steps", "diverged"])
+        writer.writerow(["step_ms", "effects_off", "fidelity", "gains", "interface_jacobian", "pose_error",
+                         "effort_error", "wall_s", "macro_steps", "diverged"])
         for c in candidates:
-            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, c.gains, repr(c.error),
+            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, c.gains,
+                             str(c.interface_jacobian).lower(), repr(c.error),
                              repr(c.effort_error), repr(c.wall), c.macro_steps, c.diverged or ""])
     return path
 
@@ -161,8 +170,8 @@ def text(scene: Scene, tolerance: float, candidates: list[Candidate], info: dict
     criteria = f"pose error {tolerance:g} and drive effort error {100 * effort_tolerance:g} % of its peak"
     if good:
         lines.append(f"within {criteria} ({len(good)} of {len(candidates)}, cheapest first):")
-        lines.append(f"  {'candidate':<78} {'pose error':>11} {'effort err':>10} {'wall [s]':>9} {'steps':>7}")
-        lines += [f"  {c.label:<78} {c.error:>11.2e} {100 * c.effort_error:>9.2f}% {c.wall:>9.3f} {c.macro_steps:>7}"
+        lines.append(f"  {'candidate':<98} {'pose error':>11} {'effort err':>10} {'wall [s]':>9} {'steps':>7}")
+        lines += [f"  {c.label:<98} {c.error:>11.2e} {100 * c.effort_error:>9.2f}% {c.wall:>9.3f} {c.macro_steps:>7}"
                   for c in good]
     if missed:
         efforts = sorted((c for c in missed if c.error <= tolerance), key=lambda c: c.effort_error)
