@@ -51,8 +51,10 @@ def not_portable(settings: dict) -> list[str]:
                      " (libcosim, Ecos and fmpy.ssp step every component from the same time: Jacobi)")
     control = settings.get("step_control", "fixed")
     if float(settings.get("startup_time", 0.0)) > 0.0:
+        windows = settings.get("windows", "").replace(":", " to ").split()
+        during = f" and from {', '.join(' '.join(windows[k:k + 3]) for k in range(0, len(windows), 3))} s" if windows else ""
         notes.append(f"a finer macro step ({settings.get('startup_step')} s) over the first "
-                     f"{settings['startup_time']} s")
+                     f"{settings['startup_time']} s{during}")
     if control == "doubling":
         notes.append("step doubling with rollback through FMU state")
     elif control == "energy":
