@@ -111,7 +111,9 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
                f'</div>') if report.failure else ""
     scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", scene.drive, scene.drive),
                   ("parameter set", scene.parameter_set, scene.parameter_set),
-                  ("coupling", f"{scene.algorithm}, order {scene.order}", f"{scene.algorithm} {scene.order}"),
+                  ("coupling", f"{scene.algorithm}, order {scene.order}"
+                   + (", the drives' interface Jacobians" if scene.interface_jacobian else ""),
+                   f"{scene.algorithm} {scene.order}"),
                   ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
                   ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
     warning_rows = "".join(f"<tr><td>{t:.6g}</td><td>{html.escape(i)}</td><td>{html.escape(text)}</td></tr>"
