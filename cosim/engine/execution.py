@@ -147,13 +147,9 @@ class Execution:
             last = min(n, math.ceil((end - self.time) / h - 1e-9))
             fine[first:max(first, last)] = True
         per = int(round(h / control.startup_step)) if control.startup_time > 0.0 else 1
-        k = 0
-        while k < n:  # runs of equal kind
-            end = k + 1
-            while end < n and fine[end] == fine[k]:
-                end += 1
+        bounds = [0, *(np.flatnonzero(np.diff(fine)) + 1).tolist(), n] if n else [0]  # runs of equal kind
+        for k, end in zip(bounds[:-1], bounds[1:]):
             yield from (self._batches(control.startup_step, (end - k) * per) if fine[k] else self._batches(h, end - k))
-            k = end
 
     def _batches(self, h: float, n: int):
         done, size = 0, 100  # small batches first: a divergence shows early
