@@ -82,10 +82,17 @@ class CouplingAlgorithm(ABC):
         """Makes the outputs at t consistent with the connected inputs (outputs that feed through
         from inputs, such as a spring force from a position, depend on them) and starts the history."""
         self.energy_residuals = []
-        outputs = coupling.read()
+        outputs, exact = coupling.read(), coupling.read_rates()
         for _ in range(sweeps):
             for name, feeds in coupling.feeds.items():
                 coupling.inputs[name].write([outputs[source][index] for source, index in feeds])
+                top = max((coupling.rate_orders.get(source, 0) for source, _ in feeds), default=0)
+                if self.order > 0 and coupling.interpolating[name] and top > 0:
+                    # the exact derivatives at t of the sources that give them (0 for the other inputs)
+                    for k in range(1, top + 1):
+                        coupling.inputs[name].write_derivatives(
+                            [exact[source][k - 1][index] if len(exact.get(source, [])) >= k else 0.0
+                             for source, index in feeds], k)
             new = coupling.read()
             settled = all(np.array_equal(new[n], outputs[n]) for n in new)
             outputs = new
@@ -102,12 +109,15 @@ class CouplingAlgorithm(ABC):
         the new sample at t + h where a source has one), evaluated at t. `polynomials` caches each
         source's polynomial for this step (key: source and whether it had a new sample)."""
         values, rates, curvatures = [], [], []
+        sent = order  # the highest derivative order sent: a source's exact derivatives all go
         for source, index in coupling.feeds[name]:
             key = (source, source in new)
+            if source in coupling.rate_orders and order > 0:
+                sent = max(sent, coupling.rate_orders[source])
             if key not in polynomials and source in coupling.rate_orders:
                 _, outputs, exact = self.history.samples[-1]  # at t: Taylor with the exact derivatives
                 zero = np.zeros_like(outputs[source])
-                derivatives = [*exact[source][:order], zero, zero][:2]
+                derivatives = [*(exact[source] if order > 0 else []), zero, zero][:2]
                 polynomials[key] = (outputs[source], derivatives[0], derivatives[1])
             if key not in polynomials:
                 extra = (t_new, new[source]) if source in new else None
@@ -120,12 +130,12 @@ class CouplingAlgorithm(ABC):
             half = 0.5 * (t_new - t)
             values = [v + r * half + 0.5 * c * half * half for v, r, c in zip(values, rates, curvatures)]
             rates, curvatures = [0.0] * len(values), [0.0] * len(values)
-            order = 0
+            sent = 0
         self.inputs_set[name] = (np.array(values), np.array(rates), np.array(curvatures))
         group.write(values)
-        if order >= 1:
+        if sent >= 1:
             group.write_derivatives(rates, 1)
-        if order >= 2:
+        if sent >= 2:
             group.write_derivatives(curvatures, 2)
 
     def step(self, coupling: Coupling, t: float, h: float) -> None:

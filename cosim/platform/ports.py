@@ -25,6 +25,10 @@ class DriveWiring:
     # The interface Jacobian: (drive output d effort / d flow, mechanics input for it, mechanics
     # input for the flow the drive was given over the step)
     slope: tuple[str, str, str]
+    # The reference's rate, for a drive whose controller differentiates its reference: (mechanics
+    # output, drive input), and the drive parameters that switch that input on
+    reference_rate: tuple[str, str] | None = None
+    wired_parameters: tuple[tuple[str, object], ...] = ()
 
 
 DRIVES = {
@@ -34,5 +38,6 @@ DRIVES = {
     "linear": DriveWiring("linear_motor", ("leg[{i}].length_ref", "position_ref"), ("leg[{i}].length", "position"),
                           ("leg[{i}].velocity", "velocity"), ("force", "leg[{i}].force"),
                           ("force", "velocity", "current"),
-                          ("force_velocity_slope", "leg[{i}].force_velocity_slope", "leg[{i}].velocity_seen")),
+                          ("force_velocity_slope", "leg[{i}].force_velocity_slope", "leg[{i}].velocity_seen"),
+                          ("leg[{i}].velocity_ref", "velocity_ref"), (("control.velocity_ref_input", True),)),
 }

@@ -2,8 +2,8 @@
 mechanics FMU and six drive FMUs, wired as ../shared/INTERFACES.md says. This is the one wiring
 table: the master, the SSP export and the other tools' runs all take it from `platform_structure`.
 
-DRIVES holds what differs between drive kinds: swapping the kind changes those connections and
-nothing else. Each drive's effort (torque, force) and its flow (speed, velocity) form a power bond.
+DRIVES holds what differs between drive kinds: swapping the kind changes those connections (and
+the drive parameters that switch a wired input on) and nothing else. Each drive's effort (torque, force) and its flow (speed, velocity) form a power bond.
 The default coupling is Gauss-Seidel with first-order extrapolation: the trajectory steps first
 (its outputs' exact derivatives feed the mechanics), then the drives from the mechanics' last two
 samples, then the mechanics with each effort interpolated between t and t + h.
@@ -44,12 +44,16 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
                   Component("mechanics", fmu_path("mechanics"), dict(mechanics_values or {}))]
     drive_fmu = fmu_path(wiring.fmu)
     for k, instance in enumerate(drive_names(drive)):
-        components.append(Component(instance, drive_fmu, {**(drive_values or {}), **(leg_values[k] if leg_values else {})}))
+        components.append(Component(instance, drive_fmu, {**dict(wiring.wired_parameters), **(drive_values or {}),
+                                                          **(leg_values[k] if leg_values else {})}))
     connections = [Connection(("trajectory", n), ("mechanics", n))
                    for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH, *BODY_WRENCH]]
     bonds = []
     for i, instance in zip(LEGS, drive_names(drive)):
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
+            connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
+        if wiring.reference_rate:
+            output, drive_input = wiring.reference_rate
             connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
         connections.append(Connection((instance, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
         effort, flow, slope = connections[-1], connections[-2], None  # torque x speed, force x velocity

@@ -42,7 +42,8 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
 
     /* Position PID (Section 5.3), derivative on the velocity error. */
     s->position_error = fmu_input_at(fmu, VR_position_ref, t) - s->position;
-    const double velocity_ref = fmu_input_rate_at(fmu, VR_position_ref, t);
+    const double velocity_ref = v->control_velocity_ref_input ? fmu_input_at(fmu, VR_velocity_ref, t)
+                                                              : fmu_input_rate_at(fmu, VR_position_ref, t);
     s->force_raw = force_ff;
     if (v->control_mode == MODE_POSITION)
         s->force_raw += v->control_position_kp * s->position_error + x[INT_POSITION] +

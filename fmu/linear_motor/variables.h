@@ -30,6 +30,9 @@ X(Real, force_ff, "force_ff", input, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
   "Force feedforward added to the position controller's output; in force mode the force command") \
 X(Real, voltage_ref, "voltage_ref", input, continuous, "V", 0.0, -FMU_INF, FMU_INF, \
   "Winding voltage in voltage mode (control.mode = 3), for open-loop studies such as Eq 5.6") \
+X(Real, velocity_ref, "velocity_ref", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, \
+  "Leg extension rate reference for the PID's derivative term, with control.velocity_ref_input (the " \
+  "mechanics' leg[i].velocity_ref: where the rate of position_ref is only the slope of the master's extrapolation)") \
 \
 X(Real, force, "force", output, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
   "Net axial force on the leg: K_f i - B_l v - friction(v) - ripple(x) (Eqs 4.28-4.31)") \
@@ -96,6 +99,8 @@ X(Real, control_position_ki, "control.position_ki", parameter, tunable, "N/(m.s)
   "Position PID integral gain: Kp w / 10 (integral zero a decade below w)") \
 X(Real, control_position_kd, "control.position_kd", parameter, tunable, "N.s/m", 628.3, 0.0, FMU_INF, \
   "Position PID derivative gain 2 m w, acting on the velocity error (reference velocity from the derivative of position_ref when given)") \
+X(Boolean, control_velocity_ref_input, "control.velocity_ref_input", parameter, fixed, "", 0, 0, 1, \
+  "The derivative term's reference velocity: the input velocity_ref (true) or the rate of position_ref (false)") \
 X(Real, control_current_kp, "control.current_kp", parameter, tunable, "V/A", 62.83, 0.0, FMU_INF, \
   "Current PI: L w_c with w_c = 2 pi 1 kHz (zero cancels L/R)") \
 X(Real, control_current_ki, "control.current_ki", parameter, tunable, "V/(A.s)", 19478.0, 0.0, FMU_INF, \

@@ -23,7 +23,8 @@ static const int VR_TORQUE_SPEED_SLOPE[] = LEG_VRS(torque_speed_slope), VR_SPEED
                  VR_FORCE_VELOCITY_SLOPE[] = LEG_VRS(force_velocity_slope), VR_VELOCITY_SEEN[] = LEG_VRS(velocity_seen);
 static const int VR_TORQUE[] = LEG_VRS(torque), VR_FORCE[] = LEG_VRS(force), VR_LENGTH[] = LEG_VRS(length),
                  VR_VELOCITY[] = LEG_VRS(velocity), VR_ANGLE[] = LEG_VRS(angle), VR_SPEED[] = LEG_VRS(speed),
-                 VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref);
+                 VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref),
+                 VR_VELOCITY_REF[] = LEG_VRS(velocity_ref), VR_SPEED_REF[] = LEG_VRS(speed_ref);
 static const int VR_POSE_REF[] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z,
                                   VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw};
 static const int VR_WRENCH[] = {VR_load_force_x, VR_load_force_y, VR_load_force_z,
@@ -231,10 +232,17 @@ void model_compute_outputs(FmuInstance *fmu) {
     const double *x = fmu->s.x, t = fmu->s.time;
     LegGeometry legs[PLATFORM_LEGS];
     double torque[6], force[6], wrench[6], dxdt[MODEL_N_STATES], pose_ref[6], length_ref[6], R[9], euler[3];
+    double pose_ref_rate[6], x_ref[PLATFORM_STATES];
+    LegGeometry legs_ref[PLATFORM_LEGS];
     PlatformDiagnostics d;
     platform_legs(p, x, legs);
-    for (int i = 0; i < 6; i++) pose_ref[i] = fmu_input_at(fmu, VR_POSE_REF[i], t);
+    for (int i = 0; i < 6; i++) {
+        pose_ref[i] = fmu_input_at(fmu, VR_POSE_REF[i], t);
+        pose_ref_rate[i] = fmu_input_rate_at(fmu, VR_POSE_REF[i], t);
+    }
     platform_leg_lengths(p, pose_ref, length_ref);
+    platform_state_from_pose(pose_ref, pose_ref_rate, x_ref); /* the reference pose moving at its rate */
+    platform_legs(p, x_ref, legs_ref);
     for (int i = 0; i < PLATFORM_LEGS; i++) {
         *fmu_real(fmu, VR_LENGTH[i]) = legs[i].length;
         *fmu_real(fmu, VR_VELOCITY[i]) = legs[i].velocity;
@@ -242,6 +250,8 @@ void model_compute_outputs(FmuInstance *fmu) {
         *fmu_real(fmu, VR_SPEED[i]) = p->screw_ratio * legs[i].velocity; /* Eq 4 */
         *fmu_real(fmu, VR_LENGTH_REF[i]) = length_ref[i];
         *fmu_real(fmu, VR_ANGLE_REF[i]) = p->screw_ratio * (length_ref[i] - p->neutral_length[i]);
+        *fmu_real(fmu, VR_VELOCITY_REF[i]) = legs_ref[i].velocity;
+        *fmu_real(fmu, VR_SPEED_REF[i]) = p->screw_ratio * legs_ref[i].velocity;
     }
     platform_rotation_from_quaternion(x + 3, R);
     platform_euler_from_rotation(R, euler);

@@ -51,7 +51,12 @@ X(Real, leg##i##_speed, "leg[" #i "].speed", output, continuous, "rad/s", 0.0, -
 X(Real, leg##i##_length_ref, "leg[" #i "].length_ref", output, continuous, "m", 0.0, -FMU_INF, FMU_INF, \
   "Length of leg " #i " at pose_ref (inverse kinematics)") \
 X(Real, leg##i##_angle_ref, "leg[" #i "].angle_ref", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
-  "Motor angle of leg " #i " at pose_ref")
+  "Motor angle of leg " #i " at pose_ref") \
+X(Real, leg##i##_velocity_ref, "leg[" #i "].velocity_ref", output, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, \
+  "Extension rate of leg " #i " at pose_ref moving at the rate of pose_ref (its inputs' derivatives): the rate " \
+  "of leg[" #i "].length_ref") \
+X(Real, leg##i##_speed_ref, "leg[" #i "].speed_ref", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "Motor speed of leg " #i " at pose_ref: screw ratio times velocity_ref")
 
 /* What a drive designer needs of leg i, at the start pose (computed once, at initialization): the
  * leg's inertia with the other legs held, M_ii of the joint-space mass matrix J^-T M J^-1, and the

@@ -307,3 +307,24 @@ def test_swapping_the_drive_changes_one_setting():
         r = simulate(drive, 3.0, 1e-3, mechanics, trajectory_values=reference, leg_values=legs).result
         error = np.array([np.abs(r[f"pose.{a}"] - r[f"pose_ref.{a}"]) for a in POSE]).T[r["time"] > 1.5].max(axis=0)
         assert np.all(error < bound), (drive, error)
+
+
+def test_the_derivative_term_takes_the_reference_velocity_input_when_switched_on():
+    """With control.velocity_ref_input the PID's derivative term uses the input velocity_ref instead of
+    the rate of position_ref (the slope of a master's extrapolation): 1 mm/s more of it moves the
+    force of the ideal force source by K_d (628.3 N s/m) within 1e-9; switched off, the input is
+    ignored."""
+    forces = {}
+    for switched in (True, False):
+        motor = FmuInstance(fmu_path("linear_motor"), f"velocity_ref_{switched}")
+        try:
+            motor.initialize({"effects.electrical": False, "control.velocity_ref_input": switched})
+            motor.set({"position_ref": 0.001, "position": 0.0, "velocity": 0.0})
+            base = motor.get("force")
+            motor.set({"velocity_ref": 1e-3})
+            forces[switched] = motor.get("force") - base
+        finally:
+            motor.free()
+    assert forces[True] == pytest.approx(628.3e-3, rel=1e-9)
+    assert forces[False] == 0.0
+

@@ -321,6 +321,23 @@ def test_inverse_kinematics_outputs_follow_pose_ref(make_mechanics, dll):
         assert mech.get(f"leg[{i + 1}].angle_ref") == pytest.approx(ratio * (lengths[i] - 1.86), rel=1e-9)
 
 
+def test_the_reference_rates_are_the_rates_of_the_inverse_kinematics(make_mechanics, dll):
+    """leg[i].velocity_ref (and speed_ref = screw ratio times it) at a pose_ref moving at a given rate
+    (the inputs' derivatives): the central difference of the leg lengths along that rate, to 1e-8."""
+    core = Core(dll)
+    pose = core.neutral_pose + np.array([0.1, -0.05, 0.2, 0.05, 0.02, -0.1])
+    rate = np.array([0.3, -0.2, 0.5, 0.4, -0.3, 0.6])
+    mech = make_mechanics()
+    mech.set({f"pose_ref.{a}": pose[k] for k, a in enumerate(POSE)})
+    mech.set_input_derivatives([f"pose_ref.{a}" for a in POSE], rate)
+    eps = 1e-6
+    rates = (core.leg_lengths(pose + eps * rate) - core.leg_lengths(pose - eps * rate)) / (2 * eps)
+    ratio = core.params["transmission"]["screw_ratio"]
+    for i in range(6):
+        assert mech.get(f"leg[{i + 1}].velocity_ref") == pytest.approx(rates[i], abs=1e-8)
+        assert mech.get(f"leg[{i + 1}].speed_ref") == pytest.approx(ratio * rates[i], abs=1e-8 * ratio)
+
+
 @pytest.mark.parametrize("name,tilt", [("meng2010", None), ("meng2010", [0.05, -0.03, 0.1, 0.04, -0.03, 0.08]),
                                        ("sumnu2015", None)])
 def test_the_legs_plants_are_outputs_that_an_independent_computation_gives(make_mechanics, dll, name, tilt):

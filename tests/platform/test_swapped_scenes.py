@@ -94,8 +94,8 @@ def test_the_fast_settings_of_the_pmsm_scene_lose_accuracy_on_linear_motors():
     2 ms (with the impact's edges at the finer step), which keeps the PMSM scene within 1e-5 in pose
     and 1 % in torque (benchmarks/master.py), keeps Meng's platform on linear motors stable, but its
     pose and forces through the first 3 s, impact included, move at least twice as far from its
-    converged run (62.5 us) as at the scene's 1 ms (measured: pose 1.6e-5 -> 4.9e-5, forces 1.8 % ->
-    12 % of their peak)."""
+    converged run (62.5 us) as at the scene's 1 ms (measured: pose 3.3e-6 -> 1.1e-5, forces 1.9 % ->
+    6.7 % of their peak, both at the kick after the finer start ends)."""
     from cosim.platform.sweep import difference
     path, forces = ROOT / "scenes" / "meng_eq35_linear.toml", [f"force[{i}]" for i in range(1, 7)]
     poses = [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
@@ -107,3 +107,21 @@ def test_the_fast_settings_of_the_pmsm_scene_lose_accuracy_on_linear_motors():
                                           "coupling.edge_time": 0.02}), plots=False)
     assert difference(fast, reference, poses) > 2 * difference(shipped, reference, poses)
     assert difference(fast, reference, forces) / peak > 0.05 > 2 * difference(shipped, reference, forces) / peak
+
+
+def test_meng_on_linear_motors_converges_at_second_order():
+    """The linear motors' PID differentiates its reference. Taken as the rate of `position_ref`, the
+    slope of the master's order-1 extrapolation (a secant, O(h) off), it made the scene first order;
+    the mechanics' `leg[i].velocity_ref`, computed from pose_ref's exact rate and curvature (the
+    trajectory's derivatives, all sent, from the first sample on), makes it second order: the pose
+    error over 0.5-2 s against the scene at 62.5 us falls at least threefold from 1 ms to 0.5 ms
+    (measured 4.5x), and at 1 ms it is under 1e-6 (measured 1.1e-7; it was 1.1e-5)."""
+    from cosim.platform.sweep import difference
+    path, poses = ROOT / "scenes" / "meng_eq35_linear.toml", [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
+    reference, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": 6.25e-5,
+                                               "coupling.startup_time": 0.0}), plots=False)
+    errors = {}
+    for step in (1e-3, 5e-4):
+        result, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": step}), plots=False)
+        errors[step] = difference(result[result["time"] >= 0.5], reference, poses)
+    assert errors[1e-3] > 3 * errors[5e-4] and errors[1e-3] < 1e-6, errors

@@ -153,12 +153,14 @@ static void polynomial_at(int n, const double *times, const double *y, double t,
 static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
     const KernelInstance *in = &s->instances[k];
     const int latest = s->n_samples - 1;
+    int sent = order; /* the highest derivative order sent: a source's exact derivatives all go */
     for (int i = 0; i < in->n_inputs; i++) {
         const int source = in->feed_source[i];
         const int at = s->instances[source].output_offset + in->feed_index[i];
         double p[3];
         if (s->instances[source].rate_order > 0) { /* Taylor polynomial at t with the exact derivatives */
-            const int given = order < s->instances[source].rate_order ? order : s->instances[source].rate_order;
+            const int given = order == 0 ? 0 : s->instances[source].rate_order; /* all it has */
+            if (given > sent) sent = given;
             p[0] = s->samples[latest * s->n_sample_values + at];
             p[1] = given >= 1 ? s->exact_rates[at] : 0.0;
             p[2] = given >= 2 ? s->exact_rates[s->n_sample_values + at] : 0.0;
@@ -185,6 +187,7 @@ static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
     FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
                                                s->input_values + in->input_offset));
     if (!in->interpolating) return 1;
+    order = sent;
     if (order >= 1)
         FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
                  in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
@@ -252,6 +255,32 @@ static int push_sample(Kernel *s, double t_new) {
     return read_rates(s);
 }
 
+/* At the start, with extrapolation (order >= 1): the exact derivatives at t that sources give with
+ * their outputs go to the inputs they feed (an output computed from an input's rate, such as the
+ * mechanics' leg velocity_ref from pose_ref's, is then right from the first sample); 0 for the
+ * other inputs. */
+static int set_exact_derivatives(Kernel *s, int k) {
+    const KernelInstance *in = &s->instances[k];
+    if (s->order == 0 || !in->interpolating) return 1;
+    int top = 0;
+    for (int i = 0; i < in->n_inputs; i++) {
+        const KernelInstance *source = &s->instances[in->feed_source[i]];
+        const int at = source->output_offset + in->feed_index[i];
+        s->input_rates[in->input_offset + i] = source->rate_order >= 1 ? s->exact_rates[at] : 0.0;
+        s->input_curvatures[in->input_offset + i] = source->rate_order >= 2 ? s->exact_rates[s->n_sample_values + at] : 0.0;
+        if (source->rate_order > top) top = source->rate_order;
+    }
+    if (top >= 1)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
+                                           s->input_rates + in->input_offset));
+    if (top >= 2)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_two,
+                                           s->input_curvatures + in->input_offset));
+    return 1;
+}
+
 /* Makes the outputs at t consistent with the connected inputs (outputs that feed through from
  * inputs depend on them): up to `sweeps` rounds of setting every input from its source and reading
  * the outputs again, until they stop changing; then starts the history with that sample. With
@@ -260,7 +289,7 @@ static int push_sample(Kernel *s, double t_new) {
 int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start) {
     s->failed_instance = s->failed_call = -1;
     s->n_samples = 0;
-    if (!read_all_outputs(s)) return 0;
+    if (!read_all_outputs(s) || !read_rates(s)) return 0;
     for (int sweep = 0; sweep < sweeps; sweep++) {
         for (int k = 0; k < s->n_instances; k++) {
             const KernelInstance *in = &s->instances[k];
@@ -271,6 +300,7 @@ int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start) {
             const double started = clock_start();
             FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
                                                        s->input_values + in->input_offset));
+            if (!set_exact_derivatives(s, k)) return 0;
             clock_stop(s, k, started);
         }
         memcpy(s->guess, s->new_values, (size_t)s->n_sample_values * sizeof(double)); /* the old outputs */
