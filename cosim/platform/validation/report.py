@@ -57,7 +57,7 @@ stroke for moments (the paper's own motion): the mechanics warns and goes on."""
 and frequency, a 1 mm (1 mrad) sine about the neutral pose through the whole co-simulation (drives
 in position mode with their default gains, which follow the paper's Table 2-4 motor data), the
 response fitted over whole periods after 0.4 s; frequencies 1-40 Hz, the coupling step at most
-1/40 of the period. Five of six DOFs land within 0.3 Hz of the paper's band. Yaw is 11.7 Hz against
+1/40 of the period. Five of six DOFs land within 0.3 Hz of the paper's band. Yaw is 11.6 Hz against
 the paper's 14-15 Hz: in our model yaw moves the legs' motor-side inertia as much as roll and
 pitch do (the legs are inclined about 45 degrees); the paper gives no reason for yaw to be faster.""",
         rows, ["meng_fig6_bode.png"]))
