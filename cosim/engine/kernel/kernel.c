@@ -148,6 +148,20 @@ static void polynomial_at(int n, const double *times, const double *y, double t,
     out[2] = 2.0 * d2;
 }
 
+/* Sends instance k's input rates (top >= 1) and curvatures (top >= 2) as they stand in the arrays. */
+static int send_derivatives(Kernel *s, int k, int top) {
+    const KernelInstance *in = &s->instances[k];
+    if (top >= 1)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
+                                           s->input_rates + in->input_offset));
+    if (top >= 2)
+        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_two,
+                                           s->input_curvatures + in->input_offset));
+    return 1;
+}
+
 /* Instance k's inputs over [t, t_new] at extrapolation order `order`: from the polynomial through
  * its sources' samples (with the new sample at t_new where a source has stepped), evaluated at t. */
 static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
@@ -186,17 +200,7 @@ static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
     }
     FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, in->input_vrs, (size_t)in->n_inputs,
                                                s->input_values + in->input_offset));
-    if (!in->interpolating) return 1;
-    order = sent;
-    if (order >= 1)
-        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
-                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
-                                           s->input_rates + in->input_offset));
-    if (order >= 2)
-        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
-                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_two,
-                                           s->input_curvatures + in->input_offset));
-    return 1;
+    return !in->interpolating || send_derivatives(s, k, sent);
 }
 
 static int do_step(Kernel *s, int k, double h) {
@@ -270,15 +274,7 @@ static int set_exact_derivatives(Kernel *s, int k) {
         s->input_curvatures[in->input_offset + i] = source->rate_order >= 2 ? s->exact_rates[s->n_sample_values + at] : 0.0;
         if (source->rate_order > top) top = source->rate_order;
     }
-    if (top >= 1)
-        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
-                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_one,
-                                           s->input_rates + in->input_offset));
-    if (top >= 2)
-        FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
-                 in->set_input_derivatives(in->component, in->input_vrs, (size_t)in->n_inputs, s->order_two,
-                                           s->input_curvatures + in->input_offset));
-    return 1;
+    return send_derivatives(s, k, top);
 }
 
 /* Makes the outputs at t consistent with the connected inputs (outputs that feed through from
