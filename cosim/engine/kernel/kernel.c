@@ -9,13 +9,15 @@
  *     (threads = 2): each member reads only what was there before the stage and writes only its
  *     own slots, so the results are bit for bit the sequential ones.
  *   A source that gives its outputs' time derivatives (fmi2GetRealOutputDerivatives) feeds its
- *   Taylor polynomial at t instead. Input derivatives go to the FMU through
+ *   Taylor polynomial at t instead, with every derivative it gives whatever the order above 0
+ *   (and already during the start's consistency sweeps). Input derivatives go to the FMU through
  *   fmi2SetRealInputDerivatives; an FMU that cannot interpolate gets each input held at its
  *   polynomial's value at the step's midpoint and no derivatives.
  *   Start: the outputs are made consistent with the connected inputs (fixed-point sweeps), and the
  *   first macro step, which has no history, is iterated to a fixed point with inputs interpolated
  *   between t and the latest guess at t + h (FMU states restored between sweeps).
- *   Every macro step measures the energy residual of each power bond (ECCO, Sadjina et al. 2017).
+ *   Every macro step measures the energy residual of each power bond (ECCO, Sadjina et al. 2017),
+ *   counting the correction of a bond whose effort comes with its slope (an interface Jacobian).
  * Step control:
  *   - fixed: n macro steps of h;
  *   - step doubling: each H once whole and once as two halves from the saved FMU states; the
