@@ -31,7 +31,7 @@ def _sources() -> list[Path]:
     if not (ROOT / "CMakeLists.txt").exists():
         return []
     return [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*"),
-            *(ROOT / "tests" / "fmus").rglob("*"), *(ROOT / "cosim" / "engine" / "kernel").rglob("*.c")]
+            *(ROOT / "tests" / "fmus").rglob("*"), *(ROOT / "cosim" / "engine" / "kernel").rglob("*.[ch]")]
 
 
 def _check(path: Path, what: str) -> Path:

@@ -14,6 +14,7 @@ import numpy as np
 from .artifacts import library_path
 from .coupling import Coupling
 from .fmi import FmuError, LogMessage
+from .native import check_layout
 from .settings import Algorithm, EnergyControl, StepDoubling
 
 _CALLS = {1: "fmi2SetReal", 2: "fmi2SetRealInputDerivatives", 3: "fmi2DoStep", 4: "fmi2GetReal",
@@ -21,6 +22,15 @@ _CALLS = {1: "fmi2SetReal", 2: "fmi2SetRealInputDerivatives", 3: "fmi2DoStep", 4
 
 _P = ctypes.c_void_p
 _INTS, _UINTS, _DOUBLES = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_uint), ctypes.POINTER(ctypes.c_double)
+
+
+class _Port(ctypes.Structure):
+    _fields_ = [("instance", ctypes.c_int), ("index", ctypes.c_int)]
+
+
+class _Bond(ctypes.Structure):
+    _fields_ = [("effort_out", _Port), ("effort_in", _Port), ("flow_out", _Port), ("flow_in", _Port),
+                ("slope_in", _Port)]
 
 
 class _Instance(ctypes.Structure):
@@ -41,7 +51,7 @@ class _Kernel(ctypes.Structure):
                 ("n_sample_values", ctypes.c_int), ("exact_rates", _DOUBLES), ("new_values", _DOUBLES),
                 ("stepped", _INTS), ("n_inputs_total", ctypes.c_int), ("input_values", _DOUBLES),
                 ("input_rates", _DOUBLES), ("input_curvatures", _DOUBLES), ("n_bonds", ctypes.c_int),
-                ("bonds", _INTS), ("n_columns", ctypes.c_int), ("column_of", _INTS), ("record_scratch", _DOUBLES),
+                ("bonds", ctypes.POINTER(_Bond)), ("n_columns", ctypes.c_int), ("column_of", _INTS), ("record_scratch", _DOUBLES),
                 ("instance_time", _DOUBLES), ("fmi_seconds", _DOUBLES), ("order_one", _INTS), ("order_two", _INTS),
                 ("states", ctypes.POINTER(ctypes.c_void_p)),
                 ("startup_states", ctypes.POINTER(ctypes.c_void_p)), ("guess", _DOUBLES), ("saved_time", _DOUBLES),
@@ -74,7 +84,11 @@ def write_csv(path: str, header: str, table: np.ndarray) -> None:
 def _load() -> ctypes.CDLL:
     global _library
     if _library is None:
-        lib = ctypes.CDLL(str(library_path("libcosim_kernel.so")))
+        path = library_path("libcosim_kernel.so")
+        lib = ctypes.CDLL(str(path))
+        check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
+                                                  (_Instance, "KernelInstance"), (_Kernel, "Kernel"),
+                                                  (_Controller, "Controller")])
         K, C = ctypes.POINTER(_Kernel), ctypes.POINTER(_Controller)
         lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int, ctypes.c_int]
         lib.kernel_record.argtypes = [K, ctypes.c_int, _DOUBLES]
@@ -188,11 +202,11 @@ class Kernel:
         sequence = algorithm.sequence if algorithm.kind == "gauss-seidel" and algorithm.sequence else names
         self.sequence = _ints([self.index[n] for n in sequence])
         self.stage_end = _ints(stages(list(sequence), coupling.feeds))
-        bonds = [x for ((eo, ei), (fo, fi)), slope in zip(coupling.bonds, coupling.bond_slopes)
-                 for x in (self.index[eo[0]], eo[1], self.index[ei[0]], ei[1],
-                           self.index[fo[0]], fo[1], self.index[fi[0]], fi[1],
-                           *((self.index[slope[0]], slope[1]) if slope else (-1, -1)))]
-        self.bonds = _ints(bonds or [0])
+        self.bonds = (_Bond * max(self.n_bonds, 1))()
+        for bond, ((eo, ei), (fo, fi)), slope in zip(self.bonds, coupling.bonds, coupling.bond_slopes):
+            for port, (name, index) in (("effort_out", eo), ("effort_in", ei), ("flow_out", fo), ("flow_in", fi)):
+                setattr(bond, port, _Port(self.index[name], index))
+            bond.slope_in = _Port(self.index[slope[0]], slope[1]) if slope else _Port(-1, -1)
         n, m = max(offset, 1), max(input_offset, 1)
         self.sample_time, self.samples = np.zeros(3), np.zeros((3, n))
         self.exact_rates, self.new_values, self.guess = np.zeros((2, n)), np.zeros(n), np.zeros(n)
@@ -217,7 +231,7 @@ class Kernel:
         s.stepped = _ptr(self.stepped, _INTS)
         s.n_inputs_total = input_offset
         s.input_values, s.input_rates, s.input_curvatures = (_ptr(self.inputs[i], _DOUBLES) for i in range(3))
-        s.n_bonds, s.bonds = self.n_bonds, _ptr(self.bonds, _INTS)
+        s.n_bonds, s.bonds = self.n_bonds, self.bonds
         s.n_columns, s.column_of = len(columns), _ptr(self.column_of, _INTS)
         s.record_scratch = _ptr(self.record_scratch, _DOUBLES)
         s.instance_time, s.fmi_seconds = _ptr(self.instance_time, _DOUBLES), _ptr(self.fmi_seconds, _DOUBLES)

@@ -195,6 +195,22 @@ def drive_set(name: str) -> tuple[dict, dict]:
     return dict(values.get("drive", {})), dict(values.get("mechanics", {}))
 
 
+def scene_mechanics(parameter_set: str, mass_set: str = "heavy", drive_set_name: str | None = None,
+                    parameters: dict | None = None) -> dict[str, object]:
+    """The mechanics FMU's values of a scene: the platform's set, the drive set's [mechanics] (what
+    the drive changes on the legs), then the scene's own, which win. The platform starts at its
+    neutral pose wherever none of them gives the start pose: the FMU's default start pose is the
+    default layout's neutral, which a changed geometry moves."""
+    from .platform_core import neutral_pose
+    values = {**mechanics_start_values(parameter_set, mass_set), **(drive_set(drive_set_name)[1] if drive_set_name else {}),
+              **(parameters or {})}
+    missing = [dof for dof in POSE if f"initial.pose.{dof}" not in values]
+    if missing:
+        neutral = neutral_pose(values)
+        values.update({f"initial.pose.{dof}": float(neutral[POSE.index(dof)]) for dof in missing})
+    return values
+
+
 def mechanics_start_values(name: str, mass_set: str = "heavy") -> dict[str, float]:
     """Start values of the mechanics FMU for parameter set `name` (meng2010, sumnu2015, halder2013)."""
     c = load(name)

@@ -1,17 +1,24 @@
 """ctypes access to the plain-C dynamics core of the mechanics (fmu/mechanics/platform.c, built by
-CMake into build/lib/ as the library the FMU is built from): inverse dynamics, leg kinematics and
-energies without the FMI layer, for tests and the validation report. Parameters come from
-params/meng2010.toml, or from mechanics-FMU start values (Core.use_start_values)."""
+CMake into build/lib/ with the FMU's own parameter mapping, fmu/mechanics/parameters.c): inverse
+dynamics, leg kinematics, leg plants and energies without the FMI layer.
+
+The platform is known once: a `Core` is built from mechanics-FMU variable values by name (the FMU's
+start values, read from its modelDescription, with the given ones over them) through the same C
+function the FMU builds its platform with, so every parameter the FMU takes (layout 1 radii and
+spacings, explicit joints, masses, gravity, switches) changes the answers here exactly as there.
+"""
 
 from __future__ import annotations
 
 import ctypes
-import math
+from functools import lru_cache
+from typing import Mapping
 
 import numpy as np
 
-from ..engine.artifacts import library_path
-from .parameter_sets import load as load_parameter_set
+from ..engine.artifacts import fmu_path, library_path
+from ..engine.checks import variables
+from ..engine.native import check_layout
 
 LEGS = 6
 D = ctypes.c_double
@@ -39,14 +46,17 @@ class Diagnostics(ctypes.Structure):
                 ("transmission_loss", D), ("friction_loss", D), ("load_power", D), ("singular", ctypes.c_int)]
 
 
+@lru_cache(maxsize=None)
 def load() -> ctypes.CDLL:
-    """The core's library, built if stale."""
-    dll = ctypes.CDLL(str(library_path("libplatform_core.so")))
+    """The core's library (its structs checked against the classes above)."""
+    path = library_path("libplatform_core.so")
+    dll = ctypes.CDLL(str(path))
+    check_layout(dll, "platform_core_layout", path, [(Platform, "Platform"), (LegGeometry, "LegGeometry"),
+                                                      (Diagnostics, "PlatformDiagnostics")])
     P = ctypes.POINTER
-    dll.platform_layout_from_radii.argtypes = [P(Platform), D, D, D, D, D, P(D), P(D)]
-    dll.platform_layout_from_radii.restype = ctypes.c_int
-    dll.platform_layout_from_joints.argtypes = [P(Platform), P(D), P(D), P(D)]
-    dll.platform_layout_from_joints.restype = ctypes.c_int
+    dll.mechanics_platform_from_values.argtypes = [P(D), ctypes.c_int, P(Platform)]
+    dll.mechanics_platform_from_values.restype = ctypes.c_int
+    dll.mechanics_value_references.restype = ctypes.c_int
     dll.platform_leg_lengths.argtypes = [P(Platform), P(D), P(D)]
     dll.platform_legs.argtypes = [P(Platform), P(D), P(LegGeometry)]
     dll.platform_derivatives.argtypes = [P(Platform), P(D), P(D), P(D), ctypes.c_void_p, P(D), P(D), P(Diagnostics)]
@@ -59,62 +69,74 @@ def load() -> ctypes.CDLL:
     return dll
 
 
+def _number(value: object) -> float:
+    """A start value as the FMU holds it (Booleans and Integers as whole numbers)."""
+    if isinstance(value, str):
+        return 1.0 if value == "true" else 0.0 if value == "false" else float(value)
+    return float(value)
+
+
+@lru_cache(maxsize=None)
+def _start_values() -> tuple[dict[str, int], tuple[float, ...]]:
+    """The mechanics FMU's value references by name and its start values by value reference."""
+    found = variables(fmu_path("mechanics"))
+    references = {name: v.valueReference for name, v in found.items()}
+    values = [0.0] * (max(references.values()) + 1)
+    for name, v in found.items():
+        if v.start is not None and v.type != "String":
+            values[v.valueReference] = _number(v.start)
+    return references, tuple(values)
+
+
+class LayoutImpossible(ValueError):
+    """Mechanics parameters that give no platform (the FMU refuses them at initialization too)."""
+
+
+def build(values: Mapping[str, object] | None = None, dll: ctypes.CDLL | None = None) -> Platform:
+    """The Platform the mechanics FMU builds from its start values with `values` (by variable
+    name) over them: the FMU's own mapping (fmu/mechanics/parameters.c)."""
+    dll = dll or load()
+    references, starts = _start_values()
+    full = list(starts)
+    for name, value in (values or {}).items():
+        if name in references:
+            full[references[name]] = _number(value)
+    p = Platform()
+    status = dll.mechanics_platform_from_values(arr(full), len(full), ctypes.byref(p))
+    if status == -2:
+        raise RuntimeError(f"libplatform_core.so and mechanics.fmu come from different variable tables "
+                           f"({dll.mechanics_value_references()} and {len(full)} value references): rebuild "
+                           "with `bash scripts/setup.sh`")
+    if status != 0:
+        if int(full[references["geometry.layout"]]) == 2:
+            raise LayoutImpossible("with the explicit joints a leg has zero length at geometry.neutral")
+        raise LayoutImpossible("the joint radii and spacings give no platform (spacing wider than a circle, or "
+                               "l_0 shorter than the legs' horizontal reach)")
+    return p
+
+
 def arr(values) -> ctypes.Array:
     values = np.asarray(values, dtype=float).ravel()
     return (D * len(values))(*values)
 
 
 class Core:
-    """The Meng platform of params/meng2010.toml, with the C core's functions on numpy arrays."""
+    """A platform as the mechanics FMU builds it, with the dynamics core's functions on numpy
+    arrays: the FMU's defaults (the Meng platform of params/meng2010.toml), its effect switches
+    (actuators, motors, friction) as given, and any mechanics start values over them
+    (use_start_values)."""
 
-    def __init__(self, dll: ctypes.CDLL | None = None, actuators: bool = True, motors: bool = True, friction: bool = True):
-        self.dll = dll = dll or load()
-        c = load_parameter_set("meng2010")
-        g, pl, act, ms, tr, mo = (c["geometry"], c["platform"], c["actuator"], c["motor_system"],
-                                  c["transmission"], c["motor"])
-        p = Platform()
-        assert dll.platform_layout_from_radii(
-            ctypes.byref(p), g["upper_joint_radius"], g["lower_joint_radius"], g["upper_joint_spacing"],
-            g["lower_joint_spacing"], g["middle_leg_length"], arr(g["lower_pair_centres_deg"]),
-            arr(g["upper_pair_centres_deg"])) == 0
-        p.platform_mass = pl["mass"]
-        p.platform_inertia[:] = pl["inertia_diag"]
-        p.moving_mass, p.moving_inertia, p.moving_com = (act["moving_part_mass"], act["moving_part_inertia"],
-                                                         act["moving_part_com_from_upper_joint"])
-        p.rotating_mass, p.rotating_inertia, p.rotating_com = (act["rotating_part_mass"],
-                                                               act["rotating_part_inertia"],
-                                                               act["rotating_part_com_from_lower_joint"])
-        p.motor_mass, p.motor_inertia, p.motor_com = ms["mass"], ms["transverse_inertia"], ms["com_from_lower_joint"]
-        p.rotor_inertia, p.screw_ratio = ms["rotor_screw_inertia"], tr["screw_ratio"]
-        p.force_torque, p.viscous_friction = tr["force_torque_coefficient"], mo["viscous_friction"]
-        p.gravity[:] = c["environment"]["gravity"]
-        p.actuator_inertia_on, p.motor_inertia_on, p.friction_on = int(actuators), int(motors), int(friction)
-        self.p, self.params = p, c
+    def __init__(self, dll: ctypes.CDLL | None = None, actuators: bool = True, motors: bool = True,
+                 friction: bool = True, values: Mapping[str, object] | None = None):
+        self.dll = dll or load()
+        self.values: dict[str, object] = {"effects.actuator_inertia": bool(actuators),
+                                          "effects.motor_inertia": bool(motors), "effects.friction": bool(friction)}
+        self.use_start_values(values or {})
 
-    def use_start_values(self, values: dict) -> "Core":
-        """Overrides the platform with mechanics-FMU start values (explicit joints, masses, switches)."""
-        p = self.p
-        if values.get("geometry.layout") == 2:
-            upper = [[values[f"geometry.platform_joint[{i}].{a}"] for a in "xyz"] for i in range(1, 7)]
-            lower = [[values[f"geometry.base_joint[{i}].{a}"] for a in "xyz"] for i in range(1, 7)]
-            neutral = [values[f"geometry.neutral.{a}"] for a in ("x", "y", "z", "roll", "pitch", "yaw")]
-            assert self.dll.platform_layout_from_joints(ctypes.byref(p), arr(upper), arr(lower), arr(neutral)) == 0
-        fields = {"platform.mass": "platform_mass", "actuator.moving_mass": "moving_mass",
-                  "actuator.moving_inertia": "moving_inertia", "actuator.moving_com": "moving_com",
-                  "actuator.rotating_mass": "rotating_mass", "actuator.rotating_inertia": "rotating_inertia",
-                  "actuator.rotating_com": "rotating_com", "effects.motor_inertia": "motor_inertia_on",
-                  "effects.friction": "friction_on", "effects.actuator_inertia": "actuator_inertia_on",
-                  "actuator.spin_inertia": "leg_spin_inertia", "joint.friction_lower": "joint_friction_lower",
-                  "joint.friction_upper": "joint_friction_upper", "motor_system.rotor_inertia": "rotor_inertia",
-                  "transmission.screw_ratio": "screw_ratio", "transmission.force_torque": "force_torque",
-                  "motor.viscous_friction": "viscous_friction", "motor_system.mass": "motor_mass",
-                  "motor_system.inertia": "motor_inertia", "motor_system.com": "motor_com"}
-        for name, field in fields.items():
-            if name in values:
-                setattr(p, field, type(getattr(p, field))(values[name]))
-        for k, axis in enumerate(("xx", "yy", "zz")):
-            if f"platform.inertia_{axis}" in values:
-                p.platform_inertia[k] = values[f"platform.inertia_{axis}"]
+    def use_start_values(self, values: Mapping[str, object]) -> "Core":
+        """The platform of these mechanics start values (by FMU variable name) over the ones so far."""
+        self.values.update(values)
+        self.p = build(self.values, self.dll)
         return self
 
     @property
@@ -167,19 +189,8 @@ class Core:
         return np.array(out[:])
 
 
-def neutral_pose(values: dict) -> np.ndarray:
+def neutral_pose(values: Mapping[str, object]) -> np.ndarray:
     """The pose at which every motor angle is zero for mechanics start values: given with explicit
-    joints (layout 2), solved by the core from the radii, spacings and the middle leg length l_0
-    otherwise (layout 1; the mechanics FMU solves the same)."""
-    pose_names = ("x", "y", "z", "roll", "pitch", "yaw")
-    if values.get("geometry.layout", 1) == 2:
-        return np.array([values[f"geometry.neutral.{a}"] for a in pose_names])
-    p = Platform()
-    centres = {side: [math.degrees(values[f"geometry.{side}_pair_centre_{k}"]) for k in (1, 2, 3)]
-               for side in ("lower", "upper")}
-    if load().platform_layout_from_radii(
-            ctypes.byref(p), values["geometry.upper_joint_radius"], values["geometry.lower_joint_radius"],
-            values["geometry.upper_joint_spacing"], values["geometry.lower_joint_spacing"],
-            values["geometry.middle_leg_length"], arr(centres["lower"]), arr(centres["upper"])) != 0:
-        raise ValueError("the joint radii and spacings give no platform (spacing wider than a circle)")
-    return np.array(p.neutral_pose[:])
+    joints (layout 2), solved from the radii, spacings and the middle leg length l_0 otherwise
+    (layout 1), as the mechanics FMU does. Raises LayoutImpossible for values that give no platform."""
+    return np.array(build(values).neutral_pose[:])

@@ -21,7 +21,7 @@ from ..engine import Diverged, FmuError, NoStep, ParameterError
 from ..engine.advice import advice_text
 from ..engine.results import message_kinds, thin, write as write_results, write_log
 from ..engine.settings import control_name, to_strings
-from .parameter_sets import drive_set, mechanics_start_values
+from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of
 from .signals import scene_trajectory
@@ -118,9 +118,8 @@ def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
 def scene_values(scene: Scene) -> tuple[dict, dict]:
     """The mechanics' and the drives' parameter values: the platform's set, the drive set (a
     drive sized for this platform), then the scene's own, which win."""
-    drive_values, drive_mechanics = drive_set(scene.drive_set) if scene.drive_set else ({}, {})
-    mechanics_values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **drive_mechanics,
-                        **scene.mechanics_parameters}
+    drive_values = drive_set(scene.drive_set)[0] if scene.drive_set else {}
+    mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, scene.drive_set, scene.mechanics_parameters)
     return mechanics_values, {**drive_values, **scene.drive_parameters}
 
 

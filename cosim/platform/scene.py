@@ -346,10 +346,10 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     interval = number("outputs", outputs, "interval", positive=True) if "interval" in outputs else None
     mass_set, mechanics_parameters = mechanics.get("mass_set", "heavy"), dict(mechanics.get("parameters", {}))
     if at_neutral:
-        from .parameter_sets import mechanics_start_values
+        from .parameter_sets import scene_mechanics
         from .platform_core import neutral_pose
         try:
-            pose = neutral_pose({**mechanics_start_values(parameter_set, mass_set), **mechanics_parameters})
+            pose = neutral_pose(scene_mechanics(parameter_set, mass_set, drive_set, mechanics_parameters))
         except (KeyError, ValueError) as error:
             raise fail(f"trajectory.{at_neutral[0]}", "offset", f"= 'neutral': no neutral pose ({error})") from None
         for dof in at_neutral:

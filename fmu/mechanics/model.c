@@ -1,7 +1,8 @@
 /* mechanics: the Stewart platform's multi-body dynamics as an FMU (Meng et al. 2010, Section 2).
  *
  * The dynamics live in platform.c (plain C, tested on its own); this file connects them to the
- * variable table: it builds the Platform from the parameters, reads the inputs, integrates, keeps
+ * variable table: it builds the Platform from the parameters (parameters.c, the one mapping, which
+ * tools reach through the platform_core library), reads the inputs, integrates, keeps
  * the energy accounts, and watches the stroke, the joint angles and the Jacobian.
  *
  *   M_s(x) u_dot = sum_i [n_i; r_i x n_i] (K_FT T_i + F_i) + (gravity, velocity terms, friction,
@@ -9,6 +10,7 @@
  *   d/dt (E_kin + E_pot) = power.drive - power.transmission_loss - power.friction_loss + power.load
  */
 #include "fmu_common.h"
+#include "parameters.h"
 
 #include <string.h>
 
@@ -33,57 +35,6 @@ static const int VR_BODY_WRENCH[] = {VR_load_body_force_x, VR_load_body_force_y,
                                      VR_load_body_torque_x, VR_load_body_torque_y, VR_load_body_torque_z};
 
 static const double PI = 3.14159265358979323846;
-
-#define JOINT(kind, i) {v->geometry_##kind##_joint_##i##_x, v->geometry_##kind##_joint_##i##_y, v->geometry_##kind##_joint_##i##_z}
-#define JOINT_ARRAY(kind) {JOINT(kind, 1), JOINT(kind, 2), JOINT(kind, 3), JOINT(kind, 4), JOINT(kind, 5), JOINT(kind, 6)}
-
-/* The Platform of the parameters; returns -1 if the layout is impossible. */
-static int build_platform(const ModelVariables *v, Platform *p) {
-    memset(p, 0, sizeof *p);
-    const double to_deg = 180.0 / PI;
-    const double lower[3] = {v->geometry_lower_pair_centre_1 * to_deg, v->geometry_lower_pair_centre_2 * to_deg,
-                             v->geometry_lower_pair_centre_3 * to_deg};
-    const double upper[3] = {v->geometry_upper_pair_centre_1 * to_deg, v->geometry_upper_pair_centre_2 * to_deg,
-                             v->geometry_upper_pair_centre_3 * to_deg};
-    int status;
-    if (v->geometry_layout == 2) {
-        const double base[6][3] = JOINT_ARRAY(base), top[6][3] = JOINT_ARRAY(platform);
-        const double neutral[6] = {v->geometry_neutral_x, v->geometry_neutral_y, v->geometry_neutral_z,
-                                   v->geometry_neutral_roll, v->geometry_neutral_pitch, v->geometry_neutral_yaw};
-        status = platform_layout_from_joints(p, top, base, neutral);
-    } else {
-        status = platform_layout_from_radii(p, v->geometry_upper_joint_radius, v->geometry_lower_joint_radius,
-                                            v->geometry_upper_joint_spacing, v->geometry_lower_joint_spacing,
-                                            v->geometry_middle_leg_length, lower, upper);
-    }
-    p->platform_mass = v->platform_mass;
-    p->platform_inertia[0] = v->platform_inertia_xx;
-    p->platform_inertia[1] = v->platform_inertia_yy;
-    p->platform_inertia[2] = v->platform_inertia_zz;
-    p->moving_mass = v->actuator_moving_mass;
-    p->moving_inertia = v->actuator_moving_inertia;
-    p->moving_com = v->actuator_moving_com;
-    p->rotating_mass = v->actuator_rotating_mass;
-    p->rotating_inertia = v->actuator_rotating_inertia;
-    p->rotating_com = v->actuator_rotating_com;
-    p->motor_mass = v->motor_system_mass;
-    p->motor_inertia = v->motor_system_inertia;
-    p->motor_com = v->motor_system_com;
-    p->rotor_inertia = v->motor_system_rotor_inertia;
-    p->screw_ratio = v->transmission_screw_ratio;
-    p->force_torque = v->transmission_force_torque;
-    p->viscous_friction = v->motor_viscous_friction;
-    p->leg_spin_inertia = v->actuator_spin_inertia;
-    p->joint_friction_lower = v->joint_friction_lower;
-    p->joint_friction_upper = v->joint_friction_upper;
-    p->gravity[0] = v->environment_gravity_x;
-    p->gravity[1] = v->environment_gravity_y;
-    p->gravity[2] = v->environment_gravity_z;
-    p->actuator_inertia_on = v->effects_actuator_inertia;
-    p->motor_inertia_on = v->effects_motor_inertia;
-    p->friction_on = v->effects_friction;
-    return status;
-}
 
 static void initial_state(const ModelVariables *v, double *x) {
     const double pose[6] = {v->initial_pose_x, v->initial_pose_y, v->initial_pose_z,
@@ -201,7 +152,7 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
 /* The platform of the parameters with its neutral leg axes; -1 if the layout is impossible. */
 static int build_internal(const ModelVariables *v, ModelInternal *in) {
     memset(in, 0, sizeof *in);
-    if (build_platform(v, &in->platform) != 0) return -1;
+    if (mechanics_platform(v, &in->platform) != 0) return -1;
     LegGeometry legs[PLATFORM_LEGS];
     double x0[PLATFORM_STATES];
     const double zero[6] = {0, 0, 0, 0, 0, 0};

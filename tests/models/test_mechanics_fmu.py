@@ -315,7 +315,7 @@ def test_inverse_kinematics_outputs_follow_pose_ref(make_mechanics, dll):
     mech = make_mechanics()
     mech.set({f"pose_ref.{a}": pose[k] for k, a in enumerate(POSE)})
     lengths = core.leg_lengths(pose)
-    ratio = core.params["transmission"]["screw_ratio"]
+    ratio = core.p.screw_ratio
     for i in range(6):
         assert mech.get(f"leg[{i + 1}].length_ref") == pytest.approx(lengths[i], rel=1e-14)
         assert mech.get(f"leg[{i + 1}].angle_ref") == pytest.approx(ratio * (lengths[i] - 1.86), rel=1e-9)
@@ -332,7 +332,7 @@ def test_the_reference_rates_are_the_rates_of_the_inverse_kinematics(make_mechan
     mech.set_input_derivatives([f"pose_ref.{a}" for a in POSE], rate)
     eps = 1e-6
     rates = (core.leg_lengths(pose + eps * rate) - core.leg_lengths(pose - eps * rate)) / (2 * eps)
-    ratio = core.params["transmission"]["screw_ratio"]
+    ratio = core.p.screw_ratio
     for i in range(6):
         assert mech.get(f"leg[{i + 1}].velocity_ref") == pytest.approx(rates[i], abs=1e-8)
         assert mech.get(f"leg[{i + 1}].speed_ref") == pytest.approx(ratio * rates[i], abs=1e-8 * ratio)

@@ -37,73 +37,11 @@
 #include <string.h>
 #include <time.h>
 
-typedef int (*SetRealFn)(void *, const unsigned *, size_t, const double *);
-typedef int (*GetRealFn)(void *, const unsigned *, size_t, double *);
-typedef int (*SetDerivativesFn)(void *, const unsigned *, size_t, const int *, const double *);
-typedef int (*GetDerivativesFn)(void *, const unsigned *, size_t, const int *, double *);
-typedef int (*DoStepFn)(void *, double, double, int);
-typedef int (*GetStateFn)(void *, void **);
-typedef int (*SetStateFn)(void *, void *);
-typedef int (*FreeStateFn)(void *, void **);
+#include "kernel.h"
 
 enum { FMI2_ERROR = 3 };
 enum { CALL_SET_REAL = 1, CALL_SET_INPUT_DERIVATIVES, CALL_DO_STEP, CALL_GET_REAL, CALL_GET_OUTPUT_DERIVATIVES,
        CALL_GET_STATE, CALL_SET_STATE, CALL_FREE_STATE };
-
-typedef struct {
-    void *component;
-    SetRealFn set_real;
-    GetRealFn get_real;
-    SetDerivativesFn set_input_derivatives;
-    GetDerivativesFn get_output_derivatives;
-    DoStepFn do_step;
-    GetStateFn get_state;
-    SetStateFn set_state;
-    FreeStateFn free_state;
-    int n_outputs, output_offset;     /* its coupled outputs, at output_offset in a sample */
-    const unsigned *output_vrs;
-    int n_inputs, input_offset;       /* its coupled inputs, at input_offset in the input arrays */
-    const unsigned *input_vrs;
-    const int *feed_source;           /* per input: the source instance */
-    const int *feed_index;            /* per input: the index in the source's outputs */
-    int rate_order;                   /* output derivatives it provides (0: none; at most 2) */
-    int interpolating;                /* takes input derivatives (canInterpolateInputs) */
-    int n_record, record_offset;      /* outputs recorded each step, at record_offset in the scratch */
-    const unsigned *record_vrs;
-} KernelInstance;
-
-typedef struct {
-    int n_instances;
-    KernelInstance *instances;
-    const int *sequence;              /* stepping order (n_instances entries) */
-    int gauss_seidel, order;
-    /* history: n_samples (<= keep) samples, oldest first; each holds every instance's outputs */
-    int keep, n_samples;
-    double *sample_time;              /* [3] */
-    double *samples;                  /* [3][n_sample_values] */
-    int n_sample_values;
-    double *exact_rates;              /* [2][n_sample_values]: output derivatives at the latest sample */
-    double *new_values;               /* [n_sample_values] scratch: outputs at t + h */
-    int *stepped;                     /* [n_instances] scratch */
-    int n_inputs_total;
-    double *input_values, *input_rates, *input_curvatures; /* as set over the current step */
-    int n_bonds;
-    const int *bonds;                 /* per bond 10 ints: effort (source, index), (target, index); flow (same);
-                                         the input taking the effort's slope (target, index), or -1, -1 */
-    int n_columns;
-    const int *column_of;             /* per recorded column: index in the record scratch */
-    double *record_scratch;
-    double *instance_time;            /* [n_instances] each instance's time */
-    double *fmi_seconds;              /* [n_instances] accumulated time inside its FMI calls */
-    const int *order_one, *order_two; /* arrays of 1s and 2s, long enough for any call */
-    void **states;                    /* [n_instances] saved FMU states of the step controller */
-    void **startup_states;            /* [n_instances] saved FMU states of the start-up iteration */
-    double *guess, *saved_time;       /* scratch: [n_sample_values], [n_instances] (start-up) */
-    int failed_instance, failed_call; /* set when a call fails */
-    int threads;                      /* 2: a stage of independent instances steps on two threads */
-    const int *stage_end;             /* per sequence position j: the stage j belongs to ends before it */
-    void *helper;                     /* the second thread (Helper), made when first needed */
-} Kernel;
 
 static double now(void) {
     struct timespec ts;
@@ -322,16 +260,16 @@ static double energy_residual(const Kernel *s, double h, double *bond_energy) {
     const double *after = s->samples + (s->n_samples - 1) * s->n_sample_values;
     double largest = 0.0;
     for (int b = 0; b < s->n_bonds; b++) {
-        const int *bond = s->bonds + 10 * b;
-        const int effort_out = s->instances[bond[0]].output_offset + bond[1];
-        const int effort_in = s->instances[bond[2]].input_offset + bond[3];
-        const int flow_out = s->instances[bond[4]].output_offset + bond[5];
-        const int flow_in = s->instances[bond[6]].input_offset + bond[7];
+        const KernelBond *bond = &s->bonds[b];
+        const int effort_out = s->instances[bond->effort_out.instance].output_offset + bond->effort_out.index;
+        const int effort_in = s->instances[bond->effort_in.instance].input_offset + bond->effort_in.index;
+        const int flow_out = s->instances[bond->flow_out.instance].output_offset + bond->flow_out.index;
+        const int flow_in = s->instances[bond->flow_in.instance].input_offset + bond->flow_in.index;
 #define SEEN(i, dt) (s->input_values[i] + s->input_rates[i] * (dt) + 0.5 * s->input_curvatures[i] * (dt) * (dt))
         const double given = 0.5 * h * (before[effort_out] * SEEN(flow_in, 0.0) + after[effort_out] * SEEN(flow_in, h));
         double felt_before = SEEN(effort_in, 0.0), felt_after = SEEN(effort_in, h);
-        if (bond[8] >= 0) {
-            const int slope_in = s->instances[bond[8]].input_offset + bond[9];
+        if (bond->slope_in.instance >= 0) {
+            const int slope_in = s->instances[bond->slope_in.instance].input_offset + bond->slope_in.index;
             felt_before += SEEN(slope_in, 0.0) * (before[flow_out] - SEEN(flow_in, 0.0));
             felt_after += SEEN(slope_in, h) * (after[flow_out] - SEEN(flow_in, h));
         }
@@ -582,18 +520,6 @@ int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, 
 
 /* ---- step control: step doubling and energy ---- */
 
-typedef struct {
-    double h, h_min, h_max, rtol;
-    const double *atol;     /* step doubling: per sample value, +inf where the error is not measured */
-    double atol_energy;     /* energy control [J] */
-    double k_i, k_p, previous; /* energy control: PI gains and the previous scaled residual */
-    double t;               /* the controller's time, advanced by each accepted H */
-    int rejected;           /* added to */
-    int accepted_count;     /* accepted steps so far (over batches) */
-    int *force_reject; int n_force_reject; /* test hook: reject the first try of these accepted-step indices */
-    /* scratch, sized by Python: */
-    double *saved_time, *saved_samples, *saved_rates, *saved_inputs, *saved_instance_time, *full;
-} Controller;
 
 static void save_memory(Kernel *s, Controller *a, int *n_samples) {
     const size_t n = (size_t)s->n_sample_values, m = (size_t)s->n_inputs_total;
@@ -720,3 +646,33 @@ int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max
     }
     return written;
 }
+
+/* ---- the structs' layout, for the ctypes copies (kernel.h) ---- */
+
+static const StructLayout LAYOUT[] = {
+    STRUCT_LAYOUT(KernelPort), STRUCT_LAYOUT_FIELD(KernelPort, instance), STRUCT_LAYOUT_FIELD(KernelPort, index),
+    STRUCT_LAYOUT(KernelBond), STRUCT_LAYOUT_FIELD(KernelBond, effort_out), STRUCT_LAYOUT_FIELD(KernelBond, effort_in),
+    STRUCT_LAYOUT_FIELD(KernelBond, flow_out), STRUCT_LAYOUT_FIELD(KernelBond, flow_in),
+    STRUCT_LAYOUT_FIELD(KernelBond, slope_in),
+#define I(field) STRUCT_LAYOUT_FIELD(KernelInstance, field)
+    STRUCT_LAYOUT(KernelInstance), I(component), I(set_real), I(get_real), I(set_input_derivatives),
+    I(get_output_derivatives), I(do_step), I(get_state), I(set_state), I(free_state), I(n_outputs), I(output_offset),
+    I(output_vrs), I(n_inputs), I(input_offset), I(input_vrs), I(feed_source), I(feed_index), I(rate_order),
+    I(interpolating), I(n_record), I(record_offset), I(record_vrs),
+#undef I
+#define K(field) STRUCT_LAYOUT_FIELD(Kernel, field)
+    STRUCT_LAYOUT(Kernel), K(n_instances), K(instances), K(sequence), K(gauss_seidel), K(order), K(keep),
+    K(n_samples), K(sample_time), K(samples), K(n_sample_values), K(exact_rates), K(new_values), K(stepped),
+    K(n_inputs_total), K(input_values), K(input_rates), K(input_curvatures), K(n_bonds), K(bonds), K(n_columns),
+    K(column_of), K(record_scratch), K(instance_time), K(fmi_seconds), K(order_one), K(order_two), K(states),
+    K(startup_states), K(guess), K(saved_time), K(failed_instance), K(failed_call), K(threads), K(stage_end),
+    K(helper),
+#undef K
+#define C(field) STRUCT_LAYOUT_FIELD(Controller, field)
+    STRUCT_LAYOUT(Controller), C(h), C(h_min), C(h_max), C(rtol), C(atol), C(atol_energy), C(k_i), C(k_p),
+    C(previous), C(t), C(rejected), C(accepted_count), C(force_reject), C(n_force_reject), C(saved_time),
+    C(saved_samples), C(saved_rates), C(saved_inputs), C(saved_instance_time), C(full),
+#undef C
+    STRUCT_LAYOUT_END};
+
+const StructLayout *kernel_layout(void) { return LAYOUT; }

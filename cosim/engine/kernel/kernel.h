@@ -1,0 +1,112 @@
+/* The step kernel's interface (kernel.c): the structs a caller fills in, and the entry points.
+ * cosim/engine/kernel.py holds ctypes copies of these structs; kernel_layout() publishes their
+ * layout (fmu/common/struct_layout.h) so that the copies are checked against the build at load. */
+#ifndef COSIM_KERNEL_H
+#define COSIM_KERNEL_H
+
+#include <stddef.h>
+
+#include "struct_layout.h"
+
+typedef int (*SetRealFn)(void *, const unsigned *, size_t, const double *);
+typedef int (*GetRealFn)(void *, const unsigned *, size_t, double *);
+typedef int (*SetDerivativesFn)(void *, const unsigned *, size_t, const int *, const double *);
+typedef int (*GetDerivativesFn)(void *, const unsigned *, size_t, const int *, double *);
+typedef int (*DoStepFn)(void *, double, double, int);
+typedef int (*GetStateFn)(void *, void **);
+typedef int (*SetStateFn)(void *, void *);
+typedef int (*FreeStateFn)(void *, void **);
+
+/* Where a bond's value is: an instance and the index among its coupled outputs (or inputs). */
+typedef struct {
+    int instance, index;
+} KernelPort;
+
+/* A power bond (effort times flow is a power): the effort's output and the input it feeds, the
+ * flow's likewise, and the input that takes the effort's slope (an interface Jacobian), instance
+ * -1 if none. */
+typedef struct {
+    KernelPort effort_out, effort_in, flow_out, flow_in, slope_in;
+} KernelBond;
+
+typedef struct {
+    void *component;
+    SetRealFn set_real;
+    GetRealFn get_real;
+    SetDerivativesFn set_input_derivatives;
+    GetDerivativesFn get_output_derivatives;
+    DoStepFn do_step;
+    GetStateFn get_state;
+    SetStateFn set_state;
+    FreeStateFn free_state;
+    int n_outputs, output_offset;     /* its coupled outputs, at output_offset in a sample */
+    const unsigned *output_vrs;
+    int n_inputs, input_offset;       /* its coupled inputs, at input_offset in the input arrays */
+    const unsigned *input_vrs;
+    const int *feed_source;           /* per input: the source instance */
+    const int *feed_index;            /* per input: the index in the source's outputs */
+    int rate_order;                   /* output derivatives it provides (0: none; at most 2) */
+    int interpolating;                /* takes input derivatives (canInterpolateInputs) */
+    int n_record, record_offset;      /* outputs recorded each step, at record_offset in the scratch */
+    const unsigned *record_vrs;
+} KernelInstance;
+
+typedef struct {
+    int n_instances;
+    KernelInstance *instances;
+    const int *sequence;              /* stepping order (n_instances entries) */
+    int gauss_seidel, order;
+    /* history: n_samples (<= keep) samples, oldest first; each holds every instance's outputs */
+    int keep, n_samples;
+    double *sample_time;              /* [3] */
+    double *samples;                  /* [3][n_sample_values] */
+    int n_sample_values;
+    double *exact_rates;              /* [2][n_sample_values]: output derivatives at the latest sample */
+    double *new_values;               /* [n_sample_values] scratch: outputs at t + h */
+    int *stepped;                     /* [n_instances] scratch */
+    int n_inputs_total;
+    double *input_values, *input_rates, *input_curvatures; /* as set over the current step */
+    int n_bonds;
+    const KernelBond *bonds;
+    int n_columns;
+    const int *column_of;             /* per recorded column: index in the record scratch */
+    double *record_scratch;
+    double *instance_time;            /* [n_instances] each instance's time */
+    double *fmi_seconds;              /* [n_instances] accumulated time inside its FMI calls */
+    const int *order_one, *order_two; /* arrays of 1s and 2s, long enough for any call */
+    void **states;                    /* [n_instances] saved FMU states of the step controller */
+    void **startup_states;            /* [n_instances] saved FMU states of the start-up iteration */
+    double *guess, *saved_time;       /* scratch: [n_sample_values], [n_instances] (start-up) */
+    int failed_instance, failed_call; /* set when a call fails */
+    int threads;                      /* 2: a stage of independent instances steps on two threads */
+    const int *stage_end;             /* per sequence position j: the stage j belongs to ends before it */
+    void *helper;                     /* the second thread (Helper), made when first needed */
+} Kernel;
+
+typedef struct {
+    double h, h_min, h_max, rtol;
+    const double *atol;     /* step doubling: per sample value, +inf where the error is not measured */
+    double atol_energy;     /* energy control [J] */
+    double k_i, k_p, previous; /* energy control: PI gains and the previous scaled residual */
+    double t;               /* the controller's time, advanced by each accepted H */
+    int rejected;           /* added to */
+    int accepted_count;     /* accepted steps so far (over batches) */
+    int *force_reject; int n_force_reject; /* test hook: reject the first try of these accepted-step indices */
+    /* scratch, sized by Python: */
+    double *saved_time, *saved_samples, *saved_rates, *saved_inputs, *saved_instance_time, *full;
+} Controller;
+
+/* The layout of KernelPort, KernelBond, KernelInstance, Kernel and Controller. */
+const StructLayout *kernel_layout(void);
+
+int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start);
+int kernel_record(Kernel *s, int clock, double *row);
+void kernel_release(Kernel *s);
+int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, double *residuals,
+                     double *bond_energy);
+int kernel_run_doubling(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
+                        double *accepted_h, double *residuals, double *bond_energy);
+int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
+                      double *accepted_h, double *residuals, double *bond_energy);
+
+#endif
