@@ -88,6 +88,14 @@ def _start_values() -> tuple[dict[str, int], tuple[float, ...]]:
     return references, tuple(values)
 
 
+def mechanics_value(values: Mapping[str, object], name: str) -> object:
+    """A mechanics variable's value: given in `values`, or the FMU's start value."""
+    if name in values:
+        return values[name]
+    references, starts = _start_values()
+    return starts[references[name]]
+
+
 class LayoutImpossible(ValueError):
     """Mechanics parameters that give no platform (the FMU refuses them at initialization too)."""
 

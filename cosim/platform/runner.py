@@ -131,16 +131,15 @@ def scene_design(scene: Scene) -> tuple[list[dict] | None, str | None]:
     mechanics_values, drive_values = scene_values(scene)
     plants = leg_plants(mechanics_values)
     try:
-        check_sizing(scene.drive, plants, mechanics_values, drive_values)
+        check_sizing(scene.drive, plants, drive_values)
     except SizingError as error:
         raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'drive', 'kind')}: drive.kind = "
                          f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
     if scene.tuning != "auto":
         if scene.drive == "pmsm" and "initial.current_q" not in drive_values:
-            return [{**drive_values, "initial.current_q": q} for q in hold_currents(plants, mechanics_values,
-                                                                                    drive_values)], None
+            return [{**drive_values, "initial.current_q": q} for q in hold_currents(plants, drive_values)], None
         return (None if not drive_values else [dict(drive_values) for _ in plants]), None
-    designed = design(scene.drive, plants, mechanics_values, drive_values)
+    designed = design(scene.drive, plants, drive_values)
     return designed, summary(scene.drive, designed)
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..engine.checks import variables
 from ..engine.artifacts import fmu_path
-from .platform_core import Core, neutral_pose
+from .platform_core import Core, mechanics_value
 from .ports import DRIVES, POSE
 
 SPEED_CROSSOVER = 500.0           # w_c [rad/s] of the PMSM speed loop
@@ -47,26 +47,22 @@ class LegPlant:
     static_force: float  # [N]: the leg force that holds the start pose (positive: pushing)
     length: float        # [m] at the start pose
     stroke: tuple[float, float]  # [m]
-
-
-def start_pose(values: Mapping[str, object]) -> np.ndarray:
-    neutral = neutral_pose(dict(values))
-    return np.array([float(values.get(f"initial.pose.{a}", neutral[k])) for k, a in enumerate(POSE)])
+    screw_ratio: float   # i_theta [rad/m]: motor angle per leg length
+    force_torque: float  # K_FT [N/(N m)]: leg force per motor torque
 
 
 def leg_plants(values: Mapping[str, object]) -> list[LegPlant]:
-    """Each leg's plant at the start pose, for mechanics start values: the dynamics core's
-    platform_leg_plants, the same function that gives the mechanics FMU's leg[i].plant.* outputs."""
+    """Each leg's plant at the start pose, for mechanics start values (over the FMU's defaults):
+    the dynamics core's platform_leg_plants on the platform the FMU builds from them, the same
+    function that gives the mechanics FMU's leg[i].plant.* outputs."""
     core = Core().use_start_values(dict(values))
-    pose = start_pose(values)
+    pose = np.array([float(mechanics_value(values, f"initial.pose.{a}")) for a in POSE])
     inertia, force = core.leg_plants(pose)
     lengths = core.leg_lengths(pose)
-    stroke = (float(values.get("limit.leg_length_min", 0.0)), float(values.get("limit.leg_length_max", math.inf)))
-    return [LegPlant(float(inertia[i]), float(force[i]), float(lengths[i]), stroke) for i in range(6)]
-
-
-def _mechanics_default(name: str) -> float:
-    return float(variables(fmu_path("mechanics"))[name].start)
+    stroke = (float(mechanics_value(values, "limit.leg_length_min")),
+              float(mechanics_value(values, "limit.leg_length_max")))
+    return [LegPlant(float(inertia[i]), float(force[i]), float(lengths[i]), stroke, core.p.screw_ratio,
+                     core.p.force_torque) for i in range(6)]
 
 
 def _defaults(drive: str) -> dict[str, float]:
@@ -74,22 +70,18 @@ def _defaults(drive: str) -> dict[str, float]:
             if v.start is not None and v.type in ("Real", "Integer")}
 
 
-def design(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, object],
-           drive_values: Mapping[str, object]) -> list[dict[str, float]]:
+def design(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object]) -> list[dict[str, float]]:
     """Per leg, the drive parameters its rules give for its plant (explicit drive_values win)."""
     given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     designed = []
     for plant in plants:
         if drive == "pmsm":
-            screw = float(mechanics_values.get("transmission.screw_ratio", _mechanics_default("transmission.screw_ratio")))
-            force_torque = float(mechanics_values.get("transmission.force_torque",
-                                                      _mechanics_default("transmission.force_torque")))
-            inertia = plant.mass / (force_torque * screw)  # J_eq, motor side [kg m^2]
+            inertia = plant.mass / (plant.force_torque * plant.screw_ratio)  # J_eq, motor side [kg m^2]
             kp_w = SPEED_CROSSOVER * inertia / given["motor.torque_constant"]
             kp_p = 0.12 * SPEED_CROSSOVER
             values = {"control.speed_kp": kp_w, "control.speed_ki": kp_w * SPEED_CROSSOVER / 6,
                       "control.position_kp": kp_p, "control.position_ki": 5 * kp_p,
-                      "initial.current_q": hold_currents([plant], mechanics_values, given)[0]}
+                      "initial.current_q": hold_currents([plant], given)[0]}
         else:
             w, m = POSITION_BANDWIDTH, plant.mass
             values = {"control.position_kp": m * w * w, "control.position_kd": 2 * m * w,
@@ -98,22 +90,17 @@ def design(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, ob
     return designed
 
 
-def hold_currents(plants: list[LegPlant], mechanics_values: Mapping[str, object],
-                  drive_values: Mapping[str, object]) -> list[float]:
+def hold_currents(plants: list[LegPlant], drive_values: Mapping[str, object]) -> list[float]:
     """Per leg, the PMSM's q current that holds the start pose: i_q = F / (K_FT K_m)."""
     given = {**_defaults("pmsm"), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
-    force_torque = float(mechanics_values.get("transmission.force_torque", _mechanics_default("transmission.force_torque")))
-    return [plant.static_force / force_torque / given["motor.torque_constant"] for plant in plants]
+    return [plant.static_force / plant.force_torque / given["motor.torque_constant"] for plant in plants]
 
 
-def check_sizing(drive: str, plants: list[LegPlant], mechanics_values: Mapping[str, object],
-                 drive_values: Mapping[str, object]) -> None:
+def check_sizing(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object]) -> None:
     given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     for i, plant in enumerate(plants, start=1):
         if drive == "pmsm":
-            force_torque = float(mechanics_values.get("transmission.force_torque",
-                                                      _mechanics_default("transmission.force_torque")))
-            torque = abs(plant.static_force) / force_torque
+            torque = abs(plant.static_force) / plant.force_torque
             limit = given["motor.torque_constant"] * given["limit.current"]
             if torque > limit:
                 raise SizingError(f"leg {i} needs {torque:.3g} N m to hold the start pose, above pmsm_drive's "

@@ -300,7 +300,7 @@ def test_swapping_the_drive_changes_one_setting():
     values = mechanics_start_values("sumnu2015")
     set_drive, set_mechanics = drive_set("sumnu2015_pmsm")
     pmsm_values = {**values, **set_mechanics}
-    setups = {"pmsm": (pmsm_values, design("pmsm", leg_plants(pmsm_values), pmsm_values, set_drive), 5e-3),
+    setups = {"pmsm": (pmsm_values, design("pmsm", leg_plants(pmsm_values), set_drive), 5e-3),
               "linear": (values, None, 3e-3)}
     reference = sines({"x": -1.5, "z": 1}, {"x": 0.01, "y": 0.02, "z": 0.02})
     for drive, (mechanics, legs, bound) in setups.items():

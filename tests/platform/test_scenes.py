@@ -222,7 +222,7 @@ def test_auto_tuning_on_the_meng_platform_reproduces_the_pmsm_defaults():
     from cosim.platform.tuning import design, leg_plants
     from cosim.engine.checks import variables
     values = mechanics_start_values("meng2010")
-    designed = design("pmsm", leg_plants(values), values, {})
+    designed = design("pmsm", leg_plants(values), {})
     defaults = {n: float(v.start) for n, v in variables(fmu_path("pmsm_drive")).items() if v.start is not None
                 and v.type == "Real"}
     for leg in designed:
