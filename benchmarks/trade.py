@@ -30,7 +30,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
-from cosim.platform.libcosim import Ecco, run_in_libcosim  # noqa: E402
+from cosim.engine import EnergyControl  # noqa: E402
+from cosim.platform.libcosim import run_in_libcosim  # noqa: E402
 from cosim.platform.results import save_figure  # noqa: E402
 from cosim.engine.observers import TaskProgress  # noqa: E402
 from cosim.engine.sweep import run_sweep  # noqa: E402
@@ -152,7 +153,8 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
         progress.advance(point.label)
     for tolerance in (1e-2, 1e-3):
         point = Point("libcosim ECCO", f"libcosim ECCO rtol=atol={tolerance:g}")
-        run = run_in_libcosim(scene, checkpoints=checkpoints, ecco=Ecco(rtol=tolerance, atol=tolerance))
+        run = run_in_libcosim(scene, checkpoints=checkpoints, ecco=EnergyControl(scene.step, rtol=tolerance, atol=tolerance,
+                                                                                   h_min=1e-5))
         point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
         points.append(point)
         progress.advance(point.label)

@@ -325,16 +325,19 @@ class EnergyStep:
     """Macro-step control from the power bonds' energy residuals (ECCO, Sadjina et al. 2017): after
     each step the residual of every bond is scaled, eps = |dE| / (atol + rtol |E|) with E the energy
     the bond transferred over the step, and the next step follows a PI law,
-    H_next = H (1 / eps_n)^k_I (eps_{n-1} / eps_n)^k_P, limited to [0.2 H, 2 H] and [h_min, h_max].
+    H_next = H safety (1 / eps_n)^k_I (eps_{n-1} / eps_n)^k_P, limited to [change_min H, change_max H]
+    and [h_min, h_max].
     No rollback: the controller only looks ahead (it needs no FMU state), so it is cheap, and it
     keeps the coupling's energy error, not a state error, near its tolerance."""
 
     def __init__(self, algorithm: CouplingAlgorithm, rtol: float = 1e-3, atol: float = 1e-4,
                  h_initial: float = 1e-3, h_min: float = 1e-6, h_max: float = 1e-2, k_i: float = 0.15,
-                 k_p: float = 0.2, before_step: Callable[[float], None] | None = None,
+                 k_p: float = 0.2, safety: float = 1.0, change_min: float = 0.2, change_max: float = 2.0,
+                 before_step: Callable[[float], None] | None = None,
                  after_accept: Callable[[float], None] | None = None):
         self.algorithm, self.rtol, self.atol = algorithm, rtol, atol
         self.h, self.h_min, self.h_max, self.k_i, self.k_p = h_initial, h_min, h_max, k_i, k_p
+        self.safety, self.change_min, self.change_max = safety, change_min, change_max
         self.before_step, self.after_accept = before_step or (lambda t: None), after_accept or (lambda t: None)
         self.accepted: list[float] = []
         self.rejected = 0  # never: kept for the same report as AdaptiveStep
@@ -352,9 +355,9 @@ class EnergyStep:
             self.after_accept(t)
             residual, transferred = self.algorithm.bond_energies
             eps = max(float(np.max(np.abs(residual) / (self.atol + self.rtol * transferred))), 1e-10)
-            factor = (1.0 / eps) ** self.k_i * (self._previous / eps) ** self.k_p
+            factor = self.safety * (1.0 / eps) ** self.k_i * (self._previous / eps) ** self.k_p
             self._previous = eps
-            self.h = min(self.h_max, max(self.h_min, h * min(2.0, max(0.2, factor))))
+            self.h = min(self.h_max, max(self.h_min, h * min(self.change_max, max(self.change_min, factor))))
         return t_end
 
 
@@ -401,7 +404,8 @@ def run(structure, settings, control, stop_time: float, record, clock: str, inte
                 else:
                     assert isinstance(control, EnergyControl)
                     controller = EnergyStep(algorithm, control.rtol, control.atol, control.step, control.h_min,
-                                            control.h_max, control.k_i, control.k_p)
+                                            control.h_max, control.k_i, control.k_p, control.safety,
+                                            control.change_min, control.change_max)
                 controller.after_accept = lambda t: rows.append(row())
                 try:
                     controller.advance(coupling, instances[clock].time, stop_time)

@@ -63,6 +63,7 @@ class _Controller(ctypes.Structure):
     _fields_ = [("h", ctypes.c_double), ("h_min", ctypes.c_double), ("h_max", ctypes.c_double),
                 ("rtol", ctypes.c_double), ("atol", _DOUBLES), ("atol_energy", ctypes.c_double),
                 ("k_i", ctypes.c_double), ("k_p", ctypes.c_double), ("previous", ctypes.c_double),
+                ("safety", ctypes.c_double), ("change_min", ctypes.c_double), ("change_max", ctypes.c_double),
                 ("t", ctypes.c_double), ("rejected", ctypes.c_int), ("accepted_count", ctypes.c_int),
                 ("force_reject", _INTS), ("n_force_reject", ctypes.c_int),
                 ("saved_time", _DOUBLES), ("saved_samples", _DOUBLES), ("saved_rates", _DOUBLES),
@@ -325,6 +326,7 @@ class Kernel:
             if not self.n_bonds:
                 raise ValueError("energy step control needs power bonds in the system")
             a.atol_energy, a.k_i, a.k_p = control.atol, control.k_i, control.k_p
+            a.safety, a.change_min, a.change_max = control.safety, control.change_min, control.change_max
         for field in ("saved_time", "saved_samples", "saved_rates", "saved_inputs", "saved_instance_time", "full"):
             setattr(a, field, _ptr(scratch[field], _DOUBLES))
         self._controller, self._controller_scratch = a, scratch

@@ -2,7 +2,9 @@
 expect): simulators with their initial values, variable connections with the power bonds named
 (each bond is its flow and its effort connection under one `powerBond` name), the base step, the
 algorithm (`ecco` when the system's step control is energy control, `fixedStep` otherwise) and an
-ECCO configuration from the system's energy-control settings (ECCO's defaults where it has none).
+ECCO configuration: the system's energy control (cosim.engine.settings.EnergyControl, the law our
+kernel runs, whose docstring says where libcosim's differs), or for a fixed-step system, which
+libcosim then runs at its fixed step, that law at rtol 1e-4 and h_min 1e-5.
 The FMUs are copied beside the XML.
 """
 
@@ -18,7 +20,6 @@ from .settings import EnergyControl, from_strings
 from .structure import SystemStructure
 
 OSP = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
-SAFETY_FACTOR, MIN_CHANGE_RATE, MAX_CHANGE_RATE = 0.99, 0.2, 1.5  # libcosim's ECCO defaults
 
 
 def _element(parent, tag: str, text: str | None = None, **attributes) -> etree._Element:
@@ -62,9 +63,9 @@ def to_osp_xml(structure: SystemStructure, power_bonds: bool = True) -> etree._E
         _element(connection, "Variable", simulator=c.target[0], name=c.target[1],
                  **({"causality": "output"} if attributes else {}))
     configuration = _element(root, "EccoConfiguration")
-    for tag, value in (("SafetyFactor", SAFETY_FACTOR), ("StepSize", ecco.step), ("MinimumStepSize", ecco.h_min),
-                       ("MaximumStepSize", ecco.h_max), ("MinimumChangeRate", MIN_CHANGE_RATE),
-                       ("MaximumChangeRate", MAX_CHANGE_RATE), ("ProportionalGain", ecco.k_p),
+    for tag, value in (("SafetyFactor", ecco.safety), ("StepSize", ecco.step), ("MinimumStepSize", ecco.h_min),
+                       ("MaximumStepSize", ecco.h_max), ("MinimumChangeRate", ecco.change_min),
+                       ("MaximumChangeRate", ecco.change_max), ("ProportionalGain", ecco.k_p),
                        ("IntegralGain", ecco.k_i), ("RelativeTolerance", ecco.rtol), ("AbsoluteTolerance", ecco.atol)):
         _element(configuration, tag, repr(float(value)))
     return root

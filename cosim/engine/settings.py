@@ -106,8 +106,19 @@ class StepDoubling:
 
 @dataclass(frozen=True)
 class EnergyControl:
-    """ECCO (Sadjina et al. 2017): the power bonds' energy residual |dE| against atol [J] +
-    rtol |E| sets the next step by a PI law with gains k_i, k_p; no rollback."""
+    """ECCO (Sadjina et al. 2017), the one law the kernel runs and the OSP export hands to libcosim:
+    after each macro step H, per power bond the energy residual dE over the step against atol [J] +
+    rtol |E| (E: the energy the bond transferred), eps = the largest over the bonds (at least 1e-10),
+    and H_next = H min(change_max, max(change_min, safety eps^-(k_i + k_p) eps_prev^k_p)) within
+    [h_min, h_max]; no rollback.
+
+    Where libcosim's ecco_algorithm differs (and so a libcosim run of the exported system): it
+    takes dE as the difference of the two sides' powers at the communication point times H, and E
+    as the larger power times H, where we integrate both sides' powers over the step (trapezoid,
+    with the interface-Jacobian correction a bond carries); it scales one bond (its first two
+    simulators' first connections), where we take the largest over every bond; it keeps the step
+    while an error is exactly zero. Its defaults are safety 0.99 and changes [0.2, 1.5]; ours are 1
+    and [0.2, 2] (the step grows back twice as fast after a load pulse), and the export writes ours."""
     step: float
     rtol: float = 1e-3
     atol: float = 1e-4
@@ -115,10 +126,20 @@ class EnergyControl:
     h_max: float = 1e-2
     k_i: float = 0.15
     k_p: float = 0.2
+    safety: float = 1.0
+    change_min: float = 0.2
+    change_max: float = 2.0
 
     def __post_init__(self):
-        for name in ("step", "rtol", "atol", "h_min", "h_max"):
+        for name in ("step", "rtol", "atol", "h_min", "h_max", "safety", "change_min"):
             _positive(name, getattr(self, name))
+        for name in ("k_i", "k_p"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise SettingsError(f"{name} = {value!r}: must be a finite number >= 0")
+        if not (self.change_min <= 1.0 <= self.change_max and math.isfinite(self.change_max)):
+            raise SettingsError(f"change_min = {self.change_min!r}, change_max = {self.change_max!r}: the step's "
+                                "change per step needs change_min <= 1 <= change_max")
 
 
 StepControl = FixedStep | StepDoubling | EnergyControl

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from fmpy import read_model_description
 
+from ..engine import EnergyControl
 from .ports import POSE
 from .runner import scene_structure
 from .scene import Scene
@@ -29,21 +30,14 @@ class LibcosimRun:
     poses: np.ndarray | None = None        # pose (n x 6) at the checkpoints
 
 
-@dataclass
-class Ecco:
-    """libcosim's ECCO algorithm (Sadjina and Pedersen 2020): step control from the power bonds'
-    energy residual, PI gains as libcosim's defaults."""
-    rtol: float = 1e-4
-    atol: float = 1e-4
-    h_min: float = 1e-5
-    h_max: float = 1e-2
-
-
 def run_in_libcosim(scene: Scene, duration: float | None = None, checkpoints: np.ndarray | None = None,
-                    ecco: Ecco | None = None) -> LibcosimRun:
+                    ecco: EnergyControl | None = None) -> LibcosimRun:
     """Runs `scene` (for `duration`, default the scene's) in libcosim: at its fixed step, or under
-    ECCO with a power bond per drive (torque x speed, force x velocity). With `checkpoints` the run
-    stops at each of those times to take the pose (the observer's last values)."""
+    libcosim's ECCO algorithm with a power bond per drive (torque x speed, force x velocity),
+    configured with every number of `ecco` (our energy control's settings: gains, safety, change
+    limits; libcosimpy's own EccoParams defaults, a safety of 0.8 and changes within [0.01, 0.2],
+    only ever shrink the step). With `checkpoints` the run stops at each of those times to take the
+    pose (the observer's last values)."""
     from libcosimpy.CosimAlgorithm import CosimAlgorithm, EccoParams
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -56,8 +50,9 @@ def run_in_libcosim(scene: Scene, duration: float | None = None, checkpoints: np
         execution = CosimExecution.from_step_size(step_size=int(round(scene.step * 1e9)))
     else:
         algorithm = CosimAlgorithm.create_ecco_algorithm(EccoParams(
-            step_size=scene.step, min_step_size=ecco.h_min, max_step_size=ecco.h_max, abs_tolerance=ecco.atol,
-            rel_tolerance=ecco.rtol))
+            safety_factor=ecco.safety, step_size=ecco.step, min_step_size=ecco.h_min, max_step_size=ecco.h_max,
+            min_change_rate=ecco.change_min, max_change_rate=ecco.change_max, abs_tolerance=ecco.atol,
+            rel_tolerance=ecco.rtol, p_gain=ecco.k_p, i_gain=ecco.k_i))
         execution = CosimExecution.from_algorithm(algorithm)
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)

@@ -58,6 +58,20 @@ def test_kernel_equals_the_oracle_on_the_oscillator(kind, order, control):
         assert len(execution.steps) > 5
 
 
+def test_the_energy_law_s_safety_and_change_limits_reach_the_kernel():
+    """ECCO with libcosim's safety factor and change limits (0.99, [0.2, 1.5]) instead of ours
+    (1, [0.2, 2]): the kernel equals the oracle under them, and takes other steps than under ours
+    (the parameters are the law's, not decoration; the OSP export writes the same ones)."""
+    settings, record, names = Algorithm("jacobi", 1), [("mass", "position")], ["x1"]
+    theirs = EnergyControl(1e-2, rtol=1e-2, atol=1e-4, h_min=1e-4, safety=0.99, change_max=1.5)
+    reference, result, execution, failure = both(oscillator(), settings, theirs, 1.0, record, names, "mass")
+    assert failure is None and reference.failure is None
+    assert_equal(reference, result, execution, names)
+    _, _, ours, _ = both(oscillator(), settings, EnergyControl(1e-2, rtol=1e-2, atol=1e-4, h_min=1e-4), 1.0,
+                         record, names, "mass")
+    assert max(np.diff(np.log(execution.steps))) <= np.log(1.5) + 1e-12 < max(np.diff(np.log(ours.steps)))
+
+
 @pytest.mark.parametrize("kind,order", [("jacobi", 0), ("jacobi", 1), ("gauss-seidel", 1), ("gauss-seidel", 2)])
 def test_kernel_equals_the_oracle_with_an_interface_jacobian(kind, order):
     """The oscillator with the coupling FMU's slopes wired to the mass (an output fed back into its

@@ -50,3 +50,22 @@ def test_libcosim_ecco_from_our_configuration_tracks_the_exact_solution(tmp_path
     error = abs(libcosim_position(xml, 1.0) - exact_position_1(1.0))
     assert error < 1e-3
     assert error < 0.1 * abs(ours(1.0) - exact_position_1(1.0))
+
+
+@pytest.mark.parametrize("control", [EnergyControl(1e-3, rtol=1e-4, atol=1e-6),
+                                     EnergyControl(2e-3, rtol=3e-3, atol=1e-5, h_min=1e-5, h_max=5e-2, k_i=0.1,
+                                                   k_p=0.3, safety=0.99, change_min=0.25, change_max=1.5)])
+def test_the_exported_ecco_configuration_is_the_law_the_kernel_runs(tmp_path, control):
+    """One ECCO law: every number of the exported EccoConfiguration is the system's EnergyControl
+    field that the kernel uses (before, the export wrote libcosim's 0.99 and [0.2, 1.5] whatever
+    the kernel ran)."""
+    from lxml import etree
+    system = oscillator(1.0)
+    system.settings = to_strings(Algorithm("jacobi", 0), control)
+    root = etree.parse(str(write_osp(system, tmp_path))).getroot()
+    written = {e.tag.split("}")[1]: float(e.text) for e in root.find("{*}EccoConfiguration")}
+    assert written == {"SafetyFactor": control.safety, "StepSize": control.step, "MinimumStepSize": control.h_min,
+                       "MaximumStepSize": control.h_max, "MinimumChangeRate": control.change_min,
+                       "MaximumChangeRate": control.change_max, "ProportionalGain": control.k_p,
+                       "IntegralGain": control.k_i, "RelativeTolerance": control.rtol,
+                       "AbsoluteTolerance": control.atol}

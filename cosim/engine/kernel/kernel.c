@@ -616,8 +616,8 @@ int kernel_run_doubling(Kernel *s, Controller *a, int clock, double t_end, int m
 }
 
 /* Energy control (ECCO) from a->t towards t_end: after each step of H, eps = max over the bonds of
- * |dE| / (atol + rtol |E|) (at least 1e-10), and H_next = H (1/eps)^k_I (eps_prev/eps)^k_P,
- * limited to [0.2 H, 2 H] and [h_min, h_max]. No rollback. Returns rows written as
+ * |dE| / (atol + rtol |E|) (at least 1e-10), and H_next = H safety (1/eps)^k_I (eps_prev/eps)^k_P,
+ * limited to [change_min H, change_max H] and [h_min, h_max] (cosim/engine/settings.py: EnergyControl). No rollback. Returns rows written as
  * kernel_run_doubling (one residual and one bond_energy block per row). */
 int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
                       double *accepted_h, double *residuals, double *bond_energy) {
@@ -640,9 +640,9 @@ int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max
             if (b == 0 || e > eps || isnan(e)) eps = e;
         }
         eps = fmax(eps, 1e-10);
-        const double factor = pow(1.0 / eps, a->k_i) * pow(a->previous / eps, a->k_p);
+        const double factor = a->safety * pow(1.0 / eps, a->k_i) * pow(a->previous / eps, a->k_p);
         a->previous = eps;
-        a->h = fmin(a->h_max, fmax(a->h_min, h * fmin(2.0, fmax(0.2, factor))));
+        a->h = fmin(a->h_max, fmax(a->h_min, h * fmin(a->change_max, fmax(a->change_min, factor))));
     }
     return written;
 }
@@ -670,7 +670,7 @@ static const StructLayout LAYOUT[] = {
 #undef K
 #define C(field) STRUCT_LAYOUT_FIELD(Controller, field)
     STRUCT_LAYOUT(Controller), C(h), C(h_min), C(h_max), C(rtol), C(atol), C(atol_energy), C(k_i), C(k_p),
-    C(previous), C(t), C(rejected), C(accepted_count), C(force_reject), C(n_force_reject), C(saved_time),
+    C(previous), C(safety), C(change_min), C(change_max), C(t), C(rejected), C(accepted_count), C(force_reject), C(n_force_reject), C(saved_time),
     C(saved_samples), C(saved_rates), C(saved_inputs), C(saved_instance_time), C(full),
 #undef C
     STRUCT_LAYOUT_END};

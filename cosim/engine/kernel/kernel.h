@@ -88,6 +88,7 @@ typedef struct {
     const double *atol;     /* step doubling: per sample value, +inf where the error is not measured */
     double atol_energy;     /* energy control [J] */
     double k_i, k_p, previous; /* energy control: PI gains and the previous scaled residual */
+    double safety, change_min, change_max; /* energy control: H_next / H = clamp(safety x PI law) */
     double t;               /* the controller's time, advanced by each accepted H */
     int rejected;           /* added to */
     int accepted_count;     /* accepted steps so far (over batches) */
