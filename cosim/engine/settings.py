@@ -15,7 +15,12 @@ ALGORITHMS = ("jacobi", "gauss-seidel")
 
 
 class SettingsError(ValueError):
-    """A setting with a wrong name or value; the message names it."""
+    """A setting with a wrong name or value; the message names it, and `setting` is its name
+    (a field of the settings classes) where one setting is at fault."""
+
+    def __init__(self, message: str, setting: str | None = None):
+        super().__init__(message)
+        self.setting = setting
 
 
 @dataclass(frozen=True)
@@ -37,18 +42,23 @@ class Algorithm:
 
     def __post_init__(self):
         if self.kind not in ALGORITHMS:
-            raise SettingsError(f"algorithm '{self.kind}': one of {', '.join(ALGORITHMS)}")
+            raise SettingsError(f"algorithm '{self.kind}': one of {', '.join(ALGORITHMS)}", "kind")
         if self.order not in (0, 1, 2):
-            raise SettingsError(f"extrapolation order {self.order}: 0, 1 and 2 are supported")
+            raise SettingsError(f"extrapolation order {self.order}: 0, 1 and 2 are supported", "order")
         if not (isinstance(self.initial_sweeps, int) and self.initial_sweeps >= 0):
-            raise SettingsError(f"initial_sweeps {self.initial_sweeps!r}: a whole number >= 0")
+            raise SettingsError(f"initial_sweeps {self.initial_sweeps!r}: a whole number >= 0", "initial_sweeps")
         if self.threads not in (1, 2):
-            raise SettingsError(f"threads {self.threads!r}: 1 or 2")
+            raise SettingsError(f"threads {self.threads!r}: 1 or 2", "threads")
 
 
 def _positive(name: str, value: float) -> None:
     if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise SettingsError(f"{name} = {value!r}: must be a positive finite number")
+        raise SettingsError(f"{name} = {value!r}: must be a positive finite number", name)
+
+
+def _step_bounds(h_min: float, h_max: float) -> None:
+    if h_min > h_max:
+        raise SettingsError(f"h_min = {h_min!r} exceeds h_max = {h_max!r}", "h_min")
 
 
 @dataclass(frozen=True)
@@ -67,9 +77,10 @@ class FixedStep:
         _positive("step", self.step)
         for window in self.windows:
             if not (len(window) == 2 and all(math.isfinite(t) for t in window) and window[0] < window[1]):
-                raise SettingsError(f"window {window!r}: a (start, end) pair with start < end")
+                raise SettingsError(f"window {window!r}: a (start, end) pair with start < end", "windows")
         if self.windows and self.startup_time == 0.0:
-            raise SettingsError("windows need startup_step, the finer step they are taken at (and a startup_time)")
+            raise SettingsError("windows need startup_step, the finer step they are taken at (and a startup_time)",
+                                "windows")
         if self.startup_time == 0.0:
             return
         _positive("startup_time", self.startup_time)
@@ -77,11 +88,11 @@ class FixedStep:
         per = self.step / self.startup_step
         if not (self.startup_step < self.step and abs(per - round(per)) < 1e-9 * per):
             raise SettingsError(f"startup_step = {self.startup_step!r}: must divide the step {self.step!r} a whole "
-                                "number of times (more than once)")
+                                "number of times (more than once)", "startup_step")
         steps = self.startup_time / self.step
         if abs(steps - round(steps)) > 1e-9 * max(steps, 1.0) or round(steps) < 1:
             raise SettingsError(f"startup_time = {self.startup_time!r}: must be a whole number of steps of "
-                                f"{self.step!r} s")
+                                f"{self.step!r} s", "startup_time")
 
 
 @dataclass(frozen=True)
@@ -91,7 +102,7 @@ class StepDoubling:
     error against atol + rtol |y|. `force_reject`: a test hook, accepted-step indices whose first
     try is rejected."""
     step: float
-    rtol: float = 1e-4
+    rtol: float = 1e-3
     atol: float | Mapping[str, float] = 1e-6
     h_min: float = 1e-6
     h_max: float = 1e-2
@@ -100,6 +111,7 @@ class StepDoubling:
     def __post_init__(self):
         for name in ("step", "rtol", "h_min", "h_max"):
             _positive(name, getattr(self, name))
+        _step_bounds(self.h_min, self.h_max)
         for value in (self.atol.values() if isinstance(self.atol, Mapping) else [self.atol]):
             _positive("atol", value)
 
@@ -133,13 +145,14 @@ class EnergyControl:
     def __post_init__(self):
         for name in ("step", "rtol", "atol", "h_min", "h_max", "safety", "change_min"):
             _positive(name, getattr(self, name))
+        _step_bounds(self.h_min, self.h_max)
         for name in ("k_i", "k_p"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise SettingsError(f"{name} = {value!r}: must be a finite number >= 0")
+                raise SettingsError(f"{name} = {value!r}: must be a finite number >= 0", name)
         if not (self.change_min <= 1.0 <= self.change_max and math.isfinite(self.change_max)):
             raise SettingsError(f"change_min = {self.change_min!r}, change_max = {self.change_max!r}: the step's "
-                                "change per step needs change_min <= 1 <= change_max")
+                                "change per step needs change_min <= 1 <= change_max", "change_max")
 
 
 StepControl = FixedStep | StepDoubling | EnergyControl

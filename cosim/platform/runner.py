@@ -7,25 +7,22 @@ results up to the last good communication point are written all the same.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..engine import (Algorithm, EnergyControl, Experiment, FixedStep, Progress, RunFailed, StepControl,
-                      StepDoubling, SystemStructure)
+from ..engine import Experiment, FixedStep, Progress, RunFailed, SystemStructure
 from ..engine import Diverged, FmuError, NoStep, ParameterError
 from ..engine.advice import advice_text
 from ..engine.results import message_kinds, thin, write as write_results, write_log
 from ..engine.settings import control_name, to_strings
 from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
-from .scene import Scene, SceneError, line_of
+from .scene import Scene, SceneError, line_of, scene_settings
 from .signals import scene_trajectory
-from .system import Run, columns, default_algorithm, platform_structure, run
+from .system import Run, columns, platform_structure, run
 from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
 
 
@@ -87,27 +84,6 @@ class SceneFailed(RuntimeError):
 # the paper's figures that a scene's plots correspond to, per parameter set
 FIGURES = {"meng2010": ("as Meng et al. 2010, Fig 7", "as Meng et al. 2010, Fig 8"),
            "sumnu2015": ("as Sumnu 2015, Section 5.3", "as Sumnu 2015, Section 5.3")}
-
-
-def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
-    """The scene's coupling algorithm and macro-step control. Step doubling measures the error on
-    the mechanics' outputs to the drives (leg angles and speeds, or lengths and velocities)."""
-    algorithm = dataclasses.replace(default_algorithm(scene.drive, scene.algorithm, scene.order), threads=scene.threads)
-    bounds = dict(step=scene.step, rtol=scene.rtol, h_min=scene.h_min, h_max=scene.h_max)
-    if scene.step_control == "doubling":
-        return algorithm, StepDoubling(atol={"mechanics": scene.atol or 1e-3}, **bounds)
-    if scene.step_control == "energy":
-        return algorithm, EnergyControl(atol=scene.atol or 1e-4, **bounds)
-    if scene.startup_time and scene.startup_step < scene.step:
-        # the first startup_time seconds, rounded up to whole steps, at the largest whole fraction
-        # of the step that is no longer than startup_step (a run at a finer step needs no finer start)
-        per = math.ceil(scene.step / scene.startup_step - 1e-9)
-        steps = math.ceil(scene.startup_time / scene.step - 1e-9)
-        # and the edge_time after each load pulse's edges, where the drives answer a jumping load
-        windows = tuple((edge, edge + scene.edge_time) for pulse in scene.pulses for edge in (pulse.start, pulse.end)
-                        if scene.edge_time > 0.0 and edge < scene.duration)
-        return algorithm, FixedStep(scene.step, steps * scene.step, scene.step / per, windows)
-    return algorithm, FixedStep(scene.step)
 
 
 def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:

@@ -39,13 +39,17 @@ A wrong key or value is reported with its name and the line it stands on.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .ports import DRIVES, POSE
+from .system import default_algorithm
 
 FRAMES = {"base": 1, "platform": 2}  # as the trajectory FMU's pulse[k].frame numbers them
 WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
@@ -110,10 +114,10 @@ class Scene:
     table: Path | None = None
     interpolation: str = "cubic"
     step_control: str = "fixed"
-    rtol: float = 1e-3
-    atol: float | None = None  # the controller's default if None
-    h_min: float = 1e-6
-    h_max: float = 1e-2
+    rtol: float | None = None  # None: the step control's default (cosim.engine.settings)
+    atol: float | None = None
+    h_min: float | None = None
+    h_max: float | None = None
     outputs_mechanics: list[str] = field(default_factory=list)
     outputs_drive: list[str] | None = None  # None: the drive kind's default
     output_interval: float | None = None
@@ -281,8 +285,8 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     step_control = coupling.get("step_control", "fixed")
     if step_control not in STEP_CONTROLS:
         raise fail("coupling", "step_control", f"= {step_control!r}: use {', '.join(map(repr, STEP_CONTROLS))}")
-    tolerances = {key: number("coupling", coupling, key, default, positive=True)
-                  for key, default in (("rtol", 1e-3), ("h_min", 1e-6), ("h_max", 1e-2))}
+    tolerances = {key: number("coupling", coupling, key, positive=True) for key in ("rtol", "h_min", "h_max")
+                  if key in coupling}
     atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
     threads = coupling.get("threads", 1)
     if threads not in (1, 2) or isinstance(threads, bool):
@@ -354,12 +358,47 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
             raise fail(f"trajectory.{at_neutral[0]}", "offset", f"= 'neutral': no neutral pose ({error})") from None
         for dof in at_neutral:
             trajectory[dof].offset = float(pose[POSE.index(dof)])
-    return Scene(path=path, name=scene.get("name", path.stem), duration=number("scene", scene, "duration", positive=True),
-                 step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
-                 drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
-                 mass_set=mass_set, mechanics_parameters=mechanics_parameters,
-                 algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
-                 interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
-                 outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
-                 tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads,
-                 interface_jacobian=interface_jacobian, **startup)
+    loaded = Scene(path=path, name=scene.get("name", path.stem),
+                    duration=number("scene", scene, "duration", positive=True), step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
+                    drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
+                    mass_set=mass_set, mechanics_parameters=mechanics_parameters,
+                    algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
+                    interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
+                    outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
+                    tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads,
+                    interface_jacobian=interface_jacobian, **startup)
+    try:
+        scene_settings(loaded)
+    except SettingsError as error:  # what the settings object refuses beyond the checks above
+        table, key = ("scene", "step") if error.setting in (None, "step") else \
+            ("coupling", {"kind": "algorithm", "windows": "edge_time"}.get(error.setting, error.setting))
+        raise fail(table, key, f"is refused: {error}") from None
+    return loaded
+
+
+# Step doubling's error scale on what the mechanics hands the drives (leg angles and speeds, or
+# lengths and velocities: m, rad, m/s, rad/s) when the scene gives no atol.
+DOUBLING_ATOL = 1e-3
+
+
+def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
+    """The scene's coupling algorithm and macro-step control: the one typed settings object
+    (cosim.engine.settings) that the SSP annotation and the OSP export carry, with its own
+    defaults for what the scene leaves out. Step doubling measures the error on the mechanics'
+    outputs to the drives."""
+    algorithm = dataclasses.replace(default_algorithm(scene.drive, scene.algorithm, scene.order), threads=scene.threads)
+    given = {key: getattr(scene, key) for key in ("rtol", "h_min", "h_max") if getattr(scene, key) is not None}
+    if scene.step_control == "doubling":
+        return algorithm, StepDoubling(scene.step, atol={"mechanics": scene.atol or DOUBLING_ATOL}, **given)
+    if scene.step_control == "energy":
+        return algorithm, EnergyControl(scene.step, **given, **({"atol": scene.atol} if scene.atol else {}))
+    if scene.startup_time and scene.startup_step < scene.step:
+        # the first startup_time seconds, rounded up to whole steps, at the largest whole fraction
+        # of the step that is no longer than startup_step (a run at a finer step needs no finer start)
+        per = math.ceil(scene.step / scene.startup_step - 1e-9)
+        steps = math.ceil(scene.startup_time / scene.step - 1e-9)
+        # and the edge_time after each load pulse's edges, where the drives answer a jumping load
+        windows = tuple((edge, edge + scene.edge_time) for pulse in scene.pulses for edge in (pulse.start, pulse.end)
+                        if scene.edge_time > 0.0 and edge < scene.duration)
+        return algorithm, FixedStep(scene.step, steps * scene.step, scene.step / per, windows)
+    return algorithm, FixedStep(scene.step)

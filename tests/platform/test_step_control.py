@@ -65,13 +65,34 @@ def test_energy_control_tightens_the_energy_error_with_its_tolerance(sumnu_scene
 @pytest.mark.parametrize("line,message", [
     ('step_control = "pid"', "'coupling.step_control' = 'pid'"),
     ("rtol = -1.0", "'coupling.rtol' = -1.0 must be a positive number"),
+    ('step_control = "energy"\nh_max = 1e-3\nh_min = 1e-2', None),  # refused by the settings object itself
 ])
 def test_a_bad_step_control_is_named_with_its_line(tmp_path, line, message):
     path = tmp_path / "scene.toml"
     path.write_text(f"[scene]\nduration = 1.0\n[coupling]\n{line}\n")
     with pytest.raises(SceneError) as error:
         load_scene(path)
-    assert f"scene.toml:4: {message}" in str(error.value)
+    if message is None:
+        assert "scene.toml:6: 'coupling.h_min' is refused: h_min = 0.01 exceeds h_max = 0.001" in str(error.value)
+    else:
+        assert f"scene.toml:4: {message}" in str(error.value)
+
+
+@pytest.mark.parametrize("control", ["fixed", "doubling", "energy"])
+def test_a_scene_s_settings_are_the_settings_object_s_with_its_defaults(tmp_path, control):
+    """One typed settings object: what a scene leaves out takes the defaults of the settings
+    classes (before, the scene parser had its own, and step doubling's rtol was 1e-3 in a scene and
+    1e-4 in an SSP), and the SSP annotation carries exactly that object."""
+    import dataclasses
+    from cosim.engine.settings import from_strings, to_strings
+    path = tmp_path / "scene.toml"
+    path.write_text(f'[scene]\nduration = 1.0\n[coupling]\nstep_control = "{control}"\n')
+    scene = load_scene(path)
+    algorithm, chosen = scene_settings(scene)
+    for field in dataclasses.fields(chosen):
+        if field.name in ("rtol", "h_min", "h_max", "k_i", "k_p", "safety", "change_min", "change_max"):
+            assert getattr(chosen, field.name) == field.default, field.name
+    assert from_strings(to_strings(algorithm, chosen), scene.step) == (algorithm, chosen)
 
 
 START = {"scene.duration": 0.5, "load.pulses": []}  # the Meng scene's first half second, no impact
