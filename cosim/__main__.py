@@ -217,7 +217,8 @@ def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
 
 
 def run_system(path: Path, out: Path, settings: list[str], duration: float | None) -> int:
-    from .engine import RunFailed, SettingsError
+    from .engine import SettingsError
+    from .engine.outcome import RunStopped
     from .engine.command import run_ssp
     from .engine.ssp import SspError
     overrides = {}
@@ -227,7 +228,7 @@ def run_system(path: Path, out: Path, settings: list[str], duration: float | Non
             return 2
         name, value = item.split("=", 1)
         overrides[name.strip()] = value.strip()
-    return report(lambda: run_ssp(path, out, overrides, duration)[1], (SspError, SettingsError), RunFailed,
+    return report(lambda: run_ssp(path, out, overrides, duration)[1], (SspError, SettingsError), RunStopped,
                   f"{out}/{path.stem}.csv and .mat", out)
 
 

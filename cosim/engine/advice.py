@@ -20,14 +20,12 @@ def stable_step(structure: SystemStructure, algorithm: Algorithm, step: float, d
     for fraction in FRACTIONS:
         h = step / fraction
         tried.append(h)
-        execution = Execution(structure, algorithm, FixedStep(h))
-        try:
-            execution.run(until, [DivergenceMonitor(ratio=ratio)])
-            return h, until, tried
-        except RunFailed:  # diverged or an FMU failed: not a step to recommend
-            continue
-        finally:
-            execution.free()
+        with Execution(structure, algorithm, FixedStep(h)) as execution:
+            try:
+                execution.run(until, [DivergenceMonitor(ratio=ratio)])
+                return h, until, tried
+            except RunFailed:  # diverged or an FMU failed: not a step to recommend
+                continue
     return None, until, tried
 
 

@@ -7,48 +7,16 @@ from the annotation's `record` setting, else every connected output as `componen
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
 import numpy as np
 
-from .execution import Execution, RunFailed
-from .advice import advice_text
-from .observers import DivergenceMonitor, Diverged, Progress
-from .settings import FixedStep
-from .results import message_kinds, thin, write, write_log
+from .observers import DivergenceMonitor, Progress
+from .outcome import Report, RunStopped, execute
+from .results import thin, write, write_log
 from .settings import from_strings
 from .structure import SystemStructure
-
-
-@dataclass
-class SystemReport:
-    name: str
-    macro_steps: int
-    rejected: int
-    simulated: float
-    wall: float
-    fmi_seconds: float
-    largest_energy_residual: float
-    warnings: int
-    failure: str | None = None
-    messages: list = field(default_factory=list)  # (instance, LogMessage) of everything logged
-
-    def text(self) -> str:
-        rtf = self.simulated / self.wall if self.wall > 0 else float("inf")
-        lines = [f"{self.name}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {self.macro_steps} macro steps"
-                 f" ({self.rejected} rejected), real-time factor {rtf:.1f}, "
-                 f"{100 * (1 - self.fmi_seconds / self.wall) if self.wall > 0 else 0:.0f} % of the wall time in the "
-                 f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
-                 f"{self.largest_energy_residual:.2e} J"]
-        if self.warnings:
-            kinds = "; ".join(f"{n} x {kind}" for n, kind in message_kinds(self.messages)[:3])
-            lines.append(f"{self.warnings} warnings from the FMUs ({kinds})")
-        if self.failure:
-            lines.append(f"FAILED: {self.failure}")
-        return "\n".join(lines)
 
 
 def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[str]]:
@@ -65,43 +33,28 @@ def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[s
 
 def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
                   stop_time: float | None = None, progress: bool = True,
-                  advice: bool = True) -> tuple[np.ndarray, SystemReport]:
-    """Runs `structure` with its settings (and the overrides); raises RunFailed with .report.
-    progress: a progress bar on a terminal; advice: a diverged run probes for a step that holds
-    (both off for a sweep's points)."""
+                  advice: bool = True) -> tuple[np.ndarray, Report]:
+    """Runs `structure` with its settings (and the overrides) through the one run path; raises
+    RunStopped (its report and partial results) when the run stopped early. progress: a progress
+    bar on a terminal; advice: a diverged run probes for a step that holds (both off for a sweep's
+    points)."""
     settings = {k: str(v) for k, v in structure.settings.items() if k not in ("record", "output_interval")}
     settings.update(overrides or {})
     algorithm, control = from_strings(settings, structure.experiment.step)
     record, names = recording(structure)
     stop = structure.experiment.stop if stop_time is None else stop_time
-    execution = Execution(structure, algorithm, control, record, names)
-    start = time.perf_counter()
-    failure = None
-    try:
-        result = execution.run(stop, [DivergenceMonitor(), *([Progress(structure.name)] if progress else [])])
-    except RunFailed as failed:
-        result, failure = failed.result, failed
-    wall = time.perf_counter() - start
-    if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
-        failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
-                                                                    failure.error.time, stop), failure.error.time),
-                            failure.result)
-    report = SystemReport(structure.name, len(execution.steps), execution.rejected,
-                          float(result["time"][-1] - result["time"][0]) if len(result) else 0.0, wall,
-                          execution.fmi_seconds, float(np.max(execution.energy_residuals, initial=0.0)),
-                          len(execution.messages("warning")), str(failure) if failure else None,
-                          execution.messages())
-    execution.free()
+    outcome = execute(structure, algorithm, control, stop, record, names,
+                      observers=[DivergenceMonitor(), *([Progress(structure.name)] if progress else [])], advice=advice)
     interval = structure.settings.get("output_interval")
-    result = thin(result, float(interval) if interval else None)
-    if failure is not None:
-        failure.report, failure.result = report, result
-        raise failure
+    result = thin(outcome.result, float(interval) if interval else None)
+    report = Report.of(outcome)
+    if outcome.failure is not None:
+        raise RunStopped(report, result, outcome.diverged)
     return result, report
 
 
 def run_ssp(path: Path, out: Path | None, overrides: Mapping[str, str] | None = None,
-            stop_time: float | None = None) -> tuple[np.ndarray, SystemReport]:
+            stop_time: float | None = None) -> tuple[np.ndarray, Report]:
     """Reads and runs an SSP system; writes <stem>.csv and .mat to `out` (also when it fails)."""
     from .checks import ParameterError
     from .execution import NoStep
@@ -114,7 +67,7 @@ def run_ssp(path: Path, out: Path | None, overrides: Mapping[str, str] | None = 
         raise SspError(f"{path}: {error}") from None
     except FmuError as error:  # an FMU that rejects the SSP's values when it is set up
         raise SspError(f"{path}: {error}") from None
-    except RunFailed as failed:
+    except RunStopped as failed:
         if out is not None:
             write(failed.result, out, Path(path).stem)
             write_log(failed.report.messages, out / f"{Path(path).stem}.log")

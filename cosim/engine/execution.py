@@ -25,11 +25,12 @@ from .structure import SystemStructure
 class RunFailed(RuntimeError):
     """An FMU failed mid-run (`error` an FmuError: which instance, call and time), an observer
     stopped the run (`error` e.g. a Diverged: when, how much, where, what to try) or the run could
-    not take a step; `result` holds the rows computed up to then."""
+    not take a step; `result` holds the rows computed up to then, and `outcome` (a
+    cosim.engine.outcome.Outcome, where the run path made one) everything else the run measured."""
 
-    def __init__(self, error: Exception, result: np.ndarray):
+    def __init__(self, error: Exception, result: np.ndarray, outcome=None):
         super().__init__(str(error))
-        self.error, self.result = error, result
+        self.error, self.result, self.outcome = error, result, outcome
 
 
 class Execution:
@@ -37,7 +38,7 @@ class Execution:
     ((component, variable) pairs) as columns `names` (default 'component.variable') after every
     accepted step. The time column is that of component `clock` (default the first).
     `interpolating` overrides per component whether it takes input derivatives (default: its
-    modelDescription's canInterpolateInputs)."""
+    modelDescription's canInterpolateInputs). A context manager: the FMUs are freed on leaving it."""
 
     def __init__(self, structure: SystemStructure, algorithm: Algorithm, control: StepControl,
                  record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None,
@@ -162,6 +163,12 @@ class Execution:
     def _controlled_batches(self, stop_time: float):
         while stop_time - self.kernel.controller_time > 1e-12 * max(1.0, abs(stop_time)):
             yield self.kernel.run_controlled(stop_time, 500)
+
+    def __enter__(self) -> "Execution":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.free()
 
     def free(self) -> None:
         if getattr(self, "kernel", None) is not None:

@@ -162,20 +162,18 @@ class SystemPoint:
 
     def __call__(self, values: Mapping[str, Value]) -> dict[str, Value]:
         from .command import run_structure
-        from .execution import RunFailed
-        from .observers import Diverged
+        from .outcome import RunStopped
         structure = self._with(self.structure(), values)
         try:
             result, report = run_structure(structure, self._settings(values), self.stop_time, progress=False,
                                            advice=False)
             status, message = "ok", ""
-        except RunFailed as failed:
+        except RunStopped as failed:
             result, report = failed.result, failed.report
-            status, message = ("diverged" if isinstance(failed.error, Diverged) else "failed"), str(failed)
-        row = {"steps": report.macro_steps, "rejected": report.rejected, "energy_residual": report.largest_energy_residual,
-               "real_time_factor": report.simulated / report.wall if report.wall > 0 else float("nan"),
-               **statistics(result, dict(self.outputs))}
-        return {**row, "status": status, "message": message}
+            status, message = ("diverged" if failed.diverged else "failed"), str(failed)
+        numbers = report.row()
+        row = {key: numbers[key] for key in ("steps", "rejected", "energy_residual", "real_time_factor")}
+        return {**row, **statistics(result, dict(self.outputs)), "status": status, "message": message}
 
 
 def evaluate_task(evaluate: Callable[[Mapping[str, Value]], dict], points: Sequence[tuple[str, dict]]) -> list[dict]:

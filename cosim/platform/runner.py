@@ -13,72 +13,46 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine import Experiment, FixedStep, Progress, RunFailed, SystemStructure
-from ..engine import Diverged, FmuError, NoStep, ParameterError
-from ..engine.advice import advice_text
-from ..engine.results import message_kinds, thin, write as write_results, write_log
-from ..engine.settings import control_name, to_strings
+from ..engine import Experiment, FmuError, NoStep, ParameterError, Progress, RunFailed, SystemStructure
+from ..engine.outcome import Outcome, Report, RunStopped
+from ..engine.results import thin, write as write_results, write_log
+from ..engine.settings import to_strings
 from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of, scene_settings
 from .signals import scene_trajectory
-from .system import Run, columns, platform_structure, run
+from .system import columns, platform_structure, run
 from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
 
 
 @dataclass
-class RunReport:
-    scene: str
-    macro_steps: int
-    simulated: float
-    wall: float
-    fmi_seconds: float
-    largest_error: np.ndarray  # per DOF, after the first tenth of the run
-    largest_energy_residual: float  # [J] over the power bonds, per macro step
-    warnings: list[str]
-    failure: str | None = None
-    rejected_steps: int = 0
-    step_control: str = "fixed"
-    warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
-    log: Path | None = None  # where every FMU message was written
+class RunReport(Report):
+    """A scene's run report: the engine's, with the tracking error, the designed gains, where the
+    interactive report was written and whether the coupling diverged."""
+    largest_error: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per DOF, after the first tenth
     tuning: str | None = None  # the gains designed for the plant (tuning = "auto")
     html: Path | None = None  # the interactive report, when plots were drawn
     diverged: bool = False  # the failure is the divergence monitor's verdict
 
     @property
-    def real_time_factor(self) -> float:
-        return self.simulated / self.wall
+    def scene(self) -> str:
+        return self.name
 
-    @property
-    def master_share(self) -> float:
-        return 1.0 - self.fmi_seconds / self.wall
+    def measured(self) -> list[str]:
+        if not len(self.largest_error):
+            return []
+        return ["largest tracking error after the first tenth: " + ", ".join(
+            f"{a} {e:.2e}" for a, e in zip(POSE, self.largest_error))]
 
-    def text(self) -> str:
-        steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"
-                                                     if self.step_control != "fixed" else "")
-        lines = [f"{self.scene}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {steps}, "
-                 f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
-                 f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
-                 f"{self.largest_energy_residual:.2e} J"]
-        if len(self.largest_error):
-            lines.append("largest tracking error after the first tenth: " + ", ".join(
-                f"{a} {e:.2e}" for a, e in zip(("x", "y", "z", "roll", "pitch", "yaw"), self.largest_error)))
-        if self.warnings:
-            kinds = "; ".join(f"{n} x {kind}" for n, kind in self.warning_kinds[:3])
-            more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""
-            lines.append(f"{len(self.warnings)} warnings from the FMUs ({kinds}{more}), first: {self.warnings[0]}"
-                         + (f"; all in {self.log}" if self.log else ""))
-        if self.tuning:
-            lines.append(self.tuning)
-        if self.failure:
-            lines.append(f"FAILED: {self.failure}")
-        return "\n".join(lines)
+    def notes(self) -> list[str]:
+        return [self.tuning] if self.tuning else []
 
 
-class SceneFailed(RuntimeError):
+class SceneFailed(RunStopped):
+    """A scene's run that stopped early: its report and the results up to then."""
+
     def __init__(self, report: RunReport, result: np.ndarray):
-        super().__init__(report.failure)
-        self.report, self.result = report, result
+        super().__init__(report, result, report.diverged)
 
 
 # the paper's figures that a scene's plots correspond to, per parameter set
@@ -204,20 +178,16 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     record = scene_record(scene)
     try:
         outcome = run(structure, algorithm, control, scene.duration, record,
-                      observers=[Progress(scene.name)] if progress else [])
-        failure, diverged = None, False
-    except RunFailed as failed:  # system.run attaches the partial run
-        outcome, failure, diverged = failed.run, str(failed), isinstance(failed.error, Diverged)
-        if advice and isinstance(failed.error, Diverged) and isinstance(control, FixedStep):
-            failure += "; " + advice_text(structure, algorithm, control.step, failed.error.time, scene.duration)
+                      observers=[Progress(scene.name)] if progress else [], advice=advice)
+    except RunFailed as failed:  # the partial run comes with it
+        outcome = failed.outcome
     except (ParameterError, FmuError, NoStep, KeyError) as error:  # found before a single step
         mapped = scene_error(scene, error)
         if mapped is None:
             raise
         raise mapped from None
     result = thin(outcome.result, scene.output_interval)
-    report = scene_report(scene, result, outcome, failure, control_name(control))
-    report.tuning, report.diverged = tuning, diverged
+    report = scene_report(scene, result, outcome, tuning)
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"
@@ -234,15 +204,17 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
             from .report_html import write_report
             report.html = write_report(out / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
                                        outcome.bond_residuals)
-    if failure:
+    if outcome.failure is not None:
         raise SceneFailed(report, result)
     return result, report
 
 
-def scene_report(scene: Scene, result: np.ndarray, outcome: Run, failure: str | None, control: str) -> RunReport:
+def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str | None = None) -> RunReport:
+    """The run's report, its tracking error taken over the (thinned) results after the first tenth."""
     late = result["time"] >= 0.1 * scene.duration
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in POSE])
-    return RunReport(scene.name, len(outcome.steps), float(result["time"][-1]), outcome.wall, outcome.fmi_seconds,
-                     errors, float(np.max(outcome.energy_residuals, initial=0.0)), outcome.warnings, failure,
-                     outcome.rejected, control, message_kinds(outcome.messages))
+    report = RunReport.of(outcome, simulated=float(result["time"][-1]), largest_error=errors, tuning=tuning,
+                          diverged=outcome.diverged)
+    report.name = scene.name
+    return report

@@ -111,20 +111,17 @@ class ScenePoint:
             status, message = ("diverged" if report.diverged else "failed"), report.failure or ""
         effort = DRIVES[scene.drive].outputs[0]
         row: dict[str, Any] = {}
+        numbers = report.row()
         for name in self.reports:
             if name == "tracking_error":
                 row.update({f"tracking_error.{a}": float(e) for a, e in zip(POSE, report.largest_error)})
             elif name == "peak_effort":
                 row.update({f"peak_effort[{k}]": float(np.max(np.abs(result[f"{effort}[{k}]"]))) if len(result)
                             and f"{effort}[{k}]" in result.dtype.names else float("nan") for k in range(1, 7)})
-            elif name == "energy_residual":
-                row["energy_residual"] = report.largest_energy_residual
             elif name == "steps":
-                row.update(steps=report.macro_steps, rejected=report.rejected_steps)
-            elif name == "real_time_factor":
-                row["real_time_factor"] = report.simulated / report.wall if report.wall > 0 else float("nan")
-            elif name == "stepping_wall":
-                row["stepping_wall"] = report.wall
+                row.update(steps=numbers["steps"], rejected=numbers["rejected"])
+            elif name in ("energy_residual", "real_time_factor", "stepping_wall"):
+                row[name] = numbers[name]
             elif name == "pose_error":
                 poses = [f"pose.{a}" for a in POSE]
                 if self.checkpoints is None:

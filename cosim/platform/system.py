@@ -11,15 +11,11 @@ samples, then the mechanics with each effort interpolated between t and t + h.
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
-import numpy as np
-
-from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Execution, Experiment, Observer,
-                      RunFailed, StepControl, SystemStructure, fmu_path)
-from ..engine.fmi import LogMessage
+from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
+                      StepControl, SystemStructure, fmu_path)
+from ..engine.outcome import Outcome, execute
 from .ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE re-exported)
 
 
@@ -85,46 +81,18 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
     return record, names
 
 
-@dataclass
-class Run:
-    """A finished (or failed) platform run: the results and what the engine measured."""
-    result: np.ndarray
-    energy_residuals: np.ndarray
-    steps: np.ndarray
-    rejected: int
-    wall: float
-    fmi_seconds: float
-    messages: list[tuple[str, LogMessage]] = field(default_factory=list)
-    monitor: DivergenceMonitor | None = None
-    bond_residuals: dict[str, float] = field(default_factory=dict)  # per bond, the largest |residual| of a step [J]
-
-    @property
-    def warnings(self) -> list[str]:
-        return [m.text for _, m in self.messages if m.status == "warning"]
-
-
 def run(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
         record: tuple[list[tuple[str, str]], list[str]], divergence_ratio: float | None = 0.05,
-        observers: Sequence[Observer] = ()) -> Run:
-    """Runs the platform system; returns the Run. A fixed-step run is watched by a divergence
-    monitor (threshold divergence_ratio; None: off). Raises RunFailed (with .run, the partial Run)
-    when an FMU fails or the coupling diverges."""
-    execution = Execution(structure, algorithm, control, record[0], record[1], clock="mechanics")
-    monitor = DivergenceMonitor(ratio=divergence_ratio) if divergence_ratio else None
-    start = time.perf_counter()
-    failure = None
-    try:
-        result = execution.run(stop_time, [*([monitor] if monitor else []), *observers])
-    except RunFailed as failed:
-        result, failure = failed.result, failed
-    wall = time.perf_counter() - start
-    outcome = Run(result, execution.energy_residuals, execution.steps, execution.rejected, wall,
-                  execution.fmi_seconds, execution.messages(), monitor,
-                  dict(zip(execution.bond_names, execution.bond_residual_max.tolist())))
-    execution.free()
-    if failure is not None:
-        failure.run = outcome
-        raise failure
+        observers: Sequence[Observer] = (), advice: bool = False) -> Outcome:
+    """Runs the platform system through the engine's one run path (time of the mechanics); returns
+    the Outcome. A fixed-step run is watched by a divergence monitor (threshold divergence_ratio;
+    None: off). Raises RunFailed (its outcome with the partial results) when an FMU fails or the
+    coupling diverges."""
+    monitor = [DivergenceMonitor(ratio=divergence_ratio)] if divergence_ratio else []
+    outcome = execute(structure, algorithm, control, stop_time, record[0], record[1], clock="mechanics",
+                      observers=[*monitor, *observers], advice=advice)
+    if outcome.failure is not None:
+        raise RunFailed(outcome.failure.error, outcome.result, outcome)
     return outcome
 
 
@@ -133,7 +101,7 @@ def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mappin
              trajectory_values: Mapping[str, object] | None = None, mechanics_outputs: Sequence[str] = (),
              drive_outputs: Sequence[str] = (), order: int = 1, algorithm: str = "gauss-seidel",
              divergence_ratio: float | None = 0.05, leg_values: Sequence[Mapping[str, object]] | None = None,
-             interface_jacobian: bool = False) -> Run:
+             interface_jacobian: bool = False) -> Outcome:
     """A platform run at a fixed step in one call (for studies and tests): the pose and reference
     and the chosen outputs recorded. leg_values: per drive, on top of drive_values."""
     from ..engine import FixedStep

@@ -1,0 +1,158 @@
+"""The one run path: `execute` runs a system once and returns its `Outcome` (the results, what the
+execution measured, what the FMUs logged, and the failure if the run stopped early); `Report` is
+the outcome's summary and its text. `python -m cosim run FILE.ssp`, a sweep's points and the
+platform's scenes all run through here, so a run is set up, freed, measured, advised and reported
+the same way whoever asks for it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .execution import Execution, RunFailed
+from .fmi import LogMessage
+from .observers import Diverged, Observer
+from .results import message_kinds
+from .settings import Algorithm, FixedStep, StepControl, control_name
+from .structure import SystemStructure
+
+
+@dataclass
+class Outcome:
+    """One run of a system: the results (named columns) up to where it got, per macro step the
+    largest energy residual of a bond and the step taken, the rejected steps, the wall time of the
+    stepping and the part of it inside the FMUs, every FMU message, per bond the largest residual
+    of a step, the observers that watched, and the failure (None for a run that reached its end)."""
+    name: str
+    result: np.ndarray
+    energy_residuals: np.ndarray
+    steps: np.ndarray
+    rejected: int
+    wall: float
+    fmi_seconds: float
+    control: str  # the step control's name: fixed, doubling, energy
+    messages: list[tuple[str, LogMessage]] = field(default_factory=list)
+    bond_residuals: dict[str, float] = field(default_factory=dict)  # [J]
+    observers: list[Observer] = field(default_factory=list)
+    failure: RunFailed | None = None
+
+    @property
+    def warnings(self) -> list[str]:
+        return [m.text for _, m in self.messages if m.status == "warning"]
+
+    @property
+    def simulated(self) -> float:
+        return float(self.result["time"][-1] - self.result["time"][0]) if len(self.result) else 0.0
+
+    @property
+    def diverged(self) -> bool:
+        return self.failure is not None and isinstance(self.failure.error, Diverged)
+
+    def observer(self, kind: type) -> Observer | None:
+        """The first observer of this kind that watched the run."""
+        return next((o for o in self.observers if isinstance(o, kind)), None)
+
+
+def execute(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
+            record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None, clock: str | None = None,
+            observers: Sequence[Observer] = (), advice: bool = False) -> Outcome:
+    """Runs `structure` from its start to stop_time and returns the Outcome; a run that an FMU or
+    an observer stops is an Outcome with its failure and the results up to then, not an exception.
+    advice: a fixed-step run that diverged probes shorter steps on the same system and its failure
+    says which one held (cosim.engine.advice). Raises before a single step for what makes the run
+    impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path."""
+    with Execution(structure, algorithm, control, record, names, clock=clock) as execution:
+        start = time.perf_counter()
+        failure = None
+        try:
+            result = execution.run(stop_time, observers)
+        except RunFailed as failed:
+            result, failure = failed.result, failed
+        wall = time.perf_counter() - start
+        outcome = Outcome(structure.name, result, execution.energy_residuals, execution.steps, execution.rejected,
+                          wall, execution.fmi_seconds, control_name(control), execution.messages(),
+                          dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers))
+    if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
+        from .advice import advice_text
+        failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
+                                                                    failure.error.time, stop_time),
+                                     failure.error.time), result)
+    outcome.failure = failure
+    return outcome
+
+
+@dataclass
+class Report:
+    """A run's summary (what `python -m cosim run` prints): the application's own lines (an
+    application's report adds `measured` after the energy line and `notes` after the warnings)."""
+    name: str
+    macro_steps: int
+    simulated: float
+    wall: float
+    fmi_seconds: float
+    largest_energy_residual: float  # [J] over the power bonds, per macro step
+    warnings: list[str]
+    failure: str | None = None
+    rejected_steps: int = 0
+    step_control: str = "fixed"
+    warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
+    log: Path | None = None  # where every FMU message was written
+    messages: list[tuple[str, LogMessage]] = field(default_factory=list, repr=False)  # everything logged
+
+    @classmethod
+    def of(cls, outcome: Outcome, simulated: float | None = None, **extra) -> "Report":
+        """The report of an outcome (simulated: the time the results cover, if thinned)."""
+        return cls(outcome.name, len(outcome.steps), outcome.simulated if simulated is None else simulated,
+                   outcome.wall, outcome.fmi_seconds, float(np.max(outcome.energy_residuals, initial=0.0)),
+                   outcome.warnings, str(outcome.failure) if outcome.failure else None, outcome.rejected,
+                   outcome.control, message_kinds(outcome.messages), messages=outcome.messages, **extra)
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.simulated / self.wall if self.wall > 0 else float("nan")
+
+    @property
+    def master_share(self) -> float:
+        return 1.0 - self.fmi_seconds / self.wall if self.wall > 0 else 0.0
+
+    def measured(self) -> list[str]:
+        return []
+
+    def notes(self) -> list[str]:
+        return []
+
+    def text(self) -> str:
+        steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"
+                                                     if self.step_control != "fixed" else "")
+        lines = [f"{self.name}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {steps}, "
+                 f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
+                 f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
+                 f"{self.largest_energy_residual:.2e} J", *self.measured()]
+        if self.warnings:
+            kinds = "; ".join(f"{n} x {kind}" for n, kind in self.warning_kinds[:3])
+            more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""
+            lines.append(f"{len(self.warnings)} warnings from the FMUs ({kinds}{more}), first: {self.warnings[0]}"
+                         + (f"; all in {self.log}" if self.log else ""))
+        lines += self.notes()
+        if self.failure:
+            lines.append(f"FAILED: {self.failure}")
+        return "\n".join(lines)
+
+    def row(self) -> dict[str, float]:
+        """The run's numbers as a sweep's row has them."""
+        return {"steps": self.macro_steps, "rejected": self.rejected_steps, "energy_residual": self.largest_energy_residual,
+                "real_time_factor": self.real_time_factor, "stepping_wall": self.wall}
+
+
+class RunStopped(RuntimeError):
+    """A run that stopped before its end, as a command reports it: its report (which says why),
+    the results up to then, and whether the coupling diverged (rather than an FMU failing)."""
+
+    def __init__(self, report: Report, result: np.ndarray, diverged: bool = False):
+        super().__init__(report.failure)
+        self.report, self.result, self.diverged = report, result, diverged
