@@ -15,18 +15,15 @@ import numpy as np
 from .observers import DivergenceMonitor, Progress
 from .outcome import Report, RunStopped, execute
 from .results import thin, write, write_log
-from .settings import from_strings
+from .settings import output_interval, recorded, system_settings
 from .structure import SystemStructure
 
 
 def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[str]]:
-    """What a run of `structure` records: its `record` setting ('component.variable=name ...'),
-    else every connected output."""
-    text = structure.settings.get("record")
-    if text:
-        pairs = [item.split("=", 1) for item in str(text).split()]
-        record = [tuple(source.split(".", 1)) for source, _ in pairs]
-        return record, [name for _, name in pairs]
+    """What a run of `structure` records: its `record` setting, else every connected output."""
+    chosen = recorded(structure.settings)
+    if chosen is not None:
+        return chosen
     outputs = list(dict.fromkeys(c.source for c in structure.connections))
     return outputs, [f"{c}.{v}" for c, v in outputs]
 
@@ -38,15 +35,12 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
     RunStopped (its report and partial results) when the run stopped early. progress: a progress
     bar on a terminal; advice: a diverged run probes for a step that holds (both off for a sweep's
     points)."""
-    settings = {k: str(v) for k, v in structure.settings.items() if k not in ("record", "output_interval")}
-    settings.update(overrides or {})
-    algorithm, control = from_strings(settings, structure.experiment.step)
+    algorithm, control = system_settings(structure.settings, structure.experiment.step, overrides)
     record, names = recording(structure)
     stop = structure.experiment.stop if stop_time is None else stop_time
     outcome = execute(structure, algorithm, control, stop, record, names,
                       observers=[DivergenceMonitor(), *([Progress(structure.name)] if progress else [])], advice=advice)
-    interval = structure.settings.get("output_interval")
-    result = thin(outcome.result, float(interval) if interval else None)
+    result = thin(outcome.result, output_interval(structure.settings))
     report = Report.of(outcome)
     if outcome.failure is not None:
         raise RunStopped(report, result, outcome.diverged)

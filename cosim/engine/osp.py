@@ -16,7 +16,7 @@ from pathlib import Path
 from fmpy import read_model_description
 from lxml import etree
 
-from .settings import EnergyControl, from_strings
+from .settings import EnergyControl, system_settings
 from .structure import SystemStructure
 
 OSP = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
@@ -30,8 +30,7 @@ def _element(parent, tag: str, text: str | None = None, **attributes) -> etree._
 
 
 def to_osp_xml(structure: SystemStructure, power_bonds: bool = True) -> etree._Element:
-    _, control = from_strings({k: str(v) for k, v in structure.settings.items()
-                               if k not in ("record", "output_interval")}, structure.experiment.step)
+    _, control = system_settings(structure.settings, structure.experiment.step)
     ecco = control if isinstance(control, EnergyControl) else EnergyControl(structure.experiment.step, rtol=1e-4,
                                                                             atol=1e-4, h_min=1e-5)
     root = etree.Element(f"{{{OSP}}}OspSystemStructure", nsmap={None: OSP}, version="0.1")

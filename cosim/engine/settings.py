@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
-from typing import Mapping
+from typing import Mapping, Sequence
 
 ALGORITHMS = ("jacobi", "gauss-seidel")
 
@@ -222,3 +222,41 @@ def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algori
         if isinstance(error, SettingsError):
             raise
         raise SettingsError(f"bad setting value: {error}") from None
+
+
+# -- a system's settings as its SSP annotation carries them: how it runs, and what it records ---
+
+OUTPUT_SETTINGS = ("record", "output_interval")
+
+
+def system_settings(settings: Mapping[str, object], default_step: float,
+                    overrides: Mapping[str, str] | None = None) -> tuple[Algorithm, StepControl]:
+    """The run settings of a system's settings (its output settings left aside), with overrides
+    (the command line's, a sweep point's) over them."""
+    values = {k: str(v) for k, v in settings.items() if k not in OUTPUT_SETTINGS}
+    values.update(overrides or {})
+    return from_strings(values, default_step)
+
+
+def output_settings(record: Sequence[tuple[str, str]], names: Sequence[str],
+                    interval: float | None = None) -> dict[str, str]:
+    """What a system records, as settings: record = 'component.variable=name ...', and the
+    interval results are written at (none: every macro step)."""
+    out = {"record": " ".join(f"{c}.{v}={n}" for (c, v), n in zip(record, names))}
+    if interval:
+        out["output_interval"] = repr(float(interval))
+    return out
+
+
+def recorded(settings: Mapping[str, object]) -> tuple[list[tuple[str, str]], list[str]] | None:
+    """The (component, variable) pairs and column names of a `record` setting, or None."""
+    text = settings.get("record")
+    if not text:
+        return None
+    pairs = [item.split("=", 1) for item in str(text).split()]
+    return [tuple(source.split(".", 1)) for source, _ in pairs], [name for _, name in pairs]
+
+
+def output_interval(settings: Mapping[str, object]) -> float | None:
+    interval = settings.get("output_interval")
+    return float(interval) if interval else None

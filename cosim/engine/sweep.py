@@ -135,11 +135,9 @@ class SystemPoint:
     def check(self, values: Mapping[str, Value]) -> None:
         """Raises ValueError (one line) when a point's names or values cannot run."""
         from .checks import check_parameters
-        from .settings import from_strings
+        from .settings import system_settings
         structure = self._with(self.structure(), values)
-        settings = {k: str(v) for k, v in structure.settings.items() if k not in ("record", "output_interval")}
-        settings.update(self._settings(values))
-        from_strings(settings, structure.experiment.step)
+        system_settings(structure.settings, structure.experiment.step, self._settings(values))
         check_parameters(structure)
 
     @staticmethod

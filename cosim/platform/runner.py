@@ -16,7 +16,7 @@ import numpy as np
 from ..engine import Experiment, FmuError, NoStep, ParameterError, Progress, RunFailed, SystemStructure
 from ..engine.outcome import Outcome, Report, RunStopped
 from ..engine.results import thin, write as write_results, write_log
-from ..engine.settings import to_strings
+from ..engine.settings import output_settings, to_strings
 from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of, scene_settings
@@ -105,11 +105,8 @@ def scene_structure(scene: Scene, designed: list[dict] | None | bool = False) ->
                                    experiment=Experiment(0.0, scene.duration, scene.step),
                                    interface_jacobian=scene.interface_jacobian)
     algorithm, control = scene_settings(scene)
-    structure.settings = to_strings(algorithm, control)
-    record, names = scene_record(scene)
-    structure.settings["record"] = " ".join(f"{c}.{v}={n}" for (c, v), n in zip(record, names))
-    if scene.output_interval:
-        structure.settings["output_interval"] = repr(scene.output_interval)
+    structure.settings = {**to_strings(algorithm, control), **output_settings(*scene_record(scene),
+                                                                               scene.output_interval)}
     return structure
 
 

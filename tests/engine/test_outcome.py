@@ -62,3 +62,13 @@ def test_a_scene_and_its_ssp_are_reported_alike(tmp_path):
     assert scene_report.simulated == pytest.approx(ssp_report.simulated, abs=1e-12)
     first = [line.split(": ", 1)[1].split(" s wall")[1] for line in (scene_report.text(), ssp_report.text())]
     assert first[0].splitlines()[0].split("real-time")[0] == first[1].splitlines()[0].split("real-time")[0]
+
+
+def test_what_a_system_records_is_written_and_read_by_one_pair_of_functions():
+    """The record setting's text (written for a scene's SSP, read by `run FILE.ssp`) round-trips,
+    names with dots and brackets included, and the run settings ignore it."""
+    from cosim.engine.settings import output_interval, output_settings, recorded, system_settings
+    record, names = [("mechanics", "pose.x"), ("pmsm1", "torque")], ["pose.x", "torque[1]"]
+    settings = {"algorithm": "jacobi", "order": "0", **output_settings(record, names, 2e-3)}
+    assert recorded(settings) == (record, names) and output_interval(settings) == 2e-3
+    assert system_settings(settings, 1e-3)[0] == Algorithm("jacobi", 0)
