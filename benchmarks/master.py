@@ -42,10 +42,10 @@ from cosim.platform.libcosim import run_in_libcosim  # noqa: E402
 from cosim.platform.runner import run_scene  # noqa: E402
 from cosim.platform.scene import load_scene  # noqa: E402
 from cosim.platform.sweep import difference  # noqa: E402
-from cosim.platform.system import POSE  # noqa: E402
+from cosim.platform.ports import POSE, per_leg  # noqa: E402
 
 SCENE = ROOT / "scenes" / "meng_eq35.toml"
-TORQUES = [f"torque[{i}]" for i in range(1, 7)]
+TORQUES = per_leg("torque")
 POSES = [f"pose.{a}" for a in POSE]
 FAST = ROOT / "scenes" / "meng_eq35_fast.toml"  # the same scene with the fast numerics
 ROUNDS = 5  # wall times: the best of this many, taken in rounds over the configurations

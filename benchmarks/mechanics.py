@@ -27,8 +27,8 @@ sys.path.insert(0, str(HERE.parent))
 from common import publish, run_stepping  # noqa: E402
 from cosim.engine.observers import TaskProgress  # noqa: E402
 from cosim.platform.platform_core import Core  # noqa: E402
+from cosim.platform.ports import POSE  # noqa: E402
 
-POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
 TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]
 CASES = [
     ("full model, RK4 1 ms (default)", {}),

@@ -17,9 +17,9 @@ import math
 import tomllib
 
 from ..engine.artifacts import ROOT
+from .ports import LEGS, POSE
 
 PARAMS = ROOT / "params"
-POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 def load(name: str) -> dict:
@@ -129,7 +129,7 @@ def halder_joints(c: dict) -> tuple[list[list[float]], list[list[float]], list[f
         theta_t[i] = theta_t[first] + (i - first) * math.pi / 3
     z_disc, z_com = g["disc_height"], g["disc_height"] + g["payload_com_above_disc"]
     lower, upper = [], []
-    for i in range(1, 7):
+    for i in LEGS:
         b = [g["base_radius"] * math.cos(theta_b[i]), g["base_radius"] * math.sin(theta_b[i]), 0.0]
         t = [g["top_radius"] * math.cos(theta_t[i]), g["top_radius"] * math.sin(theta_t[i]), z_disc]
         length = math.dist(b, t)

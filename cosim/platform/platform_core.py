@@ -19,8 +19,9 @@ import numpy as np
 from ..engine.artifacts import fmu_path, library_path
 from ..engine.checks import variables
 from ..engine.native import check_layout
+from .ports import LEGS as PORT_LEGS
 
-LEGS = 6
+LEGS = len(PORT_LEGS)  # the dynamics core's PLATFORM_LEGS
 D = ctypes.c_double
 
 

@@ -13,6 +13,11 @@ BODY_WRENCH = tuple(name.replace("load.", "load.body.") for name in WRENCH)  # t
 LEGS = range(1, 7)
 
 
+def per_leg(name: str) -> list[str]:
+    """A per-leg column's names, as a platform run records them: name[1] .. name[6]."""
+    return [f"{name}[{i}]" for i in LEGS]
+
+
 @dataclass(frozen=True)
 class DriveWiring:
     """Which mechanics outputs feed a drive and which drive output feeds the mechanics, per leg."""

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .ports import POSE
+from .system import units
 
 BUCKETS = 700  # per trace: each bucket's first, smallest and largest point (every peak and shock kept)
 
@@ -38,9 +39,15 @@ def _trace(t, y, name, **line):
     return go.Scatter(x=x, y=v, name=name, mode="lines", line=line or None)
 
 
-def _figures(result: np.ndarray) -> list[tuple[str, object]]:
+def _figures(result: np.ndarray, units: dict[str, str]) -> list[tuple[str, object]]:
     """(title, plotly figure) of every recorded output: pose against reference per DOF, each drive
-    quantity for the six legs, each other output alone."""
+    quantity for the six legs, each other output alone; units by variable name, as the FMUs
+    declare them (cosim.platform.system.units)."""
+
+    def axis(name: str) -> str:
+        unit = units.get(name.split("[")[0])
+        return f"{name} [{unit}]" if unit else name
+
     import plotly.graph_objects as go
     rows = result
     t = rows["time"]
@@ -48,10 +55,9 @@ def _figures(result: np.ndarray) -> list[tuple[str, object]]:
     figures, used = [], set()
     for a in POSE:
         if f"pose.{a}" in names:
-            unit = "m" if a in "xyz" else "rad"
             fig = go.Figure([_trace(t, rows[f"pose_ref.{a}"], "reference", dash="dash"),
                              _trace(t, rows[f"pose.{a}"], "actual")])
-            fig.update_layout(yaxis_title=f"{a} [{unit}]")
+            fig.update_layout(yaxis_title=axis(f"pose.{a}"))
             figures.append((f"pose {a}", fig))
             error = go.Figure([_trace(t, 1e3 * (rows[f"pose.{a}"] - rows[f"pose_ref.{a}"]), "error")])
             error.update_layout(yaxis_title=f"{a} error [{'mm' if a in 'xyz' else 'mrad'}]")
@@ -62,13 +68,13 @@ def _figures(result: np.ndarray) -> list[tuple[str, object]]:
     for quantity in per_leg:
         legs = [n for n in names if n.startswith(f"{quantity}[")]
         fig = go.Figure([_trace(t, rows[n], f"leg {n.split('[')[1].rstrip(']')}") for n in legs])
-        fig.update_layout(yaxis_title=quantity)
+        fig.update_layout(yaxis_title=axis(quantity))
         figures.append((f"drive {quantity}", fig))
         used |= set(legs)
     for name in names:
         if name not in used:
             fig = go.Figure([_trace(t, rows[name], name)])
-            fig.update_layout(yaxis_title=name)
+            fig.update_layout(yaxis_title=axis(name))
             figures.append((name, fig))
     for _, fig in figures:
         fig.update_layout(height=320, margin=dict(l=60, r=20, t=30, b=40), xaxis_title="time [s]",
@@ -103,7 +109,7 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
                 for a, e in zip(POSE, report.largest_error)]
     bonds = [(f"bond {name} [J]", f"{value:.3e}", repr(value)) for name, value in bond_residuals.items()]
     warnings = [(m.time, instance, m.text) for instance, m in messages if m.status in ("warning", "error", "fatal")]
-    figures = _figures(result)
+    figures = _figures(result, units(scene.drive))
     plots = "\n".join(f'<section class="plot"><h3>{html.escape(title)}</h3>'
                       f'{pio.to_html(fig, full_html=False, include_plotlyjs=False, config=dict(responsive=True))}'
                       f'</section>' for title, fig in figures)

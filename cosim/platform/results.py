@@ -10,6 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .ports import LEGS, POSE  # noqa: E402
+
 DOF = ["x (surge) [m]", "y (sway) [m]", "z (heave) [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"]
 
 
@@ -21,9 +23,8 @@ def save_figure(fig, path: Path) -> None:
     plt.close(fig)
 
 
-AXES = ("x", "y", "z", "roll", "pitch", "yaw")
-DRIVE_QUANTITIES = {"torque": ("motor torque", "N m"), "speed": ("motor speed", "rad/s"), "current.q": ("i_q", "A"),
-                    "force": ("motor force", "N"), "velocity": ("leg velocity", "m/s"), "current": ("current", "A")}
+DRIVE_QUANTITIES = {"torque": "motor torque", "speed": "motor speed", "current.q": "i_q", "force": "motor force",
+                    "velocity": "leg velocity", "current": "current"}
 
 
 def _steady_limits(ax, t, values, start: float, margin: float = 0.15) -> None:
@@ -46,7 +47,7 @@ def plot_tracking(result: np.ndarray, path: Path, title: str, source: str = "", 
     the paper's figure it corresponds to; `impacts` are (start, end) windows to mark."""
     t = result["time"]
     fig, axes = plt.subplots(6, 2, figsize=(12, 13), sharex=True)
-    for k, (label, a) in enumerate(zip(DOF, AXES)):
+    for k, (label, a) in enumerate(zip(DOF, POSE)):
         unit = "mm" if k < 3 else "mrad"
         error = 1e3 * (result[f"pose.{a}"] - result[f"pose_ref.{a}"])
         axes[k, 0].plot(t, result[f"pose_ref.{a}"], "k--", lw=1, label="reference")
@@ -75,22 +76,23 @@ def plot_tracking(result: np.ndarray, path: Path, title: str, source: str = "", 
     save_figure(fig, path)
 
 
-def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str, source: str = "",
-                impacts=(), settle: float = 0.5) -> None:
-    """Each drive's speed and effort (torque or force) with units, scaled to after the start-up,
-    and, for each impact, the effort enlarged around it: the shock the drives take while the pose
-    stays put is what Meng's Fig 8 shows."""
+def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str, units: dict[str, str],
+                source: str = "", impacts=(), settle: float = 0.5) -> None:
+    """Each drive's speed and effort (torque or force) with their units (by variable name, as
+    cosim.platform.system.units gives them), scaled to after the start-up, and, for each impact,
+    the effort enlarged around it: the shock the drives take while the pose stays put is what
+    Meng's Fig 8 shows."""
     t = result["time"]
     rows = 2 + (1 if impacts else 0)
     fig, axes = plt.subplots(rows, 1, figsize=(12, 4 * rows))
-    (speed_name, speed_unit), (effort_name, effort_unit) = DRIVE_QUANTITIES[speed], DRIVE_QUANTITIES[effort]
-    for i in range(1, 7):
+    (speed_name, speed_unit), (effort_name, effort_unit) = ((DRIVE_QUANTITIES[q], units[q]) for q in (speed, effort))
+    for i in LEGS:
         axes[0].plot(t, result[f"{speed}[{i}]"], lw=1, label=f"leg {i}")
         axes[1].plot(t, result[f"{effort}[{i}]"], lw=1, label=f"leg {i}")
     for ax, name, unit, var in ((axes[0], speed_name, speed_unit, speed), (axes[1], effort_name, effort_unit, effort)):
         ax.set(ylabel=f"{name} [{unit}]", xlabel="time [s]")
         if t[-1] > 2 * settle:
-            _steady_limits(ax, t, np.array([result[f"{var}[{i}]"] for i in range(1, 7)]), settle)
+            _steady_limits(ax, t, np.array([result[f"{var}[{i}]"] for i in LEGS]), settle)
         _mark(ax, impacts)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, ncol=6)
@@ -99,7 +101,7 @@ def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: 
     if impacts:
         start, end = impacts[0]
         window = (t >= start - 0.05) & (t <= end + 0.15)
-        for i in range(1, 7):
+        for i in LEGS:
             axes[2].plot(t[window], result[f"{effort}[{i}]"][window], lw=1, label=f"leg {i}")
         _mark(axes[2], impacts)
         axes[2].set(title=f"{effort_name} around the impact at {start:g} s", ylabel=f"{effort_name} [{effort_unit}]",

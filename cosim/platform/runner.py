@@ -21,7 +21,7 @@ from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of, scene_settings
 from .signals import scene_trajectory
-from .system import columns, platform_structure, run
+from .system import columns, platform_structure, run, units
 from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
 
 
@@ -196,8 +196,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
             impacts = sorted({(p.start, p.end) for p in scene.pulses})
             results.plot_tracking(result, out / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
             if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
-                results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed, drives,
-                                    impacts)
+                results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed,
+                                    units(scene.drive), drives, impacts)
             from .report_html import write_report
             report.html = write_report(out / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
                                        outcome.bond_residuals)

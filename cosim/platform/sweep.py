@@ -37,7 +37,7 @@ import numpy as np
 
 from ..engine.sweep import (STATISTICS, Axis, SweepError, SystemPoint, column_name, grid, latin_hypercube,
                             statistics, zipped)
-from .ports import DRIVES, POSE
+from .ports import DRIVES, LEGS, POSE, per_leg
 from .scene import SceneError, line_of, load_scene
 
 SCENE_REPORTS = {  # report name -> what it adds to a row
@@ -74,7 +74,7 @@ class ScenePoint:
         names = []
         for report in self.reports:
             names += {"tracking_error": [f"tracking_error.{a}" for a in POSE],
-                      "peak_effort": [f"peak_effort[{k}]" for k in range(1, 7)],
+                      "peak_effort": per_leg("peak_effort"),
                       "effort_error": ["effort_error", "effort_error_time"],
                       "steps": ["steps", "rejected"]}.get(report, [report])
         return names + [f"{s}.{c}" for c, stats in self.outputs for s in stats]
@@ -117,7 +117,7 @@ class ScenePoint:
                 row.update({f"tracking_error.{a}": float(e) for a, e in zip(POSE, report.largest_error)})
             elif name == "peak_effort":
                 row.update({f"peak_effort[{k}]": float(np.max(np.abs(result[f"{effort}[{k}]"]))) if len(result)
-                            and f"{effort}[{k}]" in result.dtype.names else float("nan") for k in range(1, 7)})
+                            and f"{effort}[{k}]" in result.dtype.names else float("nan") for k in LEGS})
             elif name == "steps":
                 row.update(steps=numbers["steps"], rejected=numbers["rejected"])
             elif name in ("energy_residual", "real_time_factor", "stepping_wall"):
@@ -134,7 +134,7 @@ class ScenePoint:
                                                                 - np.interp(at, self.reference["time"],
                                                                             self.reference[n])))) for n in poses)
             elif name == "effort_error":
-                names = [f"{effort}[{k}]" for k in range(1, 7)]
+                names = per_leg(effort)
                 peak = max(float(np.max(np.abs(self.reference[n]))) for n in names)
                 error, when = difference(result, self.reference, names, with_time=True)
                 row.update(effort_error=error / peak, effort_error_time=when)

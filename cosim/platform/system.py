@@ -69,6 +69,20 @@ def default_algorithm(drive: str, kind: str = "gauss-seidel", order: int = 1) ->
     return Algorithm(kind, order, sequence)
 
 
+def units(drive: str) -> dict[str, str]:
+    """The unit of every variable a platform run can record (the trajectory's, the mechanics' and
+    the drive's; outputs first where two share a name), as the FMUs' modelDescriptions declare it,
+    written for people (N.m -> N m), by variable name: a per-leg column `speed[3]` has the unit of
+    the drive's `speed`."""
+    from ..engine.checks import variables
+    found = [v for fmu in ("trajectory", "mechanics", DRIVES[drive].fmu) for v in variables(fmu_path(fmu)).values()]
+    out: dict[str, str] = {}
+    for v in sorted(found, key=lambda v: v.causality != "output"):
+        if v.unit:
+            out.setdefault(v.name, v.unit.replace(".", " "))
+    return out
+
+
 def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = ()
             ) -> tuple[list[tuple[str, str]], list[str]]:
     """What a platform run records and how the columns are named: pose_ref.<dof> (trajectory),

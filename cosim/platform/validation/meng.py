@@ -21,7 +21,8 @@ from ..platform_core import Core
 from ..runner import FIGURES, run_scene
 from ..scene import Scene, Signal, Sine, load_scene
 from ..signals import sine_motion
-from ..ports import POSE
+from ..system import units
+from ..ports import POSE, per_leg
 from .rows import Row
 
 SCENES = ROOT / "scenes"
@@ -55,20 +56,20 @@ def tracking(figures: Path | None = None) -> tuple[list[Row], dict]:
         figures.mkdir(parents=True, exist_ok=True)
         impacts = sorted({(p.start, p.end) for p in scene.pulses})
         results.plot_tracking(result, figures / "meng_eq35_tracking.png", scene.name, FIGURES["meng2010"][0], impacts)
-        results.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed",
+        results.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed", units("pmsm"),
                             FIGURES["meng2010"][1], impacts)
     quiet, _ = run_scene(meng_scene(pulses=[]))
     t = result["time"]
-    torque = np.column_stack([result[f"torque[{i}]"] for i in range(1, 7)])
-    speed = np.column_stack([result[f"speed[{i}]"] for i in range(1, 7)])
+    torque = np.column_stack([result[c] for c in per_leg("torque")])
+    speed = np.column_stack([result[c] for c in per_leg("speed")])
     ideal = inverse_torques(scene, t)
     # start: the drives' torque against the inverse model's along the reference
     shock = np.abs(torque - ideal).max(axis=1)
     band = 0.05 * np.abs(ideal).max()
     start_settling = _settling_time(t, shock, band, 0.0, 2.0)
     # impact: this run against the run without it
-    quiet_torque = np.column_stack([quiet[f"torque[{i}]"] for i in range(1, 7)])
-    quiet_speed = np.column_stack([quiet[f"speed[{i}]"] for i in range(1, 7)])
+    quiet_torque = np.column_stack([quiet[c] for c in per_leg("torque")])
+    quiet_speed = np.column_stack([quiet[c] for c in per_leg("speed")])
     torque_change = np.abs(torque - quiet_torque).max(axis=1)
     after = (t >= 2.5) & (t <= 3.5)
     impact_peak = float(torque_change[after].max())
@@ -209,7 +210,7 @@ def table_5(closed_loop: bool = True, rows: list[int] | None = None) -> tuple[li
                 scene.mechanics_parameters = dict(values)
                 result, _ = run_scene(scene)
                 late = result["time"] >= 0.5
-                loop[name] = np.column_stack([result[f"torque[{i}]"][late] for i in range(1, 7)])
+                loop[name] = np.column_stack([result[c][late] for c in per_leg("torque")])
         entry = dict(row=row + 1, amplitude=amplitude, w=w, paper=(paper_1, paper_2))
         for model, torques in (("inverse", inverse), ("closed loop", loop)):
             if not torques:
