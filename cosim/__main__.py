@@ -154,8 +154,8 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
 
 
 def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | None) -> int:
-    from .engine.sweep import SweepError, column_name, run_sweep
-    from .platform.sweep import load_sweep, plot_sweep
+    from .engine.sweep import SweepError, column_name, plot_sweep, run_sweep
+    from .platform.sweep import load_sweep
     if workers is not None and workers < 0:
         print(f"error: --workers {workers}: must be 0 (no Dask) or more", file=sys.stderr)
         return 2
@@ -179,7 +179,7 @@ def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | 
               f"{row['message'][:200]}")
     written = [*outcome.files]
     if sweep.plot is not None:
-        written.append(plot_sweep(outcome.rows, sweep.plot, out / f"{sweep.name}.png", sweep.name))
+        written.append(plot_sweep(outcome.rows, sweep.plot, out / f"{sweep.name}.png", sweep.name, sweep.units))
     print("results: " + ", ".join(str(f) for f in written))
     return 0
 

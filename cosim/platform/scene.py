@@ -41,12 +41,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..engine.tomlfile import line_of
 from ..engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .ports import DRIVES, POSE
 from .system import default_algorithm
@@ -148,25 +148,6 @@ ITEM_KEYS = {"sines": {"amplitude", "frequency", "phase"}, "steps": {"time", "he
 CAPACITY = {"sines": 3, "steps": 2, "ramps": 2, "pulses": 2}  # what the trajectory FMU holds
 STEP_CONTROLS = ("fixed", "doubling", "energy")
 NATIVE_DRIVE = {"meng2010": "pmsm", "sumnu2015": "linear"}  # the drive each platform's papers use
-
-
-def line_of(text: str, table: str, key: str) -> int:
-    """The line (1-based) on which `key` stands inside [table] (or its header; also inside an
-    inline table there), the first line naming it anywhere else, or 0."""
-    assignment = re.compile(r'(^|[{,\s])"?' + re.escape(key) + r'"?\s*=')
-    current, found = "", 0
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split("#", 1)[0].strip()
-        if line.startswith("["):
-            current = line.strip("[]").strip()
-            if current == (f"{table}.{key}" if table else key):
-                return number
-            continue
-        if assignment.search(line):
-            if current == table:
-                return number
-            found = found or number
-    return found
 
 
 def key_path(key: str) -> list[str]:

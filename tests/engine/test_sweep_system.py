@@ -36,3 +36,22 @@ def test_a_sweep_of_an_ssp_system_reports_what_each_run_gives(tmp_path):
         assert row["rms.mass.position"] == np.sqrt(np.mean(position ** 2))
         assert row["steps"] == report.macro_steps == 500 and row["energy_residual"] == report.largest_energy_residual
     assert path.read_bytes() == before  # the sweep changes nothing in the archive
+
+
+def test_the_sweep_file_reader_is_the_engine_s_with_pluggable_targets(tmp_path):
+    """The engine reads a sweep file of an SSP system on its own (no application's target given);
+    a target it was not given is named as the one-line error, with the kinds it knows."""
+    import pytest
+    from cosim.engine.sweep import SYSTEM, SweepError, load_sweep
+    system = oscillator(0.2)
+    system.settings = to_strings(Algorithm("jacobi", 0), FixedStep(1e-3))
+    write_ssp(system, tmp_path / "oscillator.ssp")
+    path = tmp_path / "sweep.toml"
+    path.write_text('[sweep]\nsystem = "oscillator.ssp"\n[[axis]]\nkey = "order"\nvalues = [0, 1]\n'
+                    '[report]\noutputs = { "mass.position" = ["max"] }\n')
+    sweep = load_sweep(path, {"system": SYSTEM})
+    assert [p["order"] for p in sweep.points] == [0, 1] and isinstance(sweep.evaluate, SystemPoint)
+    assert sweep.columns == ["steps", "rejected", "energy_residual", "real_time_factor", "max.mass.position"]
+    path.write_text('[sweep]\nscene = "meng.toml"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n')
+    with pytest.raises(SweepError, match=r"sweep.toml:2: 'sweep.scene' is not a known key .*system"):
+        load_sweep(path, {"system": SYSTEM})
