@@ -507,7 +507,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* FMU state                                                                                   */
 
 /* A state as the importer holds it: a tag that names this build and the snapshot's size and
- * checksum, whether the outputs were current, then the snapshot. A state pointer is checked by its
+ * checksum, whether the outputs were current, then the snapshot. The checksum covers every byte
+ * that is read back from the tag's end on (the outputs_stale flag and the snapshot). A state pointer is checked by its
  * tag before anything is copied (a pointer from another FMU, or memory that is no state, is
  * refused without reading past the tag: every state is larger than it), and a restored snapshot is
  * validated as if its values had been set one by one. */
@@ -524,19 +525,28 @@ typedef struct {
 
 static const char STATE_MAGIC[8] = "STEWST1";
 
-static unsigned long long fnv1a(const void *data, size_t n) {
+#define FNV_OFFSET 1469598103934665603ULL
+
+static unsigned long long fnv1a_from(unsigned long long hash, const void *data, size_t n) {
     const unsigned char *bytes = (const unsigned char *)data;
-    unsigned long long hash = 1469598103934665603ULL;
     for (size_t i = 0; i < n; i++) hash = (hash ^ bytes[i]) * 1099511628211ULL;
     return hash;
+}
+
+static unsigned long long fnv1a(const void *data, size_t n) { return fnv1a_from(FNV_OFFSET, data, n); }
+
+/* The snapshot, then the outputs_stale flag. */
+static unsigned long long state_checksum(const StoredState *stored) {
+    return fnv1a_from(fnv1a(&stored->s, sizeof(FmuSnapshot)), &stored->tag.outputs_stale,
+                      sizeof stored->tag.outputs_stale);
 }
 
 static void tag_state(StoredState *stored, int outputs_stale) {
     memcpy(stored->tag.magic, STATE_MAGIC, sizeof stored->tag.magic);
     stored->tag.guid_hash = fnv1a(MODEL_GUID, strlen(MODEL_GUID));
     stored->tag.size = sizeof(FmuSnapshot);
-    stored->tag.checksum = fnv1a(&stored->s, sizeof(FmuSnapshot));
     stored->tag.outputs_stale = outputs_stale;
+    stored->tag.checksum = state_checksum(stored);
 }
 
 /* Is this a state of this build, unaltered? Logs why not. */
@@ -546,7 +556,8 @@ static int state_is_ours(FmuInstance *fmu, const char *call, const StoredState *
         LOG_ERROR(fmu, "%s: not a state of this build of %s (%s)", call, MODEL_IDENTIFIER_STRING, MODEL_GUID);
         return 0;
     }
-    if (check_sum && stored->tag.checksum != fnv1a(&stored->s, sizeof(FmuSnapshot))) {
+    if (check_sum && (stored->tag.checksum != state_checksum(stored) ||
+                      (stored->tag.outputs_stale != 0 && stored->tag.outputs_stale != 1))) {
         LOG_ERROR(fmu, "%s: the state's bytes were altered (checksum mismatch)", call);
         return 0;
     }

@@ -108,6 +108,24 @@ def test_altered_state_bytes_are_refused(make, name):
     fmu.do_step(1e-3)  # the instance is still usable
 
 
+@pytest.mark.parametrize("name", FMUS)
+def test_every_byte_of_the_state_that_is_read_back_is_checked(make, name):
+    """The tag's outputs_stale flag (bytes 32-35) is inside the checksum: one bit flipped there
+    was accepted before, and fmi2GetReal right after fmi2SetFMUstate then returned the outputs of
+    before the last fmi2SetReal instead of those at fmi2GetFMUstate."""
+    fmu = make(name)
+    state = fmu.get_state()
+    data = bytes(fmu.serialize_state(state))
+    for offset in range(32, 36):
+        for bit in range(8):
+            flipped = bytearray(data)
+            flipped[offset] ^= 1 << bit
+            with pytest.raises(FmuError, match="altered"):
+                fmu.deserialize_state(bytes(flipped), 0.0)
+    fmu.free_state(state)
+    fmu.do_step(1e-3)
+
+
 def test_a_restored_snapshot_is_validated(make):
     """A snapshot whose checksum matches but whose values break the variable table (as memory
     corruption or a hand-made state would) is refused and leaves the instance as it was."""
@@ -124,7 +142,7 @@ def test_a_restored_snapshot_is_validated(make):
     time_offset = 8  # after the phase (int, padded): the communication point
     snapshot[time_offset:time_offset + 8] = struct.pack("<d", float("nan"))
     checksum = 1469598103934665603
-    for byte in snapshot:
+    for byte in bytes(snapshot) + bytes(data[32:36]):  # the snapshot, then the outputs_stale flag
         checksum = ((checksum ^ byte) * 1099511628211) % 2 ** 64
     data[8 + 16:8 + 24] = struct.pack("<Q", checksum)
     data[tag:] = snapshot
