@@ -129,9 +129,18 @@ class Execution:
         if not (isinstance(stop_time, (int, float)) and math.isfinite(stop_time)):
             raise NoStep(f"the stop time {stop_time!r} is not a finite number")
         if isinstance(self.control, FixedStep):
-            if int(round((stop_time - self.time) / self.control.step)) < 1:
+            steps = round((stop_time - self.time) / self.control.step)
+            if steps < 1:
                 raise NoStep(f"the macro step {self.control.step:g} s does not fit once between t = {self.time:g} s "
                              f"and the stop time {stop_time:g} s")
+            finer = round(self.control.step / self.control.startup_step) if self.control.startup_time > 0 else 1
+            rows = steps + (finer - 1) * (round(self.control.startup_time / self.control.step)
+                                          + sum(round((b - a) / self.control.step) + 1 for a, b in self.control.windows))
+            needed, available = 8.0 * rows * len(self.names), _memory()
+            if needed > 0.5 * available:
+                raise NoStep(f"the run would record {rows:.3g} rows of {len(self.names)} columns ({needed / 2 ** 30:.3g} "
+                             f"GiB), more than half of this machine's {available / 2 ** 30:.3g} GiB: shorten it, or "
+                             "record fewer outputs or take longer steps")
         elif stop_time - self.time <= 1e-12 * max(1.0, abs(stop_time)):
             raise NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
 
@@ -176,6 +185,15 @@ class Execution:
         for instance in self.instances.values():
             instance.free()
         self.instances = {}
+
+
+def _memory() -> float:
+    """This machine's physical memory [bytes] (inf where it cannot be read)."""
+    import os
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return math.inf
 
 
 class NoStep(ValueError):

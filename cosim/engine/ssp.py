@@ -228,6 +228,67 @@ def _connection(text: str, where: str) -> Connection:
     return Connection((s_component, s_variable), (t_component, t_variable))
 
 
+# an SSD connector's kind -> the FMU causalities it may stand for
+CONNECTOR_CAUSALITIES = {"input": {"input"}, "output": {"output"}, "parameter": {"parameter"},
+                         "calculatedParameter": {"calculatedParameter"}, "inout": {"input", "output"}}
+
+
+def _near(name: str, names) -> str:
+    import difflib
+    near = difflib.get_close_matches(name, list(names), 1)
+    return f" (did you mean '{near[0]}'?)" if near else ""
+
+
+def _check_against_fmus(system: etree._Element, connection_elements: list, folder: Path, where: str) -> None:
+    """SSP's rules and the FMUs' modelDescriptions, before anything is instantiated: each
+    declared connector is a variable of its component's FMU with a matching causality; each
+    connection joins a declared output connector to a declared input connector of components the
+    system has, and each input takes at most one connection."""
+    from .checks import variables
+    declared: dict[str, dict[str, etree._Element]] = {}
+    found: dict[str, dict] = {}
+    for element in system.findall("ssd:Elements/ssd:Component", NS):
+        name, source = element.get("name"), element.get("source")
+        try:
+            found[name] = variables(folder / source)
+        except Exception as error:  # not an FMU, or no modelDescription it can read
+            raise SspError(f"{where}:{element.sourceline}: component '{name}': {source} is not an FMU that can be "
+                           f"read ({type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''})") from None
+        declared[name] = {}
+        for connector in element.findall("ssd:Connectors/ssd:Connector", NS):
+            variable, kind = connector.get("name"), connector.get("kind")
+            if variable not in found[name]:
+                raise SspError(f"{where}:{connector.sourceline}: connector '{variable}' of component '{name}': "
+                               f"{Path(source).name} has no such variable{_near(variable, found[name])}")
+            causality = found[name][variable].causality
+            if causality not in CONNECTOR_CAUSALITIES.get(kind, {kind}):
+                raise SspError(f"{where}:{connector.sourceline}: connector '{variable}' of component '{name}' is "
+                               f"declared {kind}, but {Path(source).name} has it as {causality}")
+            declared[name][variable] = connector
+    fed: dict[tuple[str, str], int] = {}
+    for c in connection_elements:
+        for end, component, connector, wanted in (("start", c.get("startElement"), c.get("startConnector"), "output"),
+                                                  ("end", c.get("endElement"), c.get("endConnector"), "input")):
+            if component not in declared:
+                raise SspError(f"{where}:{c.sourceline}: connection {end}s at component '{component}', which the "
+                               f"system does not have{_near(str(component), declared)}")
+            if connector not in declared[component]:
+                hint = (_near(connector, declared[component]) or
+                        (f" ({found[component][connector].causality} of its FMU, but not declared as a connector)"
+                         if connector in found[component] else ""))
+                raise SspError(f"{where}:{c.sourceline}: connection {end}s at '{component}.{connector}', which is no "
+                               f"connector of '{component}'{hint}")
+            kind = declared[component][connector].get("kind")
+            if wanted not in CONNECTOR_CAUSALITIES.get(kind, {kind}):
+                raise SspError(f"{where}:{c.sourceline}: connection {end}s at '{component}.{connector}', an {kind} "
+                               f"connector: a connection runs from an output to an input")
+        target = (c.get("endElement"), c.get("endConnector"))
+        if target in fed:
+            raise SspError(f"{where}:{c.sourceline}: input '{target[0]}.{target[1]}' takes a second connection "
+                           f"(the first at line {fed[target]}): an input takes one")
+        fed[target] = c.sourceline
+
+
 def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructure:
     """The system of an SSP archive (.ssp) or of an SSD file in an unpacked one. An archive is
     unpacked to `extract_to` (default: a new temporary folder). Raises SspError naming the file
@@ -282,8 +343,10 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                         value = folder / value  # a file that travelled with the archive
                     parameters[name] = value
         components.append(Component(element.get("name"), source, parameters))
+    connection_elements = system.findall("ssd:Connections/ssd:Connection", NS)
     connections = [Connection((c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector")))
-                   for c in system.findall("ssd:Connections/ssd:Connection", NS)]
+                   for c in connection_elements]
+    _check_against_fmus(system, connection_elements, folder, where)
     experiment, settings, bonds = Experiment(), {}, []
     default = root.find("ssd:DefaultExperiment", NS)
     if default is not None:

@@ -219,6 +219,8 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
 
     def items(table: str, values: dict, key: str, kind) -> list:
         out = []
+        if not isinstance(values.get(key, []), list):
+            raise fail(table, key, f"= {values[key]!r} must be a list of inline tables ({', '.join(sorted(ITEM_KEYS[key]))})")
         if key != "pulses" and len(values.get(key, [])) > CAPACITY[key]:
             raise fail(table, key, f"has {len(values[key])} entries; the trajectory FMU holds {CAPACITY[key]}")
         for entry in values.get(key, []):
@@ -249,10 +251,11 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                           if NATIVE_DRIVE.get(parameter_set) != kind else None)
     if drive_set == "none":
         drive_set = None
-    if drive_set is not None and (not isinstance(drive_set, str) or not (PARAMS / f"{drive_set}.toml").is_file()):
-        known = ", ".join(p.stem for p in sorted(PARAMS.glob("*_*.toml"))) or "none"
-        raise fail("drive", "parameter_set", f"= {drive_set!r}: no drive set params/{drive_set}.toml (known: {known}, "
-                   "or 'none')")
+    drive_sets = [p.stem for p in sorted(PARAMS.glob("*_*.toml"))]  # <platform>_<drive kind>.toml
+    if drive_set is not None and (not isinstance(drive_set, str) or drive_set not in drive_sets):
+        known = ", ".join(drive_sets) or "none"
+        raise fail("drive", "parameter_set", f"= {drive_set!r} is not one of the project's drive sets (known: {known}, "
+                   "or 'none'; a platform's set goes in [mechanics])")
     algorithm = coupling.get("algorithm", "gauss-seidel")
     if algorithm not in ("gauss-seidel", "jacobi"):
         raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")

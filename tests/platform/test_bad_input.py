@@ -34,6 +34,16 @@ CASES = {
         ":4: load.pulses (load.force.z.pulse[1].end): rejected by trajectory:"),
     "step longer than the run": ("[scene]\nduration = 0.0005\nstep = 0.001\n",
                                  ":3: scene.step = 0.001 s, duration 0.0005 s: the macro step 0.001 s does not fit once"),
+    # found by mutating the shipped scene (issue 28): each was an internal-error traceback
+    "sines as a number": (MENG.replace("sines = [{amplitude = 0.1, frequency = 0.2}]", "sines = 0", 1),
+                          ":27: 'trajectory.x.sines' = 0 must be a list of inline tables"),
+    "sines as infinity": (MENG.replace("sines = [{amplitude = 0.1, frequency = 0.2}]", "sines = inf", 1),
+                          ":27: 'trajectory.x.sines' = inf must be a list of inline tables"),
+    "the [mechanics] header deleted": (MENG.replace("\n[mechanics]\n", "\n", 1),
+                                       ":12: 'drive.parameter_set' = 'meng2010' is not one of the project's drive sets"),
+    "a run whose results would not fit in memory": (MENG.replace("duration = 10.0", "duration = 1e12"),
+                                                    ":5: scene.step = 0.001 s, duration 1e+12 s: the run would record "
+                                                    "1e+15 rows of 31 columns"),
 }
 
 
@@ -75,6 +85,50 @@ def test_bad_command_line_arguments_are_one_line(arguments, message, earlier_res
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
     assert_untouched(earlier_results)
+
+
+def ssd_mutant(tmp_path, change) -> str:
+    """The Meng scene's exported SSD, unpacked beside its resources, with one change."""
+    import zipfile
+    archive = tmp_path / "meng.ssp"
+    assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive)]) == 0
+    with zipfile.ZipFile(archive) as z:
+        z.extractall(tmp_path / "unpacked")
+    ssd = tmp_path / "unpacked" / "SystemStructure.ssd"
+    text = ssd.read_text()
+    changed = change(text)
+    assert changed != text
+    ssd.write_text(changed)
+    return str(ssd)
+
+
+CONNECTION = '<ssd:Connection startElement="mechanics" startConnector="leg[1].angle_ref" endElement="pmsm1" ' \
+             'endConnector="angle_ref"/>'
+
+
+@pytest.mark.parametrize("change,message", [
+    (lambda t: t.replace('startConnector="leg[1].angle_ref"', 'startConnector="leg[0].angle_ref"'),
+     "connection starts at 'mechanics.leg[0].angle_ref', which is no connector of 'mechanics'"),
+    (lambda t: t.replace('<ssd:Connector name="leg[1].angle_ref" kind="output">',
+                         '<ssd:Connector name="leg[1].angle_rfe" kind="output">'),
+     "connector 'leg[1].angle_rfe' of component 'mechanics': mechanics.fmu has no such variable (did you mean "
+     "'leg[1].angle_ref'?)"),
+    (lambda t: t.replace('<ssd:Connector name="leg[1].angle_ref" kind="output">',
+                         '<ssd:Connector name="leg[1].angle_ref" kind="input">'),
+     "connector 'leg[1].angle_ref' of component 'mechanics' is declared input, but mechanics.fmu has it as output"),
+    (lambda t: t.replace(CONNECTION, CONNECTION + CONNECTION.replace("leg[1].angle_ref", "leg[2].angle_ref")),
+     "input 'pmsm1.angle_ref' takes a second connection"),
+])
+def test_a_broken_ssd_is_one_line_before_anything_is_instantiated(tmp_path, change, message, capsys):
+    """Each connector against its FMU's modelDescription and each connection against SSP's rules
+    (issue 28: a connection to a variable the FMU lacks was a KeyError traceback, a connector
+    the FMU lacks was accepted without a word)."""
+    path = ssd_mutant(tmp_path, change)
+    capsys.readouterr()
+    assert main(["run", path, "--duration", "0.01", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and message in err, err
+    assert err.startswith(f"error: {path}:") and not (tmp_path / "out").exists()
 
 
 def test_a_folder_given_as_the_scene_is_one_line(capsys):
