@@ -5,6 +5,10 @@
 #                                 (1000 more, printed so a failure can be replayed)
 #   bash scripts/fuzz.sh long     100 000 sequences per FMU (seed 1)
 #   bash scripts/fuzz.sh replay MODEL SEED INDEX    one sequence, every call printed
+#   bash scripts/fuzz.sh long-inputs              10 000 mutants of each input file kind (seed 1)
+# CI also fuzzes the files a user writes (tests/fuzz/fuzz_inputs.py): seeded mutations of every
+# shipped scene and sweep file and of an exported SSD and SSV, each run briefly through the CLI;
+# any traceback, hang, exit other than 0/1/2 or multi-line error fails it.
 # Each run also checks for leaks (LeakSanitizer: every sequence instantiates and frees an instance)
 # and steps six instances on six threads against a sequential run (ThreadSanitizer reports races).
 # Exits non-zero on any violation, sanitizer report or difference.
@@ -24,6 +28,8 @@ export TSAN_OPTIONS=halt_on_error=1
 mode=${1:-ci}
 start=$(date +%s)
 case "$mode" in
+  long-inputs)
+    exec .venv/bin/python tests/fuzz/fuzz_inputs.py --long ;;
   replay)
     exec "build-fuzz/fuzz_$2" --seed "$3" --replay "$4" --verbose ;;
   long)
@@ -34,7 +40,8 @@ case "$mode" in
     for m in $MODELS; do
       for seed in 1 2 "$new_seed"; do "build-fuzz/fuzz_$m" --seed "$seed" --sequences 1000; done
       "build-fuzz/threads_$m"
-    done ;;
-  *) echo "usage: bash scripts/fuzz.sh [ci | long | replay MODEL SEED INDEX]" >&2; exit 2 ;;
+    done
+    .venv/bin/python tests/fuzz/fuzz_inputs.py --mutants 40 ;;
+  *) echo "usage: bash scripts/fuzz.sh [ci | long | long-inputs | replay MODEL SEED INDEX]" >&2; exit 2 ;;
 esac
 echo "fuzz: done in $(( $(date +%s) - start )) s, no violations, sanitizer reports or differences"

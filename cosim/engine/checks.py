@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Mapping
 
 
 from .structure import SystemStructure, Value
@@ -72,15 +73,20 @@ def problem(variable, value: Value) -> str | None:
 def check_parameters(structure: SystemStructure) -> None:
     """Raises ParameterError for the first parameter value its FMU cannot take."""
     for component in structure.components:
-        known = variables(component.fmu)
-        for name, value in component.parameters.items():
-            if name not in known:
-                close = [n for n in known if n.lower() == name.lower() or _near(n, name)]
-                hint = f" (did you mean '{close[0]}'?)" if close else ""
-                raise ParameterError(component.name, name, value, f"no such variable{hint}", component.fmu.stem)
-            reason = problem(known[name], value)
-            if reason:
-                raise ParameterError(component.name, name, value, reason, component.fmu.stem)
+        check_values(component.name, component.fmu, component.parameters)
+
+
+def check_values(component: str, fmu: Path, values: Mapping[str, Value]) -> None:
+    """Raises ParameterError for the first of `values` (by variable name) that the FMU cannot take."""
+    known = variables(fmu)
+    for name, value in values.items():
+        if name not in known:
+            close = [n for n in known if n.lower() == name.lower() or _near(n, name)]
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise ParameterError(component, name, value, f"no such variable{hint}", fmu.stem)
+        reason = problem(known[name], value)
+        if reason:
+            raise ParameterError(component, name, value, reason, fmu.stem)
 
 
 def _near(a: str, b: str) -> bool:

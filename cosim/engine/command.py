@@ -53,11 +53,12 @@ def run_ssp(path: Path, out: Path | None, overrides: Mapping[str, str] | None = 
     from .checks import ParameterError
     from .execution import NoStep
     from .fmi import FmuError
+    from .settings import SettingsError
     from .ssp import SspError, read_ssp
     structure = read_ssp(path)
     try:
         result, report = run_structure(structure, overrides, stop_time)
-    except (ParameterError, NoStep) as error:  # the SSP's values or times, before a single step
+    except (ParameterError, NoStep, SettingsError) as error:  # the SSP's values, settings or times, before a step
         raise SspError(f"{path}: {error}") from None
     except FmuError as error:  # an FMU that rejects the SSP's values when it is set up
         raise SspError(f"{path}: {error}") from None

@@ -18,7 +18,7 @@ from .coupling import Coupling
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
 from .observers import Diverged, Observer, Recorder
-from .settings import Algorithm, FixedStep, StepControl, control_name
+from .settings import Algorithm, FixedStep, SettingsError, StepControl, control_name
 from .structure import SystemStructure
 
 
@@ -48,8 +48,8 @@ class Execution:
         self.structure, self.algorithm, self.control = structure, algorithm, control
         self.control_name = control_name(control)
         if algorithm.sequence and sorted(algorithm.sequence) != sorted(c.name for c in structure.components):
-            raise ValueError(f"the Gauss-Seidel sequence {list(algorithm.sequence)} must name every component "
-                             f"once: {[c.name for c in structure.components]}")
+            raise SettingsError(f"the Gauss-Seidel sequence {list(algorithm.sequence)} must name every component "
+                                f"once: {[c.name for c in structure.components]}", "sequence")
         self.instances: dict[str, FmuInstance] = structure.instantiate(logging_on)
         try:
             self.coupling = Coupling(self.instances, structure.connections, structure.bonds, interpolating)

@@ -253,8 +253,15 @@ def recorded(settings: Mapping[str, object]) -> tuple[list[tuple[str, str]], lis
     text = settings.get("record")
     if not text:
         return None
-    pairs = [item.split("=", 1) for item in str(text).split()]
-    return [tuple(source.split(".", 1)) for source, _ in pairs], [name for _, name in pairs]
+    record, names = [], []
+    for item in str(text).split():
+        source, _, name = item.partition("=")
+        component, _, variable = source.partition(".")
+        if not (component and variable and name):
+            raise SettingsError(f"record: {item!r} is not component.variable=name", "record")
+        record.append((component, variable))
+        names.append(name)
+    return record, names
 
 
 def output_interval(settings: Mapping[str, object]) -> float | None:

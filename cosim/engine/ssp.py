@@ -15,6 +15,7 @@ it there too.
 
 from __future__ import annotations
 
+import math
 import shutil
 import tempfile
 import zipfile
@@ -228,6 +229,37 @@ def _connection(text: str, where: str) -> Connection:
     return Connection((s_component, s_variable), (t_component, t_variable))
 
 
+def _float(element: etree._Element, attribute: str, default: float, where: str, positive: bool = False) -> float:
+    """A number attribute, finite (and positive if asked), or one line naming it."""
+    text = element.get(attribute)
+    try:
+        value = default if text is None else float(text)
+    except ValueError:
+        value = float("nan")
+    if not math.isfinite(value) or (positive and value <= 0):
+        raise SspError(f"{where}:{element.sourceline}: {attribute} = {text!r} must be a {'positive ' if positive else ''}"
+                       "finite number")
+    return value
+
+
+def _check_record(settings: dict, found: dict[str, dict], run: etree._Element, where: str) -> None:
+    """The annotation's record setting names variables of the system's components."""
+    from .settings import SettingsError, recorded
+    element = run.find("cosim:Setting[@name='record']", NS)
+    line = element.sourceline if element is not None else run.sourceline
+    try:
+        chosen = recorded(settings)
+    except SettingsError as error:
+        raise SspError(f"{where}:{line}: {error}") from None
+    for component, variable in (chosen[0] if chosen else []):
+        if component not in found:
+            raise SspError(f"{where}:{line}: record names component '{component}', which the system does not "
+                           f"have{_near(component, found)}")
+        if variable not in found[component]:
+            raise SspError(f"{where}:{line}: record names '{component}.{variable}', which its FMU does not "
+                           f"have{_near(variable, found[component])}")
+
+
 # an SSD connector's kind -> the FMU causalities it may stand for
 CONNECTOR_CAUSALITIES = {"input": {"input"}, "output": {"output"}, "parameter": {"parameter"},
                          "calculatedParameter": {"calculatedParameter"}, "inout": {"input", "output"}}
@@ -239,7 +271,7 @@ def _near(name: str, names) -> str:
     return f" (did you mean '{near[0]}'?)" if near else ""
 
 
-def _check_against_fmus(system: etree._Element, connection_elements: list, folder: Path, where: str) -> None:
+def _check_against_fmus(system: etree._Element, connection_elements: list, folder: Path, where: str) -> dict[str, dict]:
     """SSP's rules and the FMUs' modelDescriptions, before anything is instantiated: each
     declared connector is a variable of its component's FMU with a matching causality; each
     connection joins a declared output connector to a declared input connector of components the
@@ -287,6 +319,7 @@ def _check_against_fmus(system: etree._Element, connection_elements: list, folde
             raise SspError(f"{where}:{c.sourceline}: input '{target[0]}.{target[1]}' takes a second connection "
                            f"(the first at line {fed[target]}): an input takes one")
         fed[target] = c.sourceline
+    return found
 
 
 def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructure:
@@ -346,15 +379,15 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
     connection_elements = system.findall("ssd:Connections/ssd:Connection", NS)
     connections = [Connection((c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector")))
                    for c in connection_elements]
-    _check_against_fmus(system, connection_elements, folder, where)
+    found = _check_against_fmus(system, connection_elements, folder, where)
     experiment, settings, bonds = Experiment(), {}, []
     default = root.find("ssd:DefaultExperiment", NS)
     if default is not None:
-        experiment.start = float(default.get("startTime", "0"))
-        experiment.stop = float(default.get("stopTime", "1"))
+        experiment.start = _float(default, "startTime", 0.0, where)
+        experiment.stop = _float(default, "stopTime", 1.0, where)
         run = default.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/cosim:Run", NS)
         if run is not None:
-            experiment.step = float(run.get("step", experiment.step))
+            experiment.step = _float(run, "step", experiment.step, where, positive=True)
             settings = {s.get("name"): s.get("value") for s in run.findall("cosim:Setting", NS)}
             for b in run.findall("cosim:PowerBond", NS):
                 effort, flow = (_connection(b.get(k, ""), f"{where}:{b.sourceline}") for k in ("effort", "flow"))
@@ -362,6 +395,7 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                 if any(c is not None and c not in connections for c in (effort, flow, slope)):
                     raise SspError(f"{where}:{b.sourceline}: power bond of connections that the system lacks")
                 bonds.append(Bond(effort, flow, slope))
+            _check_record(settings, found, run, where)
     names = [c.name for c in components]
     for c in connections:
         for component, _ in (c.source, c.target):

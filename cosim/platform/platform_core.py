@@ -74,6 +74,8 @@ def _number(value: object) -> float:
     """A start value as the FMU holds it (Booleans and Integers as whole numbers)."""
     if isinstance(value, str):
         return 1.0 if value == "true" else 0.0 if value == "false" else float(value)
+    if not isinstance(value, (bool, int, float, np.number)):
+        raise ValueError(f"{value!r} is not a number")
     return float(value)
 
 
@@ -99,6 +101,11 @@ def mechanics_value(values: Mapping[str, object], name: str) -> object:
 
 class LayoutImpossible(ValueError):
     """Mechanics parameters that give no platform (the FMU refuses them at initialization too)."""
+
+
+class SingularPose(ValueError):
+    """A pose at which the platform's dynamics have no answer (a singular leg Jacobian or mass
+    matrix: a pose out of reach, or the joints crossing)."""
 
 
 def build(values: Mapping[str, object] | None = None, dll: ctypes.CDLL | None = None) -> Platform:
@@ -177,7 +184,8 @@ class Core:
         dx, diag = (D * 13)(), Diagnostics()
         status = self.dll.platform_derivatives(ctypes.byref(self.p), arr(x), arr(torque), arr(force), None,
                                                arr(wrench), dx, ctypes.byref(diag))
-        assert status == 0
+        if status != 0:
+            raise SingularPose("the mass matrix is singular at this state")
         return np.array(dx[:]), diag
 
     def energy(self, x) -> float:
@@ -188,13 +196,15 @@ class Core:
         """Per leg at `pose`: the inertia along its axis with the other legs held [kg] and the axial
         force that holds the pose [N] (what the mechanics FMU outputs as leg[i].plant.*)."""
         inertia, force = (D * LEGS)(), (D * LEGS)()
-        assert self.dll.platform_leg_plants(ctypes.byref(self.p), arr(self.state(pose)), inertia, force) == 0
+        if self.dll.platform_leg_plants(ctypes.byref(self.p), arr(self.state(pose)), inertia, force) != 0:
+            raise SingularPose(f"the legs are singular at the pose {np.round(np.asarray(pose, float), 6).tolist()}")
         return np.array(inertia[:]), np.array(force[:])
 
     def inverse_dynamics(self, pose, rate, acceleration, wrench=np.zeros(6)) -> np.ndarray:
         out = (D * LEGS)()
-        assert self.dll.platform_inverse_dynamics(ctypes.byref(self.p), arr(pose), arr(rate), arr(acceleration),
-                                                  arr(wrench), out) == 0
+        if self.dll.platform_inverse_dynamics(ctypes.byref(self.p), arr(pose), arr(rate), arr(acceleration),
+                                              arr(wrench), out) != 0:
+            raise SingularPose(f"the leg Jacobian is singular at the pose {np.round(np.asarray(pose, float), 6).tolist()}")
         return np.array(out[:])
 
 

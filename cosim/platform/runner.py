@@ -21,6 +21,7 @@ from .parameter_sets import drive_set, scene_mechanics
 from .ports import DRIVES, POSE
 from .scene import Scene, SceneError, line_of, scene_settings
 from .signals import scene_trajectory
+from .platform_core import LayoutImpossible, SingularPose
 from .system import columns, platform_structure, run, units
 from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
 
@@ -155,6 +156,9 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     if isinstance(error, NoStep):
         return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'scene', 'step')}: scene.step = "
                           f"{scene.step:g} s, duration {scene.duration:g} s: {error}")
+    if isinstance(error, (LayoutImpossible, SingularPose)):  # the platform the scene asks for, at its start pose
+        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'mechanics', 'parameters')}: the platform "
+                          f"of [mechanics] at its start pose: {error}")
     if isinstance(error, KeyError) and "no variable" in str(error):  # a recorded output the FMU lacks
         names = set(scene.outputs_mechanics)
         key = "mechanics" if any(f"'{n}'" in str(error) for n in names) else "drive"
@@ -169,16 +173,16 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
     FMU fails or the coupling diverges. progress: a bar on a terminal; advice: a diverged run
     probes for a step that holds (both off for a sweep's points)."""
-    designed, tuning = scene_design(scene)
-    structure = scene_structure(scene, designed)
     algorithm, control = scene_settings(scene)
     record = scene_record(scene)
     try:
+        designed, tuning = scene_design(scene)
+        structure = scene_structure(scene, designed)
         outcome = run(structure, algorithm, control, scene.duration, record,
                       observers=[Progress(scene.name)] if progress else [], advice=advice)
     except RunFailed as failed:  # the partial run comes with it
         outcome = failed.outcome
-    except (ParameterError, FmuError, NoStep, KeyError) as error:  # found before a single step
+    except (ParameterError, FmuError, NoStep, KeyError, LayoutImpossible, SingularPose) as error:  # before a step
         mapped = scene_error(scene, error)
         if mapped is None:
             raise
@@ -211,7 +215,7 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
     late = result["time"] >= 0.1 * scene.duration
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in POSE])
-    report = RunReport.of(outcome, simulated=float(result["time"][-1]), largest_error=errors, tuning=tuning,
-                          diverged=outcome.diverged)
+    report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
+                          tuning=tuning, diverged=outcome.diverged)
     report.name = scene.name
     return report

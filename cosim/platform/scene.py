@@ -203,6 +203,8 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         return SceneError(f"{path}:{line_of(text, table, key)}: '{where}' {problem}")
 
     def check_keys(table: str, values: dict, allowed: set[str]) -> None:
+        if not isinstance(values, dict):
+            raise fail("", table, f"= {values!r} must be a table")
         for key in values:
             if key not in allowed:
                 raise fail(table, key, f"is not a known key (known here: {', '.join(sorted(allowed))})")
@@ -215,7 +217,29 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         value = values[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and not value > 0):
             raise fail(table, key, f"= {value!r} must be a {'positive ' if positive else ''}number")
+        if not math.isfinite(value):
+            raise fail(table, key, f"= {value!r} must be a finite number")
         return float(value)
+
+    def choice(table: str, values: dict, key: str, default: str, options, what: str) -> str:
+        value = values.get(key, default)
+        if not isinstance(value, str) or value not in options:
+            raise fail(table, key, f"= {value!r} {what} ({', '.join(map(repr, options))})")
+        return value
+
+    def parameters(table: str, values: dict, fmu: str) -> dict[str, Any]:
+        """[<table>.parameters] checked against the FMU's modelDescription: names, types, bounds."""
+        given = values.get("parameters", {})
+        if not isinstance(given, dict):
+            raise fail(table, "parameters", f"= {given!r} must be a table of FMU variable = value")
+        from ..engine.artifacts import fmu_path
+        from ..engine.checks import ParameterError, check_values
+        try:
+            check_values(table, fmu_path(fmu), given)
+        except ParameterError as error:
+            raise SceneError(f"{path}:{line_of(text, f'{table}.parameters', error.variable)}: {table}.parameters."
+                             f'"{error.variable}" = {error.value!r}: {error.reason} ({error.fmu})') from None
+        return dict(given)
 
     def items(table: str, values: dict, key: str, kind) -> list:
         out = []
@@ -235,13 +259,14 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
 
     check_keys("", data, SCHEMA[""])
     for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"):
+        if not isinstance(data.get(table, {}), dict):
+            raise fail("", table, f"= {data[table]!r} must be a table ([{table}])")
         check_keys(table, data.get(table, {}), SCHEMA[table])
     scene, drive, mechanics = data.get("scene", {}), data.get("drive", {}), data.get("mechanics", {})
     coupling = data.get("coupling", {})
-    kind = drive.get("kind", "pmsm")
-    if kind not in DRIVES:
-        raise fail("drive", "kind", f"= {kind!r} is not a drive kind ({', '.join(DRIVES)})")
-    parameter_set = mechanics.get("parameter_set", "meng2010")
+    kind = choice("drive", drive, "kind", "pmsm", tuple(DRIVES), "is not a drive kind")
+    parameter_set = choice("mechanics", mechanics, "parameter_set", "meng2010", ("meng2010", "sumnu2015"),
+                           "is not a platform's parameter set")
     # a drive on the platform its defaults were designed for keeps them; a swapped one is designed
     tuning = drive.get("tuning", "defaults" if NATIVE_DRIVE.get(parameter_set) == kind else "auto")
     if tuning not in ("auto", "defaults"):
@@ -260,11 +285,8 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     if algorithm not in ("gauss-seidel", "jacobi"):
         raise fail("coupling", "algorithm", f"= {algorithm!r}: use 'gauss-seidel' or 'jacobi'")
     order = coupling.get("order", 1)
-    if order not in (0, 1, 2):
+    if not isinstance(order, int) or isinstance(order, bool) or order not in (0, 1, 2):
         raise fail("coupling", "order", f"= {order!r}: use 0, 1 or 2")
-    parameter_set = mechanics.get("parameter_set", "meng2010")
-    if parameter_set not in ("meng2010", "sumnu2015"):
-        raise fail("mechanics", "parameter_set", f"= {parameter_set!r}: use 'meng2010' or 'sumnu2015'")
 
     step_control = coupling.get("step_control", "fixed")
     if step_control not in STEP_CONTROLS:
@@ -273,7 +295,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                   if key in coupling}
     atol = number("coupling", coupling, "atol", positive=True) if "atol" in coupling else None
     threads = coupling.get("threads", 1)
-    if threads not in (1, 2) or isinstance(threads, bool):
+    if not isinstance(threads, int) or isinstance(threads, bool) or threads not in (1, 2):
         raise fail("coupling", "threads", f"= {threads!r}: use 1, or 2 to step the drives on two threads")
     interface_jacobian = coupling.get("interface_jacobian", False)
     if not isinstance(interface_jacobian, bool):
@@ -332,7 +354,12 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
             raise fail("outputs", key, "must be a list of variable names")
         names[key] = value
     interval = number("outputs", outputs, "interval", positive=True) if "interval" in outputs else None
-    mass_set, mechanics_parameters = mechanics.get("mass_set", "heavy"), dict(mechanics.get("parameters", {}))
+    from .parameter_sets import load as load_parameter_set
+    mass_set = choice("mechanics", mechanics, "mass_set", "heavy",
+                      tuple(load_parameter_set(parameter_set).get("mass_sets", {"heavy": None})), "is not a mass set of "
+                      f"{parameter_set}")
+    mechanics_parameters = parameters("mechanics", mechanics, "mechanics")
+    drive_parameters = parameters("drive", drive, DRIVES[kind].fmu)
     if at_neutral:
         from .parameter_sets import scene_mechanics
         from .platform_core import neutral_pose
@@ -344,7 +371,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
             trajectory[dof].offset = float(pose[POSE.index(dof)])
     loaded = Scene(path=path, name=scene.get("name", path.stem),
                     duration=number("scene", scene, "duration", positive=True), step=number("scene", scene, "step", 1e-3, positive=True), drive=kind,
-                    drive_parameters=dict(drive.get("parameters", {})), parameter_set=parameter_set,
+                    drive_parameters=drive_parameters, parameter_set=parameter_set,
                     mass_set=mass_set, mechanics_parameters=mechanics_parameters,
                     algorithm=algorithm, order=order, trajectory=trajectory, pulses=pulses, table=table_file,
                     interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,

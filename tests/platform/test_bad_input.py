@@ -44,6 +44,18 @@ CASES = {
     "a run whose results would not fit in memory": (MENG.replace("duration = 10.0", "duration = 1e12"),
                                                     ":5: scene.step = 0.001 s, duration 1e+12 s: the run would record "
                                                     "1e+15 rows of 31 columns"),
+    # found by tests/fuzz/fuzz_inputs.py (each was an internal-error traceback)
+    "an order of -0.0": (MENG.replace("order = 1", "order = -0.0"), ":17: 'coupling.order' = -0.0: use 0, 1 or 2"),
+    "a platform set that is a table": (MENG.replace('parameter_set = "meng2010"', "parameter_set = {}"),
+                                       ":13: 'mechanics.parameter_set' = {} is not a platform's parameter set"),
+    "a mass set that is a number": (MENG.replace('parameter_set = "meng2010"', 'parameter_set = "meng2010"\nmass_set = 3'),
+                                    ":14: 'mechanics.mass_set' = 3 is not a mass set of meng2010 ('heavy')"),
+    "a start pose that is a table": (MENG.replace('parameter_set = "meng2010"', 'parameter_set = "meng2010"\n'
+                                                  '[mechanics.parameters]\n"initial.pose.z" = {}'),
+                                     ':15: mechanics.parameters."initial.pose.z" = {}: must be a finite number (mechanics)'),
+    "a start pose out of reach": (MENG.replace('parameter_set = "meng2010"', 'parameter_set = "meng2010"\n'
+                                               '[mechanics.parameters]\n"initial.pose.y" = -1e300'),
+                                  ":14: the platform of [mechanics] at its start pose: the legs are singular at the pose"),
 }
 
 

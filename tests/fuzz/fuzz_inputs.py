@@ -1,0 +1,270 @@
+"""The files a user writes, under hostile edits: seeded mutations of every shipped scene, every
+shipped sweep file and the Meng scene's exported SSD and SSV, each run briefly through the CLI
+(`python -m cosim run` / `sweep`), asserting that it ends with exit 0 (ran), 1 (a run that
+failed, with its report) or 2 (one line: the file, the place, what and why), never with a
+traceback, an exit 3 or a hang.
+
+    .venv/bin/python tests/fuzz/fuzz_inputs.py                     CI: seed 1 and a new seed (printed),
+                                                                  --mutants per file kind and seed (default 40)
+    .venv/bin/python tests/fuzz/fuzz_inputs.py --long              10 000 mutants per file kind (seed 1)
+    .venv/bin/python tests/fuzz/fuzz_inputs.py --replay KIND SEED INDEX    one mutant: its diff and all it printed
+
+A mutation is one of: a value replaced by a hostile one (0, a negative, 1e300, 1e-300, nan, inf,
+text, a boolean, an empty list or table, a string where a number stood), a line deleted,
+duplicated or swapped with another, a name misspelt, the file cut short. Each mutant runs in a
+forked child of this process (the modules and FMUs loaded once), two at a time, with a time limit.
+Exits 1 on any violation, each printed with its one-line replay.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import io
+import os
+import random
+import re
+import shutil
+import signal
+import sys
+import tempfile
+import time
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from cosim.__main__ import main  # noqa: E402
+
+HOSTILE = ["0", "-1", "-0.0", "1e300", "-1e300", "1e-300", "nan", "inf", "-inf", '"text"', '""', "true", "false",
+           "[]", "{}", "[1, 2]", '"neutral"', "3.5", "1e12"]
+HOSTILE_XML = ["0", "-1", "1e300", "1e-300", "nan", "inf", "-inf", "text", "", "true", "leg[0].angle", "pmsm9",
+               "resources/nothing.fmu", "0.5", "1e12", "&amp;"]
+TIME_LIMIT = 60.0  # [s] per mutant: a brief run takes well under a second
+
+
+@dataclass
+class Base:
+    kind: str      # scene, sweep, ssd, ssv
+    name: str      # the mutant's path in the work tree (beside the files it refers to)
+    text: str      # the unmutated file
+    command: list  # the CLI call; {root} is the work tree, {out} the output folder
+
+
+def _brief_sweep(text: str) -> str:
+    """A shipped sweep file made brief: its runs 5 ms long, each axis cut to two values."""
+    text = re.sub(r"(?m)^duration\s*=.*$", "duration = 0.005", text)
+    return re.sub(r"(?m)^(values\s*=\s*\[)([^,\]]+),\s*([^,\]]+)(,[^\]]*)?\]", r"\1\2, \3]", text)
+
+
+def bases(root: Path) -> dict[str, list[Base]]:
+    """The unmutated files of each kind, in a work tree `root` with what they refer to: the
+    shipped scenes and sweep files, and the Meng scene's exported SSP unpacked."""
+    shutil.copytree(ROOT / "scenes", root / "scenes")
+    shutil.copytree(ROOT / "sweeps", root / "sweeps")
+    out: dict[str, list[Base]] = {"scene": [], "sweep": [], "ssd": [], "ssv": []}
+    for path in sorted((root / "scenes").glob("*.toml")):
+        out["scene"].append(Base("scene", "scenes/mutant.toml", path.read_text(),
+                                 ["run", "{root}/scenes/mutant.toml", "--duration", "0.02", "--no-plots", "--out", "{out}"]))
+    for path in sorted((root / "sweeps").glob("*.toml")):
+        out["sweep"].append(Base("sweep", "sweeps/mutant.toml", _brief_sweep(path.read_text()),
+                                 ["sweep", "{root}/sweeps/mutant.toml", "--workers", "0", "--out", "{out}"]))
+    archive = root / "meng.ssp"
+    with _quiet():
+        assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive)]) == 0
+    with zipfile.ZipFile(archive) as z:
+        z.extractall(root / "ssp")
+    archive.unlink()
+    ssd = root / "ssp" / "SystemStructure.ssd"
+    out["ssd"].append(Base("ssd", "ssp/mutant.ssd", ssd.read_text(),
+                           ["run", "{root}/ssp/mutant.ssd", "--duration", "0.02", "--out", "{out}"]))
+    for ssv in sorted((root / "ssp" / "resources").glob("*.ssv")):
+        # the mutant SSV stands in for the original beside the unchanged SSD (restored after each run)
+        out["ssv"].append(Base("ssv", f"ssp/resources/{ssv.name}", ssv.read_text(),
+                               ["run", "{root}/ssp/SystemStructure.ssd", "--duration", "0.02", "--out", "{out}"]))
+    return out
+
+
+class _quiet:
+    def __enter__(self):
+        self.saved = sys.stdout, sys.stderr
+        sys.stdout = sys.stderr = io.StringIO()
+
+    def __exit__(self, *exc):
+        sys.stdout, sys.stderr = self.saved
+
+
+def mutate(text: str, rng: random.Random, xml: bool) -> tuple[str, str]:
+    """One mutation of `text` and what it was."""
+    lines = text.split("\n")
+    kind = rng.choice(["value", "value", "value", "delete", "duplicate", "swap", "misspell", "cut"])
+    if kind == "value":
+        pattern = r'="([^"]*)"' if xml else r'=\s*("[^"\n]*"|\[[^\]\n]*\]|\{[^}\n]*\}|[^\s,}\]#\n]+)'
+        spots = list(re.finditer(pattern, text))
+        if spots:
+            spot = rng.choice(spots)
+            new = rng.choice(HOSTILE_XML if xml else HOSTILE)
+            replaced = f'="{new}"' if xml else f"= {new}"
+            return text[:spot.start()] + replaced + text[spot.end():], f"value at {spot.start()} -> {new!r}"
+        kind = "delete"
+    if kind == "misspell":
+        names = list(re.finditer(r'[A-Za-z_][A-Za-z_.\[\]0-9]{2,}', text))
+        name = rng.choice(names)
+        word = name.group(0)
+        k = rng.randrange(len(word) - 1)
+        wrong = word[:k] + word[k + 1] + word[k] + word[k + 2:] if rng.random() < 0.5 else word[:k] + word[k + 1:]
+        return text[:name.start()] + wrong + text[name.end():], f"{word!r} -> {wrong!r}"
+    if kind == "cut":
+        at = rng.randrange(len(text))
+        return text[:at], f"cut at {at} of {len(text)}"
+    i = rng.randrange(len(lines))
+    if kind == "delete":
+        return "\n".join(lines[:i] + lines[i + 1:]), f"line {i + 1} deleted"
+    if kind == "duplicate":
+        return "\n".join(lines[:i + 1] + lines[i:]), f"line {i + 1} duplicated"
+    j = rng.randrange(len(lines))
+    lines[i], lines[j] = lines[j], lines[i]
+    return "\n".join(lines), f"lines {i + 1} and {j + 1} swapped"
+
+
+def mutant(bases_of_kind: list[Base], seed: int, index: int) -> tuple[Base, str, str]:
+    rng = random.Random(f"{seed}:{index}")
+    base = bases_of_kind[index % len(bases_of_kind)]
+    text, what = mutate(base.text, rng, xml=base.kind in ("ssd", "ssv"))
+    return base, text, what
+
+
+def run_child(base: Base, text: str, root: Path, log: Path) -> int:
+    """Forks a child that writes the mutant into the work tree `root` and runs the CLI on it
+    (output in root/out, emptied first); returns its pid."""
+    pid = os.fork()
+    if pid:
+        return pid
+    code = 4
+    try:
+        fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        os.dup2(fd, 1)
+        os.dup2(fd, 2)
+        sys.stdout = os.fdopen(1, "w", buffering=1)
+        sys.stderr = os.fdopen(2, "w", buffering=1)
+        shutil.rmtree(root / "out", ignore_errors=True)
+        (root / base.name).write_text(text)
+        code = main([a.replace("{root}", str(root)).replace("{out}", str(root / "out")) for a in base.command])
+    except SystemExit as done:
+        code = done.code if isinstance(done.code, int) else 2
+    except BaseException:  # noqa: BLE001 - what main did not catch is the finding
+        import traceback
+        traceback.print_exc()
+        code = 5
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code if isinstance(code, int) else 4)
+
+
+def verdict(code: int | None, output: str) -> str | None:
+    """Why a mutant's end breaks the rules, or None."""
+    if code is None:
+        return f"no end within {TIME_LIMIT:g} s (a hang)"
+    if "Traceback" in output or code not in (0, 1, 2):
+        return f"exit {code}" + (" with a traceback" if "Traceback" in output else "")
+    errors = [line for line in output.splitlines() if line.startswith("error:")]
+    if code == 2 and len(errors) != 1:
+        return f"exit 2 with {len(errors)} error lines"
+    if code == 2 and any(not line.strip() for line in errors):
+        return "exit 2 with an empty error"
+    return None
+
+
+def fuzz(kinds: dict[str, list[Base]], seed: int, count: int, pristine: Path, parallel: int = 2) -> list[str]:
+    """Runs `count` mutants of each kind, `parallel` at a time, each slot in its own copy of the
+    work tree; returns the violations, each with its replay line."""
+    violations, running = [], {}
+    todo = [(kind, index) for kind in kinds for index in range(count)]
+    tally = {kind: {0: 0, 1: 0, 2: 0} for kind in kinds}
+    start = time.time()
+    slots = [pristine.parent / f"slot{k}" for k in range(parallel)]
+    for slot in slots:
+        if not slot.exists():
+            shutil.copytree(pristine, slot)
+    free = list(range(parallel))
+    while todo or running:
+        while todo and free:
+            kind, index = todo.pop(0)
+            slot = free.pop()
+            base, text, what = mutant(kinds[kind], seed, index)
+            log = slots[slot] / "log.txt"
+            pid = run_child(base, text, slots[slot], log)
+            running[pid] = (kind, index, what, slot, log, time.time(), base)
+        time.sleep(0.002)
+        for pid, (kind, index, what, slot, log, began, base) in list(running.items()):
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if not done and time.time() - began < TIME_LIMIT:
+                continue
+            if not done:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+                code = None
+            else:
+                code = os.waitstatus_to_exitcode(status)
+            output = log.read_text(errors="replace")
+            (slots[slot] / base.name).write_text(base.text)  # the next mutant starts from the original
+            problem = verdict(code, output)
+            if problem:
+                last = output.strip().splitlines()[-3:] if output.strip() else []
+                violations.append(f"{kind} seed {seed} mutant {index} ({what}): {problem}: {' | '.join(last)}\n"
+                                  f"  replay: .venv/bin/python tests/fuzz/fuzz_inputs.py --replay {kind} {seed} {index}")
+            elif code in (0, 1, 2):
+                tally[kind][code] += 1
+            del running[pid]
+            free.append(slot)
+    for kind, counts in tally.items():
+        print(f"inputs: {kind}: seed {seed}, {count} mutants: {counts[0]} ran, {counts[1]} failed runs with their "
+              f"report, {counts[2]} one-line errors, {sum(v.startswith(kind + ' ') for v in violations)} violations",
+              flush=True)
+    print(f"inputs: seed {seed} done in {time.time() - start:.0f} s", flush=True)
+    return violations
+
+
+def replay(kinds: dict[str, list[Base]], kind: str, seed: int, index: int, root: Path) -> int:
+    base, text, what = mutant(kinds[kind], seed, index)
+    print(f"{kind} seed {seed} mutant {index}: {what}")
+    sys.stdout.writelines(difflib.unified_diff(base.text.splitlines(True), text.splitlines(True), "original", "mutant"))
+    log = root.parent / "replay.txt"
+    pid = run_child(base, text, root, log)
+    _, status = os.waitpid(pid, 0)
+    code = os.waitstatus_to_exitcode(status)
+    print(f"--- exit {code}; it printed:\n{log.read_text(errors='replace')}")
+    problem = verdict(code, log.read_text(errors="replace"))
+    print(f"verdict: {problem or 'within the rules'}")
+    return 1 if problem else 0
+
+
+def arguments() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--mutants", type=int, default=40, help="mutants per file kind and seed (CI)")
+    parser.add_argument("--long", action="store_true", help="10 000 mutants per file kind, seed 1")
+    parser.add_argument("--seed", type=int, help="one seed instead of 1 and a new one")
+    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv")
+    parser.add_argument("--replay", nargs=3, metavar=("KIND", "SEED", "INDEX"))
+    return parser.parse_args()
+
+
+if __name__ == "__main__":
+    args = arguments()
+    with tempfile.TemporaryDirectory(prefix="fuzz_inputs_") as folder:
+        work = Path(folder) / "pristine"
+        kinds = {k: v for k, v in bases(work).items() if k in args.kinds.split(",")}
+        if args.replay:
+            sys.exit(replay(kinds, args.replay[0], int(args.replay[1]), int(args.replay[2]), work))
+        seeds = [1] if args.long else ([args.seed] if args.seed is not None else [1, int(time.time()) % 1000000007])
+        count = 10000 if args.long else args.mutants
+        print(f"inputs: seeds {', '.join(map(str, seeds))}, {count} mutants per file kind and seed "
+              f"(replay: .venv/bin/python tests/fuzz/fuzz_inputs.py --replay KIND SEED INDEX)", flush=True)
+        found = [v for seed in seeds for v in fuzz(kinds, seed, count, work)]
+        for line in found:
+            print(line)
+        print(f"inputs: {len(found)} violations (tracebacks, hangs, exits other than 0/1/2, multi-line errors)")
+        sys.exit(1 if found else 0)
