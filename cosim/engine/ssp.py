@@ -19,6 +19,7 @@ import math
 import shutil
 import tempfile
 import zipfile
+import zlib
 from pathlib import Path
 
 from fmpy import read_model_description
@@ -338,6 +339,8 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                 archive.extractall(folder)
         except zipfile.BadZipFile:
             raise SspError(f"{path}: not an SSP archive (not a zip file)") from None
+        except (OSError, EOFError, ValueError, zlib.error, NotImplementedError) as error:  # a damaged archive
+            raise SspError(f"{path}: a damaged SSP archive, its files cannot be unpacked ({error})") from None
         ssd, where = folder / "SystemStructure.ssd", f"{path}!SystemStructure.ssd"
         if not ssd.exists():
             shutil.rmtree(folder, ignore_errors=True)

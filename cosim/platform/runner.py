@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import Experiment, FmuError, NoStep, ParameterError, Progress, RunFailed, SystemStructure
+from ..engine.artifacts import fmu_path
+from ..engine.checks import variables
 from ..engine.outcome import Outcome, Report, RunStopped
 from ..engine.results import thin, write as write_results, write_log
 from ..engine.settings import output_settings, to_strings
@@ -150,8 +152,10 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     if isinstance(error, FmuError) and error.call.startswith(("fmi2Instantiate", "fmi2Set", "fmi2Enter", "fmi2Exit",
                                                              "fmi2Setup")):
         detail = "; ".join(m.text for m in error.messages) or "the FMU logged no reason"
-        named = re.search(r"'([^']+)'", detail)
-        where = located(scene, error.instance, named.group(1)) if named else f"{scene.path}"
+        named = re.search(r"'([^']+)'", detail)  # the variable the FMU names, if it is one of its variables
+        fmu = {"trajectory": "trajectory", "mechanics": "mechanics"}.get(error.instance, DRIVES[scene.drive].fmu)
+        known = named is not None and named.group(1) in variables(fmu_path(fmu))
+        where = located(scene, error.instance, named.group(1)) if known else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):
         return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'scene', 'step')}: scene.step = "

@@ -1,5 +1,6 @@
 """The files a user writes, under hostile edits: seeded mutations of every shipped scene, every
-shipped sweep file and the Meng scene's exported SSD and SSV, each run briefly through the CLI
+shipped sweep file, the Meng scene's exported SSP archive and its SSD and SSV, and a trajectory
+table (CSV) a scene reads, each run briefly through the CLI
 (`python -m cosim run` / `sweep`), asserting that it ends with exit 0 (ran), 1 (a run that
 failed, with its report) or 2 (one line: the file, the place, what and why), never with a
 traceback, an exit 3 or a hang.
@@ -11,7 +12,8 @@ traceback, an exit 3 or a hang.
 
 A mutation is one of: a value replaced by a hostile one (0, a negative, 1e300, 1e-300, nan, inf,
 text, a boolean, an empty list or table, a string where a number stood), a line deleted,
-duplicated or swapped with another, a name misspelt, the file cut short. Each mutant runs in a
+duplicated or swapped with another, a name misspelt, the file cut short (an archive: a byte
+changed, bytes cut out, or cut short). Each mutant runs in a
 forked child of this process (the modules and FMUs loaded once), two at a time, with a time limit.
 Exits 1 on any violation, each printed with its one-line replay.
 """
@@ -47,7 +49,7 @@ TIME_LIMIT = 60.0  # [s] per mutant: a brief run takes well under a second
 
 @dataclass
 class Base:
-    kind: str      # scene, sweep, ssd, ssv
+    kind: str      # scene, sweep, ssd, ssv, table, ssp
     name: str      # the mutant's path in the work tree (beside the files it refers to)
     text: str      # the unmutated file
     command: list  # the CLI call; {root} is the work tree, {out} the output folder
@@ -64,7 +66,7 @@ def bases(root: Path) -> dict[str, list[Base]]:
     shipped scenes and sweep files, and the Meng scene's exported SSP unpacked."""
     shutil.copytree(ROOT / "scenes", root / "scenes")
     shutil.copytree(ROOT / "sweeps", root / "sweeps")
-    out: dict[str, list[Base]] = {"scene": [], "sweep": [], "ssd": [], "ssv": []}
+    out: dict[str, list[Base]] = {"scene": [], "sweep": [], "ssd": [], "ssv": [], "table": [], "ssp": []}
     for path in sorted((root / "scenes").glob("*.toml")):
         out["scene"].append(Base("scene", "scenes/mutant.toml", path.read_text(),
                                  ["run", "{root}/scenes/mutant.toml", "--duration", "0.02", "--no-plots", "--out", "{out}"]))
@@ -76,7 +78,8 @@ def bases(root: Path) -> dict[str, list[Base]]:
         assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive)]) == 0
     with zipfile.ZipFile(archive) as z:
         z.extractall(root / "ssp")
-    archive.unlink()
+    out["ssp"].append(Base("ssp", "meng.ssp", archive.read_bytes().decode("latin-1"),
+                           ["run", "{root}/meng.ssp", "--duration", "0.02", "--out", "{out}"]))
     ssd = root / "ssp" / "SystemStructure.ssd"
     out["ssd"].append(Base("ssd", "ssp/mutant.ssd", ssd.read_text(),
                            ["run", "{root}/ssp/mutant.ssd", "--duration", "0.02", "--out", "{out}"]))
@@ -84,6 +87,15 @@ def bases(root: Path) -> dict[str, list[Base]]:
         # the mutant SSV stands in for the original beside the unchanged SSD (restored after each run)
         out["ssv"].append(Base("ssv", f"ssp/resources/{ssv.name}", ssv.read_text(),
                                ["run", "{root}/ssp/SystemStructure.ssd", "--duration", "0.02", "--out", "{out}"]))
+    # a trajectory table (heave and roll over 1 s) read by a scene that adds it to its signals
+    t = [k / 50 for k in range(51)]
+    (root / "scenes" / "table.csv").write_text("time,z,roll\n" + "".join(
+        f"{x!r},{0.05 * x * (1 - x)!r},{0.01 * x!r}\n" for x in t))
+    (root / "scenes" / "with_table.toml").write_text(
+        '[scene]\nduration = 0.02\n[trajectory]\ntable = "table.csv"\ninterpolation = "linear"\n'
+        '[trajectory.z]\noffset = "neutral"\n')
+    out["table"].append(Base("table", "scenes/table.csv", (root / "scenes" / "table.csv").read_text(),
+                             ["run", "{root}/scenes/with_table.toml", "--no-plots", "--out", "{out}"]))
     return out
 
 
@@ -96,18 +108,25 @@ class _quiet:
         sys.stdout, sys.stderr = self.saved
 
 
-def mutate(text: str, rng: random.Random, xml: bool) -> tuple[str, str]:
-    """One mutation of `text` and what it was."""
+VALUES = {  # form -> (where a value stands, the hostile values, how one is written there)
+    "toml": (r'=\s*("[^"\n]*"|\[[^\]\n]*\]|\{[^}\n]*\}|[^\s,}\]#\n]+)', HOSTILE, "= {}"),
+    "xml": (r'="([^"]*)"', HOSTILE_XML, '="{}"'),
+    "csv": (r"[-+0-9.eE]+|[a-z]+", ["nan", "inf", "-1", "1e300", "", "x", "1,2", "0", "-0.0", "time"], "{}"),
+}
+
+
+def mutate(text: str, rng: random.Random, form: str) -> tuple[str, str]:
+    """One mutation of `text` (a TOML, XML or CSV file) and what it was."""
     lines = text.split("\n")
     kind = rng.choice(["value", "value", "value", "delete", "duplicate", "swap", "misspell", "cut"])
     if kind == "value":
-        pattern = r'="([^"]*)"' if xml else r'=\s*("[^"\n]*"|\[[^\]\n]*\]|\{[^}\n]*\}|[^\s,}\]#\n]+)'
+        pattern, hostile, written = VALUES[form]
         spots = list(re.finditer(pattern, text))
         if spots:
             spot = rng.choice(spots)
-            new = rng.choice(HOSTILE_XML if xml else HOSTILE)
-            replaced = f'="{new}"' if xml else f"= {new}"
-            return text[:spot.start()] + replaced + text[spot.end():], f"value at {spot.start()} -> {new!r}"
+            new = rng.choice(hostile)
+            return (text[:spot.start()] + written.format(new) + text[spot.end():],
+                    f"value at {spot.start()} -> {new!r}")
         kind = "delete"
     if kind == "misspell":
         names = list(re.finditer(r'[A-Za-z_][A-Za-z_.\[\]0-9]{2,}', text))
@@ -129,10 +148,26 @@ def mutate(text: str, rng: random.Random, xml: bool) -> tuple[str, str]:
     return "\n".join(lines), f"lines {i + 1} and {j + 1} swapped"
 
 
+def mutate_bytes(data: str, rng: random.Random) -> tuple[str, str]:
+    """One mutation of an archive's bytes (held as latin-1 text)."""
+    kind = rng.choice(["byte", "byte", "cut out", "cut short"])
+    at = rng.randrange(len(data))
+    if kind == "byte":
+        new = chr(rng.randrange(256))
+        return data[:at] + new + data[at + 1:], f"byte {at} -> {ord(new)}"
+    if kind == "cut out":
+        length = rng.randrange(1, 4096)
+        return data[:at] + data[at + length:], f"{length} bytes cut out at {at}"
+    return data[:at], f"cut at {at} of {len(data)}"
+
+
 def mutant(bases_of_kind: list[Base], seed: int, index: int) -> tuple[Base, str, str]:
     rng = random.Random(f"{seed}:{index}")
     base = bases_of_kind[index % len(bases_of_kind)]
-    text, what = mutate(base.text, rng, xml=base.kind in ("ssd", "ssv"))
+    if base.kind == "ssp":
+        text, what = mutate_bytes(base.text, rng)
+    else:
+        text, what = mutate(base.text, rng, {"ssd": "xml", "ssv": "xml", "table": "csv"}.get(base.kind, "toml"))
     return base, text, what
 
 
@@ -150,7 +185,7 @@ def run_child(base: Base, text: str, root: Path, log: Path) -> int:
         sys.stdout = os.fdopen(1, "w", buffering=1)
         sys.stderr = os.fdopen(2, "w", buffering=1)
         shutil.rmtree(root / "out", ignore_errors=True)
-        (root / base.name).write_text(text)
+        (root / base.name).write_bytes(text.encode("latin-1") if base.kind == "ssp" else text.encode())
         code = main([a.replace("{root}", str(root)).replace("{out}", str(root / "out")) for a in base.command])
     except SystemExit as done:
         code = done.code if isinstance(done.code, int) else 2
@@ -210,7 +245,8 @@ def fuzz(kinds: dict[str, list[Base]], seed: int, count: int, pristine: Path, pa
             else:
                 code = os.waitstatus_to_exitcode(status)
             output = log.read_text(errors="replace")
-            (slots[slot] / base.name).write_text(base.text)  # the next mutant starts from the original
+            # the next mutant starts from the original
+            (slots[slot] / base.name).write_bytes(base.text.encode("latin-1") if base.kind == "ssp" else base.text.encode())
             problem = verdict(code, output)
             if problem:
                 last = output.strip().splitlines()[-3:] if output.strip() else []
@@ -231,7 +267,9 @@ def fuzz(kinds: dict[str, list[Base]], seed: int, count: int, pristine: Path, pa
 def replay(kinds: dict[str, list[Base]], kind: str, seed: int, index: int, root: Path) -> int:
     base, text, what = mutant(kinds[kind], seed, index)
     print(f"{kind} seed {seed} mutant {index}: {what}")
-    sys.stdout.writelines(difflib.unified_diff(base.text.splitlines(True), text.splitlines(True), "original", "mutant"))
+    if kind != "ssp":
+        sys.stdout.writelines(difflib.unified_diff(base.text.splitlines(True), text.splitlines(True), "original",
+                                                   "mutant"))
     log = root.parent / "replay.txt"
     pid = run_child(base, text, root, log)
     _, status = os.waitpid(pid, 0)
@@ -247,7 +285,7 @@ def arguments() -> argparse.Namespace:
     parser.add_argument("--mutants", type=int, default=40, help="mutants per file kind and seed (CI)")
     parser.add_argument("--long", action="store_true", help="10 000 mutants per file kind, seed 1")
     parser.add_argument("--seed", type=int, help="one seed instead of 1 and a new one")
-    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv")
+    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv,table,ssp")
     parser.add_argument("--replay", nargs=3, metavar=("KIND", "SEED", "INDEX"))
     return parser.parse_args()
 
