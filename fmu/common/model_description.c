@@ -32,6 +32,24 @@ static const UnitDefinition UNITS[] = {
 };
 #define N_UNITS (sizeof UNITS / sizeof UNITS[0])
 
+/* The model's direct feed-through (MODEL_FEEDTHROUGH in variables.h): per row an output and the
+ * inputs it depends on at the same communication point. */
+typedef struct { int output; const int *inputs; int count; } Feedthrough;
+#define FMU_X_FEEDTHROUGH(output, ...) \
+    {VR_##output, (const int[]){__VA_ARGS__}, (int)(sizeof((const int[]){__VA_ARGS__}) / sizeof(int))},
+static const Feedthrough FEEDTHROUGH[] = {MODEL_FEEDTHROUGH(FMU_X_FEEDTHROUGH){0, NULL, 0}};
+#undef FMU_X_FEEDTHROUGH
+
+/* An output's Unknown element: its dependencies are the inputs of its feed-through row, or none
+ * (an empty list: it follows the state alone, not any input at the same communication point). */
+static void put_output_unknown(FILE *f, int vr) {
+    fprintf(f, "      <Unknown index=\"%d\" dependencies=\"", vr);
+    for (const Feedthrough *row = FEEDTHROUGH; row->inputs; row++)
+        if (row->output == vr)
+            for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", k ? " " : "", row->inputs[k]);
+    fputs("\"/>\n", f);
+}
+
 static const UnitDefinition *find_unit(const char *name) {
     for (size_t i = 0; i < N_UNITS; i++)
         if (strcmp(UNITS[i].name, name) == 0) return &UNITS[i];
@@ -147,7 +165,7 @@ static int write_model_description(const char *path, int n_sources, char **sourc
     }
     fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
     for (int vr = 1; vr < VR_COUNT; vr++)
-        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
+        if (fmu_variables[vr].causality == FMU_OUTPUT) put_output_unknown(f, vr);
     fprintf(f, "    </Outputs>\n    <InitialUnknowns>\n");
     for (int vr = 1; vr < VR_COUNT; vr++)
         if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);

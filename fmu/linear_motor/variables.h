@@ -112,4 +112,21 @@ X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 325.0, 0.0, FMU
 FMU_SOLVER_VARIABLES(X, 1, 2.5e-4, 1e-6, 1e-8)
 /* clang-format on */
 
+/* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of
+ * the inputs it depends on at the same communication point), one row per such output; every other
+ * output depends on no input (on the state alone). The union over the control modes and the
+ * effects (without the winding, the force follows the controller at once).
+ * tests/models/test_dependencies.py perturbs each input and holds this table to what moves. */
+#define LOOP_INPUTS VR_position_ref, VR_position, VR_velocity, VR_force_ff, VR_velocity_ref
+#define MODEL_FEEDTHROUGH(D) \
+D(force, LOOP_INPUTS) \
+D(force_electromagnetic, LOOP_INPUTS) \
+D(force_friction, VR_velocity) \
+D(force_ripple, VR_position) \
+D(force_ref, LOOP_INPUTS) \
+D(current, LOOP_INPUTS) \
+D(voltage, LOOP_INPUTS, VR_voltage_ref) \
+D(power_electrical, LOOP_INPUTS, VR_voltage_ref) \
+D(power_mechanical, LOOP_INPUTS)
+
 #endif

@@ -180,4 +180,33 @@ LEG_PLANT_VARIABLES(X, 1) LEG_PLANT_VARIABLES(X, 2) LEG_PLANT_VARIABLES(X, 3) \
 LEG_PLANT_VARIABLES(X, 4) LEG_PLANT_VARIABLES(X, 5) LEG_PLANT_VARIABLES(X, 6)
 /* clang-format on */
 
+/* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of
+ * the inputs it depends on at the same communication point), one row per such output; every other
+ * output depends on no input (on the state alone). The legs' references follow pose_ref (and
+ * its derivatives); the powers follow the efforts and the load.
+ * tests/models/test_dependencies.py perturbs each input and holds this table to what moves. */
+#define POSE_REF_INPUTS VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw
+#define LEG_EFFORT_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_force, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen, \
+    VR_leg##i##_force_velocity_slope, VR_leg##i##_velocity_seen
+#define LEG_TORQUE_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen
+#define ALL_LEGS(inputs) inputs(1), inputs(2), inputs(3), inputs(4), inputs(5), inputs(6)
+#define MODEL_FEEDTHROUGH(D) \
+D(leg1_length_ref, POSE_REF_INPUTS) D(leg1_angle_ref, POSE_REF_INPUTS) \
+D(leg1_velocity_ref, POSE_REF_INPUTS) D(leg1_speed_ref, POSE_REF_INPUTS) \
+D(leg2_length_ref, POSE_REF_INPUTS) D(leg2_angle_ref, POSE_REF_INPUTS) \
+D(leg2_velocity_ref, POSE_REF_INPUTS) D(leg2_speed_ref, POSE_REF_INPUTS) \
+D(leg3_length_ref, POSE_REF_INPUTS) D(leg3_angle_ref, POSE_REF_INPUTS) \
+D(leg3_velocity_ref, POSE_REF_INPUTS) D(leg3_speed_ref, POSE_REF_INPUTS) \
+D(leg4_length_ref, POSE_REF_INPUTS) D(leg4_angle_ref, POSE_REF_INPUTS) \
+D(leg4_velocity_ref, POSE_REF_INPUTS) D(leg4_speed_ref, POSE_REF_INPUTS) \
+D(leg5_length_ref, POSE_REF_INPUTS) D(leg5_angle_ref, POSE_REF_INPUTS) \
+D(leg5_velocity_ref, POSE_REF_INPUTS) D(leg5_speed_ref, POSE_REF_INPUTS) \
+D(leg6_length_ref, POSE_REF_INPUTS) D(leg6_angle_ref, POSE_REF_INPUTS) \
+D(leg6_velocity_ref, POSE_REF_INPUTS) D(leg6_speed_ref, POSE_REF_INPUTS) \
+D(power_drive, ALL_LEGS(LEG_EFFORT_INPUTS)) \
+D(power_transmission_loss, ALL_LEGS(LEG_TORQUE_INPUTS)) \
+D(power_load, VR_load_force_x, VR_load_force_y, VR_load_force_z, VR_load_torque_x, VR_load_torque_y, VR_load_torque_z, \
+  VR_load_body_force_x, VR_load_body_force_y, VR_load_body_force_z, VR_load_body_torque_x, VR_load_body_torque_y, \
+  VR_load_body_torque_z)
+
 #endif

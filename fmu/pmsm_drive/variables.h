@@ -134,4 +134,22 @@ X(Real, initial_current_q, "initial.current_q", parameter, fixed, "A", 0.0, -FMU
 FMU_SOLVER_VARIABLES(X, 1, 1e-4, 1e-6, 1e-6)
 /* clang-format on */
 
+/* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of
+ * the inputs it depends on at the same communication point), one row per such output; every other
+ * output depends on no input (on the state alone). The union over the control modes and the
+ * inverter models.
+ * tests/models/test_dependencies.py perturbs each input and holds this table to what moves. */
+#define LOOP_INPUTS VR_angle_ref, VR_angle, VR_speed, VR_torque_ff, VR_speed_ff
+#define MODEL_FEEDTHROUGH(D) \
+D(voltage_d, VR_angle) \
+D(voltage_q, LOOP_INPUTS) \
+D(power_electrical, LOOP_INPUTS) \
+D(power_mechanical, VR_speed) \
+D(current_a, VR_angle) \
+D(current_b, VR_angle) \
+D(current_c, VR_angle) \
+D(current_error_max, LOOP_INPUTS) \
+D(speed_ref, VR_angle_ref, VR_angle, VR_speed_ff) \
+D(current_ref_q, LOOP_INPUTS)
+
 #endif

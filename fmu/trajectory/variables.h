@@ -95,4 +95,7 @@ WRENCH_VARIABLES(X, torque, y, "N.m", "torque, y") \
 WRENCH_VARIABLES(X, torque, z, "N.m", "torque, z")
 /* clang-format on */
 
+/* Direct feed-through: none (the trajectory has no inputs; its outputs are functions of time). */
+#define MODEL_FEEDTHROUGH(D)
+
 #endif
