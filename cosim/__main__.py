@@ -1,6 +1,6 @@
 """Command line:
     python -m cosim run SCENE|FILE.ssp|FILE.ssd [--out DIR] [--no-plots] [--duration S] [--set NAME=VALUE]
-    python -m cosim export SCENE [--ssp FILE.ssp] [--osp DIR]    the scene as an SSP 1.0 archive and/or
+    python -m cosim export SCENE [--ssp FILE.ssp] [--osp DIR] [--warnings-as-ok]   the scene as an SSP 1.0 archive and/or
                                                                  an OSP configuration (libcosim)
     python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
     python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL
@@ -53,6 +53,9 @@ def _main(argv: list[str] | None = None) -> int:
     export.add_argument("scene", type=Path)
     export.add_argument("--ssp", type=Path, help="the .ssp file to write")
     export.add_argument("--osp", type=Path, help="a folder for OspSystemStructure.xml and the FMUs (libcosim)")
+    export.add_argument("--warnings-as-ok", action="store_true",
+                        help="every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok), for tools that "
+                             "stop on fmi2Warning such as OMSimulator; the warnings stay in the log")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
     validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
                           "(default: this checkout's docs/)")
@@ -106,7 +109,7 @@ def _main(argv: list[str] | None = None) -> int:
             print(f"error: --duration {args.duration}: must be a positive finite number of seconds", file=sys.stderr)
             return 2
     if args.command == "export":
-        return export_scene(args.scene, args.ssp, args.osp)
+        return export_scene(args.scene, args.ssp, args.osp, args.warnings_as_ok)
     if args.scene.suffix.lower() in (".ssp", ".ssd"):
         return run_system(args.scene, args.out, args.set, duration)
     try:
@@ -184,7 +187,7 @@ def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | 
     return 0
 
 
-def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
+def export_scene(path: Path, ssp: Path | None, osp: Path | None, warnings_as_ok: bool = False) -> int:
     from .engine.osp import write_osp
     from .engine.ssp import SspError, not_portable, write_ssp
     from .platform.runner import scene_structure
@@ -197,6 +200,12 @@ def export_scene(path: Path, ssp: Path | None, osp: Path | None) -> int:
     try:
         scene = load_scene(path)
         structure = scene_structure(scene)
+        if warnings_as_ok:
+            for component in structure.components:
+                component.parameters["fmi.warnings_as_ok"] = True
+            print("note: every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok = true): a tool that "
+                  "stops on fmi2Warning (OMSimulator) runs on past a leg out of its stroke; the warnings stay in the "
+                  "FMUs' log")
         try:
             check_parameters(structure)
         except ParameterError as error:

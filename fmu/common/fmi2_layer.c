@@ -836,7 +836,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
             return fmi2Error;
         }
     }
-    return fmu->warned ? fmi2Warning : fmi2OK;
+    return fmu->warned && !fmu->s.v.fmi_warnings_as_ok ? fmi2Warning : fmi2OK;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {

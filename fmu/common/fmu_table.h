@@ -44,6 +44,13 @@
     X(Integer, solver_rejected, "solver.rejected", output, discrete, "", 0, -FMU_INF, FMU_INF,     \
       "Internal solver steps rejected by the error control since the start")
 
+/* Rows every model puts in its table: the FMI layer's own settings. */
+#define FMU_LAYER_VARIABLES(X)                                                                     \
+    X(Boolean, fmi_warnings_as_ok, "fmi.warnings_as_ok", parameter, fixed, "", 0, 0, 1,            \
+      "false (FMI 2.0): a call that raised a warning returns fmi2Warning; true: the warning stays " \
+      "in the log, the call returns fmi2OK (for importers that stop on any status but fmi2OK, "    \
+      "such as OMSimulator)")
+
 #define FMU_TEXT_MAX 1024
 typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's value, inside the snapshot */
 

@@ -177,7 +177,8 @@ X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.34906
 X(Boolean, limit_hard_stop, "limit.hard_stop", parameter, fixed, "", 0, 0, 1, "false: leaving the stroke or a joint limit is a logged warning; true: an error that stops the run") \
 FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10) \
 LEG_PLANT_VARIABLES(X, 1) LEG_PLANT_VARIABLES(X, 2) LEG_PLANT_VARIABLES(X, 3) \
-LEG_PLANT_VARIABLES(X, 4) LEG_PLANT_VARIABLES(X, 5) LEG_PLANT_VARIABLES(X, 6)
+LEG_PLANT_VARIABLES(X, 4) LEG_PLANT_VARIABLES(X, 5) LEG_PLANT_VARIABLES(X, 6) \
+FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
 /* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of

@@ -131,7 +131,8 @@ X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 1200.0, 0.0, FM
   "the switching inverter is bounded by its DC link instead") \
 X(Real, initial_current_q, "initial.current_q", parameter, fixed, "A", 0.0, -FMU_INF, FMU_INF, \
   "q current held at the start, with the integrators preset to hold it (e.g. against gravity)") \
-FMU_SOLVER_VARIABLES(X, 1, 1e-4, 1e-6, 1e-6)
+FMU_SOLVER_VARIABLES(X, 1, 1e-4, 1e-6, 1e-6) \
+FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
 /* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of

@@ -92,7 +92,8 @@ WRENCH_VARIABLES(X, force, y, "N", "force, y") \
 WRENCH_VARIABLES(X, force, z, "N", "force, z") \
 WRENCH_VARIABLES(X, torque, x, "N.m", "torque, x") \
 WRENCH_VARIABLES(X, torque, y, "N.m", "torque, y") \
-WRENCH_VARIABLES(X, torque, z, "N.m", "torque, z")
+WRENCH_VARIABLES(X, torque, z, "N.m", "torque, z") \
+FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
 /* Direct feed-through: none (the trajectory has no inputs; its outputs are functions of time). */

@@ -23,7 +23,8 @@ X(Real, mass, "mass", parameter, fixed, "kg", 1.0, 0.0, FMU_INF, "m2") \
 X(Real, stiffness, "stiffness", parameter, fixed, "N/m", 10.0, 0.0, FMU_INF, "k2") \
 X(Real, coupling_stiffness, "coupling_stiffness", parameter, fixed, "N/m", 100.0, 0.0, FMU_INF, "kc") \
 X(Real, coupling_damping, "coupling_damping", parameter, fixed, "N.s/m", 1.0, 0.0, FMU_INF, "dc") \
-FMU_SOLVER_VARIABLES(X, 2, 1e-2, 1e-12, 1e-14)
+FMU_SOLVER_VARIABLES(X, 2, 1e-2, 1e-12, 1e-14) \
+FMU_LAYER_VARIABLES(X)
 /* Direct feed-through (the ModelStructure's output dependencies): the spring-damper force
  * follows the first mass's position and velocity at once. */
 #define MODEL_FEEDTHROUGH(D) D(force, VR_position_1, VR_velocity_1)

@@ -23,7 +23,8 @@ X(Real, mass, "mass", parameter, fixed, "kg", 1.0, 0.0, FMU_INF, "m1") \
 X(Real, stiffness, "stiffness", parameter, fixed, "N/m", 10.0, 0.0, FMU_INF, "k1") \
 X(Real, damping, "damping", parameter, fixed, "N.s/m", 0.1, 0.0, FMU_INF, "d1") \
 X(Real, initial_position, "initial.position", parameter, fixed, "m", 1.0, -FMU_INF, FMU_INF, "x1(0)") \
-FMU_SOLVER_VARIABLES(X, 2, 1e-2, 1e-12, 1e-14)
+FMU_SOLVER_VARIABLES(X, 2, 1e-2, 1e-12, 1e-14) \
+FMU_LAYER_VARIABLES(X)
 /* Direct feed-through: none (the mass's position and velocity are its state). */
 #define MODEL_FEEDTHROUGH(D)
 
