@@ -42,6 +42,8 @@ def run_structure(structure: SystemStructure, overrides: Mapping[str, str] | Non
                       observers=[DivergenceMonitor(), *([Progress(structure.name)] if progress else [])], advice=advice)
     result = thin(outcome.result, output_interval(structure.settings))
     report = Report.of(outcome)
+    if structure.experiment.step_source not in ("", "this project's annotation") and not (overrides or {}).get("step"):
+        report.remarks.append(f"macro step {structure.experiment.step:g} s: {structure.experiment.step_source}")
     if outcome.failure is not None:
         raise RunStopped(report, result, outcome.diverged)
     return result, report

@@ -103,6 +103,7 @@ class Report:
     warning_kinds: list[tuple[int, str]] = field(default_factory=list)  # (count, kind), most first
     log: Path | None = None  # where every FMU message was written
     messages: list[tuple[str, LogMessage]] = field(default_factory=list, repr=False)  # everything logged
+    remarks: list[str] = field(default_factory=list)  # what the run chose that its input did not say
 
     @classmethod
     def of(cls, outcome: Outcome, simulated: float | None = None, **extra) -> "Report":
@@ -124,7 +125,7 @@ class Report:
         return []
 
     def notes(self) -> list[str]:
-        return []
+        return list(self.remarks)
 
     def text(self) -> str:
         steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"

@@ -33,7 +33,9 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 COSIM = "https://github.com/stewart-cosim/ssp-annotation/1.0"
 ANNOTATION = "io.github.stewart-cosim.run"
 PARAMETER_SET = "parameters"
-NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM}
+OSP_ANNOTATION, OSP = "com.opensimulationplatform", "http://opensimulationplatform.com/SSP/OSPAnnotations"
+OMS_ANNOTATION, OMS = "org.openmodelica", "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM, "osp": OSP, "oms": OMS}
 _SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "schema"
 
 
@@ -43,7 +45,10 @@ class SspError(ValueError):
 
 def not_portable(settings: dict) -> list[str]:
     """What of these run settings other SSP tools do not do (they run their own algorithm)."""
-    notes = []
+    notes = ["our step control and coupling: OMSimulator runs its fixed-step master (oms-ma) at the step of its "
+             "system annotation, ordering outputs by the FMUs' declared dependencies, and stops at the first "
+             "fmi2Warning unless the export set fmi.warnings_as_ok; libcosim runs its fixed-step algorithm at the OSP "
+             "annotation's base step; Ecos and fmpy.ssp at the step they are given"]
     order = int(settings.get("order", 1))
     if order > 0:
         notes.append(f"input extrapolation of order {order} through fmi2SetRealInputDerivatives (other tools hold "
@@ -106,10 +111,18 @@ def _parameter_set(component: Component, kinds: dict[str, str]) -> etree._Elemen
     return root
 
 
+def _decimal(value: float) -> str:
+    """A number as xs:decimal writes it (no exponent), exact to 15 significant digits."""
+    text = f"{value:.{max(0, 15 - math.floor(math.log10(abs(value))) - 1) if value else 1}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
 def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._Element, dict[str, etree._Element]]:
     """The SSD tree and the SSV tree of each component; `sources` maps components to their FMU's
     path inside the archive."""
-    root = etree.Element(_q(SSD, "SystemStructureDescription"), nsmap={"ssd": SSD, "ssc": SSC},
+    # the tools' namespaces are declared here: libcosim reads an element's attributes, a namespace
+    # declaration among them, as its children
+    root = etree.Element(_q(SSD, "SystemStructureDescription"), nsmap={"ssd": SSD, "ssc": SSC, "osp": OSP, "oms": OMS},
                          version="1.0", name=structure.name)
     system = etree.SubElement(root, _q(SSD, "System"), name=structure.name)
     elements = etree.SubElement(system, _q(SSD, "Elements"))
@@ -145,6 +158,14 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     for c in structure.connections:
         etree.SubElement(connections, _q(SSD, "Connection"), startElement=c.source[0], startConnector=c.source[1],
                          endElement=c.target[0], endConnector=c.target[1])
+    # OMSimulator takes a system's type (a weakly coupled system of co-simulation FMUs, run by its
+    # fixed-step master) only from its own annotation; its schema types the numbers as xs:decimal
+    system_annotations = etree.SubElement(system, _q(SSD, "Annotations"))
+    oms = etree.SubElement(etree.SubElement(system_annotations, _q(SSC, "Annotation"), type=OMS_ANNOTATION),
+                           _q(OMS, "Annotations"))
+    etree.SubElement(etree.SubElement(oms, _q(OMS, "SimulationInformation")), _q(OMS, "FixedStepMaster"),
+                     description="oms-ma", stepSize=_decimal(structure.experiment.step), absoluteTolerance="0.0001",
+                     relativeTolerance="0.0001")
     used = {u.get("unit") for u in root.iter(_q(SSC, "Real")) if u.get("unit")}
     if used:
         unit_list = etree.SubElement(root, _q(SSD, "Units"))
@@ -155,6 +176,10 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     experiment = etree.SubElement(root, _q(SSD, "DefaultExperiment"), startTime=repr(structure.experiment.start),
                                   stopTime=repr(structure.experiment.stop))
     annotations = etree.SubElement(experiment, _q(SSD, "Annotations"))
+    # libcosim's base step, where its own SSPs keep it
+    algorithm = etree.SubElement(etree.SubElement(annotations, _q(SSC, "Annotation"), type=OSP_ANNOTATION),
+                                 _q(OSP, "Algorithm"))
+    etree.SubElement(algorithm, _q(OSP, "FixedStepAlgorithm"), baseStepSize=repr(structure.experiment.step))
     annotation = etree.SubElement(annotations, _q(SSC, "Annotation"), type=ANNOTATION)
     run = etree.SubElement(annotation, _q(COSIM, "Run"), nsmap={"cosim": COSIM}, step=repr(structure.experiment.step))
     for name, value in structure.settings.items():
@@ -384,13 +409,19 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                    for c in connection_elements]
     found = _check_against_fmus(system, connection_elements, folder, where)
     experiment, settings, bonds = Experiment(), {}, []
+    experiment.step_source = "no step in the SSD (neither this project's annotation nor the OSP one): the default"
     default = root.find("ssd:DefaultExperiment", NS)
     if default is not None:
+        osp = default.find(f"ssd:Annotations/ssc:Annotation[@type='{OSP_ANNOTATION}']//osp:FixedStepAlgorithm", NS)
+        if osp is not None:  # libcosim's base step (its own SSPs carry no other)
+            experiment.step = _float(osp, "baseStepSize", experiment.step, where, positive=True)
+            experiment.step_source = f"the OSP annotation's FixedStepAlgorithm baseStepSize (line {osp.sourceline})"
         experiment.start = _float(default, "startTime", 0.0, where)
         experiment.stop = _float(default, "stopTime", 1.0, where)
         run = default.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/cosim:Run", NS)
         if run is not None:
             experiment.step = _float(run, "step", experiment.step, where, positive=True)
+            experiment.step_source = "this project's annotation"
             settings = {s.get("name"): s.get("value") for s in run.findall("cosim:Setting", NS)}
             for b in run.findall("cosim:PowerBond", NS):
                 effort, flow = (_connection(b.get(k, ""), f"{where}:{b.sourceline}") for k in ("effort", "flow"))

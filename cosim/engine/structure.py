@@ -51,6 +51,9 @@ class Experiment:
     start: float = 0.0
     stop: float = 1.0
     step: float = 1e-3
+    # where the step came from, when read from a file: this project's annotation, the OSP one, or
+    # neither (the default above); a run that did not take it from our annotation says so
+    step_source: str = field(default="", compare=False)
 
 
 @dataclass

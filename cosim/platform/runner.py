@@ -48,7 +48,7 @@ class RunReport(Report):
             f"{a} {e:.2e}" for a, e in zip(POSE, self.largest_error))]
 
     def notes(self) -> list[str]:
-        return [self.tuning] if self.tuning else []
+        return [*self.remarks, *([self.tuning] if self.tuning else [])]
 
 
 class SceneFailed(RunStopped):

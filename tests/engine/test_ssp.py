@@ -75,3 +75,60 @@ def test_not_an_archive(tmp_path):
     (tmp_path / "x.ssp").write_text("hello")
     with pytest.raises(SspError, match="not an SSP archive"):
         read_ssp(tmp_path / "x.ssp")
+
+
+def _without_our_annotation(archive: Path, folder: Path, annotation: str = "") -> Path:
+    """The archive's SSD unpacked, this project's run annotation replaced by `annotation`."""
+    import re
+    with zipfile.ZipFile(archive) as z:
+        z.extractall(folder)
+    ssd = folder / "SystemStructure.ssd"
+    text = re.sub(r"<ssd:Annotations>.*?</ssd:Annotations>", annotation, ssd.read_text(), flags=re.S)
+    ssd.write_text(text)
+    return ssd
+
+
+def test_a_step_only_in_the_osp_annotation_is_the_step_taken_and_said(archive, tmp_path):
+    """libcosim's own SSPs carry their step only in the OSP annotation (FixedStepAlgorithm
+    baseStepSize): the run takes it and says where it came from; with no step anywhere, the run
+    says it took the default."""
+    _, path = archive
+    osp = ('<ssd:Annotations><ssc:Annotation type="com.opensimulationplatform"><osp:Algorithm '
+           'xmlns:osp="http://opensimulationplatform.com/SSP/OSPAnnotations"><osp:FixedStepAlgorithm '
+           'baseStepSize="2e-3"/></osp:Algorithm></ssc:Annotation></ssd:Annotations>')
+    ssd = _without_our_annotation(path, tmp_path / "osp", osp)
+    _, report = run_ssp(ssd, None)
+    assert report.macro_steps == 250  # 0.5 s at 2 ms
+    assert "macro step 0.002 s: the OSP annotation's FixedStepAlgorithm baseStepSize" in report.text()
+    bare = _without_our_annotation(path, tmp_path / "bare")
+    _, report = run_ssp(bare, None)
+    assert report.macro_steps == 500 and "macro step 0.001 s: no step in the SSD" in report.text()
+    _, ours = run_ssp(path, None)
+    assert "macro step" not in ours.text().split("\n", 2)[-1]  # our own annotation's step needs no word
+
+
+def test_the_export_carries_the_annotations_other_tools_need(archive):
+    """OMSimulator takes the system's type only from its own annotation on ssd:System (its
+    command-line tool aborts without it): a FixedStepMaster 'oms-ma' whose four attributes its
+    published schema requires, as xs:decimal (digits, no exponent), at the system's step;
+    libcosim's base step in the OSP annotation of the default experiment. The archive stays valid
+    SSP, and our own annotation's step is the one read back."""
+    import re
+    system, path = archive
+    with zipfile.ZipFile(path) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+    validate(root, "SystemStructureDescription.xsd", "ssd")
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+          "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+          "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
+          "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
+    master = root.findall("ssd:System/ssd:Annotations/ssc:Annotation[@type='org.openmodelica']/oms:Annotations/"
+                          "oms:SimulationInformation/oms:FixedStepMaster", ns)
+    assert len(master) == 1 and master[0].get("description") == "oms-ma"
+    for attribute in ("stepSize", "absoluteTolerance", "relativeTolerance"):
+        assert re.fullmatch(r"[0-9]+(\.[0-9]+)?", master[0].get(attribute)), attribute
+    assert float(master[0].get("stepSize")) == system.experiment.step
+    base = root.find("ssd:DefaultExperiment/ssd:Annotations/ssc:Annotation[@type='com.opensimulationplatform']/"
+                     "osp:Algorithm/osp:FixedStepAlgorithm", ns)
+    assert float(base.get("baseStepSize")) == system.experiment.step
+    assert read_ssp(path).experiment.step_source == "this project's annotation"
