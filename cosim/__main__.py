@@ -2,6 +2,7 @@
     python -m cosim run SCENE|FILE.ssp|FILE.ssd [--out DIR] [--no-plots] [--duration S] [--set NAME=VALUE]
     python -m cosim export SCENE [--ssp FILE.ssp] [--osp DIR] [--warnings-as-ok]   the scene as an SSP 1.0 archive and/or
                                                                  an OSP configuration (libcosim)
+    python -m cosim view SCENE [--out DIR]    the platform following the scene's reference motion, in 3D
     python -m cosim validate [--out DIR]      rebuilds DIR/validation.md (default docs/)
     python -m cosim advise SCENE --tolerance TOL [--probe S]   the cheapest model within TOL
     python -m cosim sweep SWEEP.toml [--workers N] [--scheduler ADDRESS] [--out DIR]   many runs on Dask"""
@@ -56,6 +57,9 @@ def _main(argv: list[str] | None = None) -> int:
     export.add_argument("--warnings-as-ok", action="store_true",
                         help="every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok), for tools that "
                              "stop on fmi2Warning such as OMSimulator; the warnings stay in the log")
+    view = commands.add_parser("view", help="the platform following a scene's reference motion, in 3D (no co-simulation)")
+    view.add_argument("scene", type=Path)
+    view.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_view.html")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
     validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
                           "(default: this checkout's docs/)")
@@ -94,6 +98,24 @@ def _main(argv: list[str] | None = None) -> int:
                                       redesign=not args.keep_gains)
         print(text(scene, args.tolerance, candidates, info))
         print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
+        return 0
+    if args.command == "view":
+        from .platform.runner import scene_error, scene_values
+        from .platform.view3d import write_view
+        try:
+            scene = load_scene(args.scene)
+            path, lines = write_view(scene, scene_values(scene)[0], args.out / f"{scene.path.stem}_view.html")
+        except SceneError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        except ValueError as error:  # a platform the scene's values do not build
+            mapped = scene_error(scene, error)
+            if mapped is None:
+                raise
+            print(f"error: {mapped}", file=sys.stderr)
+            return 2
+        print("\n".join(lines))
+        print(f"written: {path}")
         return 0
     if args.command == "validate":
         from .platform.validation.report import build

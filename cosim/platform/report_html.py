@@ -15,6 +15,7 @@ import numpy as np
 
 from .ports import POSE
 from .system import units
+from .view3d import SYNC_SCRIPT as VIEW_SYNC
 
 BUCKETS = 700  # per trace: each bucket's first, smallest and largest point (every peak and shock kept)
 
@@ -89,9 +90,10 @@ def _table(rows: list[tuple[str, str, str]]) -> str:
     return f"<table>{cells}</table>"
 
 
-def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_residuals: dict[str, float]) -> Path:
+def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_residuals: dict[str, float],
+                 mechanics_values: dict | None = None) -> Path:
     """Writes the report of a run (`report`: the platform's RunReport; `messages`: (instance,
-    LogMessage) of everything the FMUs logged)."""
+    LogMessage) of everything the FMUs logged; `mechanics_values`: the platform's, for the 3D view)."""
     import plotly.io as pio
     from plotly.offline import get_plotlyjs
     summary = [
@@ -122,6 +124,16 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
                    f"{scene.algorithm} {scene.order}"),
                   ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
                   ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
+    view = ""
+    if mechanics_values is not None and len(result) > 1:
+        from . import view3d
+        geometry, frames = view3d.run_frames(mechanics_values, result, scene.pulses)
+        out = frames.out_of_stroke.any(axis=0)
+        view = (f'<h2>The platform ({len(frames.time)} frames; play, drag the slider, or click a plot to go to its '
+                f'time)</h2><p>Legs coloured by the stroke they use, red where they leave it'
+                f'{" (legs " + ", ".join(str(i + 1) for i in np.flatnonzero(out)) + ")" if out.any() else ""}, dashed '
+                f'where a joint passes its angle limit; the reference pose in grey.</p>'
+                f'<section class="view">{view3d.html_div(view3d.figure(geometry, frames, report.scene))}</section>')
     warning_rows = "".join(f"<tr><td>{t:.6g}</td><td>{html.escape(i)}</td><td>{html.escape(text)}</td></tr>"
                            for t, i, text in warnings)
     page = f"""<!DOCTYPE html>
@@ -133,6 +145,7 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 </head><body>
 <h1>{html.escape(report.scene)}</h1>
 {failure}
+{view}
 <h2>Scene</h2>{_table(scene_rows)}
 <h2>Run</h2>{_table(summary)}
 <h2>Power bonds: largest energy residual in one step</h2>{_table(bonds)}
@@ -140,6 +153,7 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 <table class="warnings"><tr><th>step start [s]</th><th>instance</th><th>message</th></tr>{warning_rows}</table>
 <h2>Every recorded output ({len(figures)} plots; drag to zoom, double-click to reset)</h2>
 {plots}
+{VIEW_SYNC if view else ""}
 </body></html>
 """
     path.parent.mkdir(parents=True, exist_ok=True)

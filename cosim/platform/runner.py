@@ -208,7 +208,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
                                     units(scene.drive), drives, impacts)
             from .report_html import write_report
             report.html = write_report(out / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
-                                       outcome.bond_residuals)
+                                       outcome.bond_residuals, scene_values(scene)[0])
     if outcome.failure is not None:
         raise SceneFailed(report, result)
     return result, report

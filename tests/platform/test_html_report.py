@@ -52,7 +52,7 @@ def test_the_report_loads_offline_without_console_errors_and_renders_every_plot(
     assert not errors, errors
     figures = text.count('<section class="plot">')
     assert figures == 6 + 6 + 3  # pose and error per DOF; torque, speed and i_q of the six drives
-    assert run.stdout.count('class="plot-container plotly"') == figures  # plotly drew each of them
+    assert run.stdout.count('class="plot-container plotly"') == figures + 1  # plotly drew each, and the 3D view
     assert run.stdout.count('class="main-svg"') >= figures
 
 

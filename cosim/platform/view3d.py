@@ -1,0 +1,294 @@
+"""The platform in 3D: an animated plotly view of a run for the HTML report, and of a scene's
+reference motion alone for `python -m cosim view SCENE`.
+
+What is drawn is the platform the mechanics FMU simulates: its joints, stroke and joint-angle limit
+come from the scene's mechanics values through the FMU's own mapping (cosim.platform.platform_core,
+the one place the master reads a platform from), so Meng's, Sumnu's and Halder's layouts, and any
+geometry a study sets, draw right. Per frame: the base and the platform (its joints joined), the six
+legs from lower to upper joint coloured by how much of their stroke they use (red and thick outside
+it, dashed past the joint-angle limit), the reference pose as a grey ghost, and an external load as
+an arrow at the platform origin while a pulse acts. Frames are the recorded rows decimated to at
+most MAX_FRAMES; play and pause, a time slider, camera presets; in the report a click on any plot
+moves the view to that time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .platform_core import build, mechanics_value
+from .ports import POSE
+
+MAX_FRAMES = 200
+CAMERAS = {"iso": dict(x=1.6, y=-1.6, z=1.1), "front": dict(x=0.0, y=-2.4, z=0.4),
+           "side": dict(x=2.4, y=0.0, z=0.4), "top": dict(x=0.0, y=0.0, z=2.6)}
+GHOST, BASE, PLATFORM, LOAD = "#9a9a9a", "#34495e", "#2e86c1", "#c0392b"
+
+
+@dataclass(frozen=True)
+class Geometry:
+    lower: np.ndarray         # 6 x 3, base frame [m]
+    upper: np.ndarray         # 6 x 3, platform frame [m]
+    neutral_axis: np.ndarray  # 6 x 3, each leg's direction at the neutral pose
+    stroke: tuple[float, float]
+    joint_limit: float        # [rad]
+
+    @classmethod
+    def of(cls, values: Mapping[str, object]) -> "Geometry":
+        """The platform of these mechanics values (over the FMU's defaults), as the FMU builds it."""
+        p = build(values)
+        lower, upper = np.array(p.lower_joint[:]).reshape(6, 3), np.array(p.upper_joint[:]).reshape(6, 3)
+        neutral = legs_at(lower, upper, np.array(p.neutral_pose[:])[None, :])[0]
+        axis = neutral - lower
+        return cls(lower, upper, axis / np.linalg.norm(axis, axis=1, keepdims=True),
+                   (float(mechanics_value(values, "limit.leg_length_min")),
+                    float(mechanics_value(values, "limit.leg_length_max"))),
+                   float(mechanics_value(values, "limit.joint_angle")))
+
+
+def rotations(poses: np.ndarray) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll) of each pose (n x 6) as n x 3 x 3 (the mechanics' convention)."""
+    roll, pitch, yaw = poses[:, 3], poses[:, 4], poses[:, 5]
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    return np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
+                     np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
+                     np.stack([-sp, cp * sr, cp * cr], -1)], -2)
+
+
+def legs_at(lower: np.ndarray, upper: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """The upper joints in the base frame (n x 6 x 3) for poses (n x 6): t + R a_i."""
+    return poses[:, None, :3] + np.einsum("nij,kj->nki", rotations(poses), upper)
+
+
+@dataclass
+class Frames:
+    """What the view draws at each frame time: upper joints (actual, reference), leg lengths, stroke
+    use, the legs out of stroke or past the joint-angle limit, and the load arrow."""
+    time: np.ndarray
+    top: np.ndarray            # n x 6 x 3
+    ghost: np.ndarray | None   # n x 6 x 3
+    length: np.ndarray         # n x 6
+    use: np.ndarray            # n x 6: 0 at the shortest, 1 at the longest leg of the stroke
+    out_of_stroke: np.ndarray  # n x 6 bool
+    past_joint_limit: np.ndarray
+    load: np.ndarray           # n x 3: the external force in the base frame [N]
+
+
+def frames(geometry: Geometry, time: np.ndarray, pose: np.ndarray, pose_ref: np.ndarray | None,
+           force: np.ndarray | None = None) -> Frames:
+    top = legs_at(geometry.lower, geometry.upper, pose)
+    legs = top - geometry.lower
+    length = np.linalg.norm(legs, axis=2)
+    low, high = geometry.stroke
+    axis = legs / length[..., None]
+    lower_angle = np.arccos(np.clip(np.einsum("nki,ki->nk", axis, geometry.neutral_axis), -1, 1))
+    in_platform = np.einsum("nji,nkj->nki", rotations(pose), axis)  # R' n: the leg seen from the platform
+    upper_angle = np.arccos(np.clip(np.einsum("nki,ki->nk", in_platform, geometry.neutral_axis), -1, 1))
+    return Frames(time, top, None if pose_ref is None else legs_at(geometry.lower, geometry.upper, pose_ref), length,
+                  (length - low) / (high - low), (length < low) | (length > high),
+                  np.maximum(lower_angle, upper_angle) > geometry.joint_limit,
+                  np.zeros((len(time), 3)) if force is None else force)
+
+
+def decimate(time: np.ndarray, most: int = MAX_FRAMES) -> np.ndarray:
+    """Indices of at most `most` rows, evenly spaced in time, the first and the last included."""
+    if len(time) <= most:
+        return np.arange(len(time))
+    wanted = np.linspace(time[0], time[-1], most)
+    return np.unique(np.clip(np.searchsorted(time, wanted), 0, len(time) - 1))
+
+
+def _leg_color(use: float, out: bool) -> str:
+    if out:
+        return "#e60000"
+    u = float(np.clip(use, 0.0, 1.0))  # green in the middle of the stroke, amber towards either end
+    edge = abs(2 * u - 1)
+    return f"rgb({int(40 + 200 * edge)},{int(170 - 40 * edge)},{int(60 - 40 * edge)})"
+
+
+def _closed(points: np.ndarray) -> dict:
+    ring = np.vstack([points, points[:1]])
+    return dict(x=np.round(ring[:, 0], 4), y=np.round(ring[:, 1], 4), z=np.round(ring[:, 2], 4))
+
+
+def _traces(geometry: Geometry, f: Frames, k: int, arrow_scale: float) -> list[dict]:
+    """The scatter3d traces of frame k, always in the same order (legs 1-6, platform, ghost, load)."""
+    traces = []
+    for i in range(6):
+        ends = np.vstack([geometry.lower[i], f.top[k, i]])
+        traces.append(dict(type="scatter3d", mode="lines", name=f"leg {i + 1}", showlegend=False,
+                           x=np.round(ends[:, 0], 4), y=np.round(ends[:, 1], 4), z=np.round(ends[:, 2], 4),
+                           line=dict(color=_leg_color(f.use[k, i], bool(f.out_of_stroke[k, i])),
+                                     width=12 if f.out_of_stroke[k, i] else 7,
+                                     dash="dash" if f.past_joint_limit[k, i] else "solid"),
+                           hovertext=f"leg {i + 1}: {f.length[k, i]:.4f} m, {100 * f.use[k, i]:.0f} % of the stroke"
+                                     + (" (out of stroke)" if f.out_of_stroke[k, i] else "")
+                                     + (" (joint past its limit)" if f.past_joint_limit[k, i] else ""),
+                           hoverinfo="text"))
+    traces.append(dict(type="scatter3d", mode="lines+markers", name="platform", showlegend=False,
+                       line=dict(color=PLATFORM, width=6), marker=dict(size=3, color=PLATFORM),
+                       **_closed(f.top[k])))
+    ghost = f.ghost[k] if f.ghost is not None else np.full((6, 3), np.nan)
+    traces.append(dict(type="scatter3d", mode="lines", name="reference", showlegend=False,
+                       line=dict(color=GHOST, width=3, dash="dot"), **_closed(ghost)))
+    centre = f.top[k].mean(axis=0)
+    tip = centre + arrow_scale * f.load[k] if np.any(f.load[k]) else np.full(3, np.nan)
+    traces.append(dict(type="scatter3d", mode="lines+markers", name="load", showlegend=False,
+                       x=[centre[0], tip[0]], y=[centre[1], tip[1]], z=[centre[2], tip[2]],
+                       line=dict(color=LOAD, width=8), marker=dict(size=[0, 6], color=LOAD)))
+    return traces
+
+
+def figure(geometry: Geometry, f: Frames, title: str) -> dict:
+    """The animated plotly figure (as a plain dict, written without plotly's per-frame validation,
+    which costs seconds for 200 frames): the base, then the traces of each frame; a slider, play
+    and pause, camera presets."""
+    peak = float(np.max(np.linalg.norm(f.load, axis=1), initial=0.0))
+    arrow_scale = 0.5 / peak if peak > 0 else 0.0  # the largest load as a 0.5 m arrow
+    base = dict(type="scatter3d", mode="lines+markers", name="base", showlegend=False,
+                line=dict(color=BASE, width=6), marker=dict(size=3, color=BASE), **_closed(geometry.lower))
+    names = [f"{t:.4f}" for t in f.time]
+    fig = dict(data=[base, *_traces(geometry, f, 0, arrow_scale)],
+               frames=[dict(name=n, data=_traces(geometry, f, k, arrow_scale), traces=list(range(1, 10)))
+                       for k, n in enumerate(names)])
+    everything = np.vstack([geometry.lower, f.top.reshape(-1, 3)])
+    low, high = everything.min(axis=0), everything.max(axis=0)
+    span = float(np.max(high - low)) * 0.6 + 0.2
+    centre = (low + high) / 2
+    axes = {a: dict(range=[centre[k] - span, centre[k] + span], title=dict(text=f"{a} [m]")) for k, a in enumerate("xyz")}
+    step = dict(mode="immediate", frame=dict(duration=0, redraw=True), transition=dict(duration=0))
+    fig["layout"] = dict(
+        title=dict(text=title), height=620, margin=dict(l=0, r=0, t=40, b=0),
+        scene=dict(xaxis=axes["x"], yaxis=axes["y"], zaxis=axes["z"], aspectmode="cube",
+                   camera=dict(eye=CAMERAS["iso"])),
+        updatemenus=[
+            dict(type="buttons", direction="left", x=0.0, y=0.0, xanchor="left", yanchor="top", showactive=False,
+                 buttons=[dict(label="play", method="animate",
+                               args=[None, dict(mode="immediate", fromcurrent=True,
+                                                frame=dict(duration=40, redraw=True), transition=dict(duration=0))]),
+                          dict(label="pause", method="animate", args=[[None], step])]),
+            dict(type="buttons", direction="left", x=1.0, y=1.0, xanchor="right", yanchor="top", showactive=False,
+                 buttons=[dict(label=name, method="relayout", args=[{"scene.camera.eye": eye}])
+                          for name, eye in CAMERAS.items()])],
+        sliders=[dict(active=0, x=0.12, len=0.88, y=0.0, currentvalue=dict(prefix="t = ", suffix=" s"),
+                      steps=[dict(label=f"{t:.3g}", method="animate", args=[[n], step])
+                             for t, n in zip(f.time, names)])])
+    return fig
+
+
+def run_frames(values: Mapping[str, object], result: np.ndarray, pulses: Sequence = ()) -> tuple[Geometry, Frames]:
+    """The frames of a recorded run (its pose and pose_ref columns), decimated, with the loads of
+    the scene's pulses (base or platform frame) as arrows."""
+    geometry = Geometry.of(values)
+    rows = decimate(result["time"])
+    time = result["time"][rows]
+    pose = np.column_stack([result[f"pose.{a}"][rows] for a in POSE])
+    ref = np.column_stack([result[f"pose_ref.{a}"][rows] for a in POSE])
+    return geometry, frames(geometry, time, pose, ref, pulse_forces(pulses, time, pose))
+
+
+def pulse_forces(pulses: Sequence, time: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """The force of the load pulses acting at each time, base frame (a platform-frame pulse turned
+    by the pose's orientation)."""
+    force = np.zeros((len(time), 3))
+    turn = rotations(pose)
+    for p in pulses:
+        if not p.component.startswith("force."):
+            continue
+        axis = "xyz".index(p.component[-1])
+        acting = (time >= p.start) & (time <= p.end)
+        local = np.zeros((len(time), 3))
+        local[:, axis] = p.value * acting
+        force += np.einsum("nij,nj->ni", turn, local) if p.frame == "platform" else local
+    return force
+
+
+def html_div(fig: dict, div_id: str = "platform-view") -> str:
+    import plotly.io as pio
+    return pio.to_html(fig, full_html=False, include_plotlyjs=False, div_id=div_id, auto_play=False,
+                       config=dict(responsive=True), validate=False)
+
+
+# What the report adds: a click on any 2D plot moves the view to the nearest frame.
+SYNC_SCRIPT = """<script>
+(function () {
+  var view = document.getElementById('platform-view');
+  if (!view || !view.layout) return;
+  var names = view.layout.sliders[0].steps.map(function (s) { return s.args[0][0]; });
+  var times = names.map(parseFloat);
+  function show(t) {
+    var k = 0;
+    for (var i = 1; i < times.length; i++) if (Math.abs(times[i] - t) < Math.abs(times[k] - t)) k = i;
+    Plotly.animate(view, [names[k]], {mode: 'immediate', frame: {duration: 0, redraw: true}, transition: {duration: 0}});
+    Plotly.relayout(view, {'sliders[0].active': k});
+  }
+  window.platformView = {show: show, names: names};
+  document.querySelectorAll('.plot .js-plotly-plot').forEach(function (plot) {
+    plot.on('plotly_click', function (event) { if (event.points.length) show(event.points[0].x); });
+  });
+})();
+</script>"""
+
+
+def reference_motion(scene, frames_most: int = MAX_FRAMES) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The scene's reference pose and base-frame load force over its duration, from its trajectory
+    FMU run alone through the engine (the one evaluation of the scene's signals, tables included):
+    times, poses (n x 6), forces (n x 3)."""
+    from ..engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
+    from ..engine.outcome import execute
+    from .signals import scene_trajectory
+    frames_most = max(2, min(frames_most, int(scene.duration / 0.02) + 1))
+    step = scene.duration / (frames_most - 1)
+    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), scene_trajectory(scene))], [],
+                            experiment=Experiment(0.0, scene.duration, step))
+    names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
+    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), scene.duration, [("trajectory", n) for n in names])
+    if outcome.failure is not None:
+        raise outcome.failure
+    result = outcome.result
+    return result["time"], np.column_stack([result[f"trajectory.{n}"] for n in names[:6]]), \
+        np.column_stack([result[f"trajectory.{n}"] for n in names[6:]])
+
+
+def extremes(geometry: Geometry, f: Frames) -> list[str]:
+    """Per leg, the shortest and longest it gets against the stroke, and when it leaves the
+    stroke or passes the joint-angle limit first."""
+    low, high = geometry.stroke
+    lines = [f"stroke [{low:g}, {high:g}] m, joint-angle limit {np.degrees(geometry.joint_limit):.1f} deg"]
+    for i in range(6):
+        shortest, longest = f.length[:, i].min(), f.length[:, i].max()
+        line = (f"leg {i + 1}: {shortest:.4f} to {longest:.4f} m ({100 * f.use[:, i].min():.0f} to "
+                f"{100 * f.use[:, i].max():.0f} % of the stroke)")
+        if f.out_of_stroke[:, i].any():
+            line += f", out of stroke from t = {f.time[np.argmax(f.out_of_stroke[:, i])]:.3g} s"
+        if f.past_joint_limit[:, i].any():
+            line += f", joint past its limit from t = {f.time[np.argmax(f.past_joint_limit[:, i])]:.3g} s"
+        lines.append(line)
+    return lines
+
+
+def write_view(scene, values: Mapping[str, object], path) -> tuple[object, list[str]]:
+    """`python -m cosim view SCENE`: the platform following the scene's reference motion (no
+    co-simulation: the pose is the reference), as a self-contained page; returns its path and the
+    extremes per leg."""
+    import html
+    from pathlib import Path
+    from plotly.offline import get_plotlyjs
+    geometry = Geometry.of(values)
+    time, pose, force = reference_motion(scene)
+    f = frames(geometry, time, pose, None, force + pulse_forces([p for p in scene.pulses if p.frame == "platform"],
+                                                                 time, pose))
+    lines = extremes(geometry, f)
+    page = (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{html.escape(scene.name)}</title>'
+            f'<script>{get_plotlyjs()}</script><style>body{{font-family:sans-serif;margin:1.5em;max-width:1200px}}'
+            f'</style></head><body><h1>{html.escape(scene.name)}: the reference motion</h1><p>The platform at the '
+            f'pose the scene asks for, before any co-simulation (its trajectory FMU stepped alone).</p><ul>'
+            + "".join(f"<li>{html.escape(line)}</li>" for line in lines)
+            + f'</ul><section class="view">{html_div(figure(geometry, f, scene.name))}</section></body></html>')
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(page, encoding="utf-8")
+    return path, lines
