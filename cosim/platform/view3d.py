@@ -6,8 +6,9 @@ come from the scene's mechanics values through the FMU's own mapping (cosim.plat
 the one place the master reads a platform from), so Meng's, Sumnu's and Halder's layouts, and any
 geometry a study sets, draw right. Per frame: the base and the platform (its joints joined), the six
 legs from lower to upper joint coloured by how much of their stroke they use (red and thick outside
-it, dashed past the joint-angle limit), the reference pose as a grey ghost, and an external load as
-an arrow at the platform origin while a pulse acts. Frames are the recorded rows decimated to at
+it, dashed past the joint-angle limit), the housing that swings about each lower joint and the motor
+it carries (the parts the mechanics models; no motor on Sumnu's linear motors), the reference pose
+as a grey ghost, and an external load as an arrow at the platform origin while a pulse acts. Frames are the recorded rows decimated to at
 most MAX_FRAMES; play and pause, a time slider, camera presets; in the report a click on any plot
 moves the view to that time.
 """
@@ -35,6 +36,8 @@ class Geometry:
     neutral_axis: np.ndarray  # 6 x 3, each leg's direction at the neutral pose
     stroke: tuple[float, float]
     joint_limit: float        # [rad]
+    housing: float = 0.0      # length of the part that swings about the lower joint (twice its centre of mass) [m]
+    motor_at: float | None = None  # the carried motor's centre of mass from the lower joint [m], if it has one
 
     @classmethod
     def of(cls, values: Mapping[str, object]) -> "Geometry":
@@ -43,10 +46,12 @@ class Geometry:
         lower, upper = np.array(p.lower_joint[:]).reshape(6, 3), np.array(p.upper_joint[:]).reshape(6, 3)
         neutral = legs_at(lower, upper, np.array(p.neutral_pose[:])[None, :])[0]
         axis = neutral - lower
+        carries_motor = bool(p.motor_inertia_on) and p.motor_mass > 0
         return cls(lower, upper, axis / np.linalg.norm(axis, axis=1, keepdims=True),
                    (float(mechanics_value(values, "limit.leg_length_min")),
                     float(mechanics_value(values, "limit.leg_length_max"))),
-                   float(mechanics_value(values, "limit.joint_angle")))
+                   float(mechanics_value(values, "limit.joint_angle")),
+                   2 * p.rotating_com if p.rotating_mass > 0 else 0.0, p.motor_com if carries_motor else None)
 
 
 def rotations(poses: np.ndarray) -> np.ndarray:
@@ -115,7 +120,8 @@ def _closed(points: np.ndarray) -> dict:
 
 
 def _traces(geometry: Geometry, f: Frames, k: int, arrow_scale: float) -> list[dict]:
-    """The scatter3d traces of frame k, always in the same order (legs 1-6, platform, ghost, load)."""
+    """The scatter3d traces of frame k, always in the same order (legs 1-6, platform, ghost, load,
+    the housings that swing about the lower joints, the carried motors)."""
     traces = []
     for i in range(6):
         ends = np.vstack([geometry.lower[i], f.top[k, i]])
@@ -139,6 +145,17 @@ def _traces(geometry: Geometry, f: Frames, k: int, arrow_scale: float) -> list[d
     traces.append(dict(type="scatter3d", mode="lines+markers", name="load", showlegend=False,
                        x=[centre[0], tip[0]], y=[centre[1], tip[1]], z=[centre[2], tip[2]],
                        line=dict(color=LOAD, width=8), marker=dict(size=[0, 6], color=LOAD)))
+    axis = (f.top[k] - geometry.lower) / f.length[k][:, None]
+    housing = geometry.lower + axis * np.minimum(geometry.housing, f.length[k])[:, None]
+    segments = np.full((18, 3), np.nan)  # lower joint, housing end, gap; per leg
+    segments[0::3], segments[1::3] = geometry.lower, housing
+    traces.append(dict(type="scatter3d", mode="lines", name="housings", showlegend=False, hoverinfo="skip",
+                       x=np.round(segments[:, 0], 4), y=np.round(segments[:, 1], 4), z=np.round(segments[:, 2], 4),
+                       line=dict(color="#5d6d7e", width=14)))
+    motors = geometry.lower + axis * (geometry.motor_at if geometry.motor_at is not None else np.nan)
+    traces.append(dict(type="scatter3d", mode="markers", name="motors", showlegend=False, hoverinfo="skip",
+                       x=np.round(motors[:, 0], 4), y=np.round(motors[:, 1], 4), z=np.round(motors[:, 2], 4),
+                       marker=dict(size=6, color="#17202a", symbol="square")))
     return traces
 
 
@@ -152,7 +169,7 @@ def figure(geometry: Geometry, f: Frames, title: str) -> dict:
                 line=dict(color=BASE, width=6), marker=dict(size=3, color=BASE), **_closed(geometry.lower))
     names = [f"{t:.4f}" for t in f.time]
     fig = dict(data=[base, *_traces(geometry, f, 0, arrow_scale)],
-               frames=[dict(name=n, data=_traces(geometry, f, k, arrow_scale), traces=list(range(1, 10)))
+               frames=[dict(name=n, data=_traces(geometry, f, k, arrow_scale), traces=list(range(1, 12)))
                        for k, n in enumerate(names)])
     everything = np.vstack([geometry.lower, f.top.reshape(-1, 3)])
     low, high = everything.min(axis=0), everything.max(axis=0)
