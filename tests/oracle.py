@@ -77,6 +77,7 @@ class CouplingAlgorithm(ABC):
         self.energy_residuals: list[float] = []  # per macro step, the largest over the bonds [J]
         # of the last step, per bond: the energy residual and the energy transferred [J]
         self.bond_energies: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0))
+        self.feedthrough: list[tuple[str, list[int], list[int]]] = []  # Coupling.feedthrough(), if resolved
 
     def initialize(self, coupling: Coupling, t: float, sweeps: int = 20, zero_start: bool = False) -> None:
         """Makes the outputs at t consistent with the connected inputs (outputs that feed through
@@ -143,8 +144,33 @@ class CouplingAlgorithm(ABC):
             self._start_up(coupling, t, h)
         else:
             self._sweep(coupling, t, h)
+        self._resolve_feedthrough(coupling)
         if coupling.bonds:
             self.energy_residuals.append(self._energy_residual(coupling, h))
+
+    def _resolve_feedthrough(self, coupling: Coupling) -> None:
+        """The outputs that depend on inputs at the same communication point, read again in
+        dependency order with those inputs at their sources' newest values (and the exact
+        derivatives of the sources that give them, under extrapolation)."""
+        _, outputs, exact = self.history.samples[-1]
+        for name, inputs, indices in self.feedthrough:
+            names, values, rates, curvatures, top = [], [], [], [], 0
+            for i in inputs:
+                source, index = coupling.feeds[name][i]
+                given = coupling.rate_orders.get(source, 0) if self.order > 0 and coupling.interpolating[name] else 0
+                names.append(coupling.input_names[name][i])
+                values.append(outputs[source][index])
+                rates.append(exact[source][0][index] if given >= 1 else 0.0)
+                curvatures.append(exact[source][1][index] if given >= 2 else 0.0)
+                top = max(top, given)
+            instance = coupling.instances[name]
+            instance.set(dict(zip(names, values)))
+            if top >= 1:
+                instance.set_input_derivatives(names, rates, 1)
+            if top >= 2:
+                instance.set_input_derivatives(names, curvatures, 2)
+            for index in indices:
+                outputs[name][index] = instance.get(coupling.sources[name][index])
 
     def _energy_residual(self, coupling: Coupling, h: float) -> float:
         """Largest |energy residual| of the bonds over the step just taken: the energy the output
@@ -383,6 +409,7 @@ def run(structure, settings, control, stop_time: float, record, clock: str, inte
     try:
         coupling = Coupling(instances, structure.connections, structure.bonds, interpolating)
         algorithm = algorithm_of(settings)
+        algorithm.feedthrough = coupling.feedthrough() if getattr(settings, "feedthrough", False) else []
         algorithm.initialize(coupling, instances[clock].time, settings.initial_sweeps, settings.zero_start)
 
         def row():

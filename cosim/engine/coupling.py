@@ -12,7 +12,15 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .fmi import FmuInstance
+from .settings import SettingsError
 from .structure import Bond, Connection
+
+
+class FeedthroughLoop(SettingsError):
+    """Outputs that feed through to each other at the same communication point (an algebraic loop)."""
+
+    def __init__(self, message: str):
+        super().__init__(message, "feedthrough")
 
 
 class Coupling:
@@ -53,6 +61,51 @@ class Coupling:
         # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order
         self.rate_orders = {n: min(2, self.instances[n].max_output_derivative_order) for n in self.outputs
                             if self.instances[n].max_output_derivative_order > 0}
+
+    def feedthrough(self) -> list[tuple[str, list[int], list[int]]]:
+        """Direct feed-through among the coupled outputs, as steps in dependency order: (instance,
+        the indices of its inputs to set, the indices of its coupled outputs to read again). An
+        output feeds through when its FMU's ModelStructure lists connected inputs among its
+        dependencies (no dependencies attribute: every input, as FMI 2.0 says). Raises
+        FeedthroughLoop naming the outputs of a loop of such paths (an algebraic loop)."""
+        depends: dict[tuple[str, str], list[int]] = {}
+        for name, outputs in self.sources.items():
+            inputs = self.input_names.get(name, [])
+            if not outputs or not inputs:
+                continue
+            declared = {u.variable.name: u.dependencies for u in self.instances[name].model_description.outputs}
+            for output in outputs:
+                given = declared.get(output)
+                names = set(inputs) if given is None else {v.name for v in given}
+                indices = [i for i, n in enumerate(inputs) if n in names]
+                if indices:
+                    depends[(name, output)] = indices
+        # an output waits for the feed-through outputs that feed the inputs it depends on (Kahn's order)
+        waits = {node: {(source, self.sources[source][index]) for source, index in
+                        (self.feeds[node[0]][i] for i in depends[node])} & set(depends) for node in depends}
+        order, ready = [], [node for node in depends if not waits[node]]
+        while ready:
+            node = ready.pop(0)
+            order.append(node)
+            for other in depends:
+                if node in waits[other]:
+                    waits[other].discard(node)
+                    if not waits[other] and other not in order and other not in ready:
+                        ready.append(other)
+        if len(order) < len(depends):
+            loop = sorted(f"{n}.{o}" for n, o in depends if (n, o) not in order)
+            raise FeedthroughLoop(f"an algebraic loop: the outputs {', '.join(loop)} depend on each other's values at "
+                                  "the same communication point (their FMUs' declared dependencies); switch "
+                                  "feedthrough off, or break the loop")
+        steps: list[tuple[str, list[int], list[int]]] = []
+        for name, output in order:
+            index = self.sources[name].index(output)
+            if steps and steps[-1][0] == name:
+                steps[-1][1].extend(i for i in depends[(name, output)] if i not in steps[-1][1])
+                steps[-1][2].append(index)
+            else:
+                steps.append((name, list(depends[(name, output)]), [index]))
+        return steps
 
     def read(self) -> dict[str, np.ndarray]:
         return {n: group.read().copy() for n, group in self.outputs.items()}

@@ -33,6 +33,11 @@ class _Bond(ctypes.Structure):
                 ("slope_in", _Port)]
 
 
+class _Feed(ctypes.Structure):
+    _fields_ = [("instance", ctypes.c_int), ("first", ctypes.c_int), ("n_inputs", ctypes.c_int),
+                ("n_outputs", ctypes.c_int)]
+
+
 class _Instance(ctypes.Structure):
     _fields_ = [("component", _P), ("set_real", _P), ("get_real", _P), ("set_input_derivatives", _P),
                 ("get_output_derivatives", _P), ("do_step", _P), ("get_state", _P), ("set_state", _P),
@@ -56,7 +61,9 @@ class _Kernel(ctypes.Structure):
                 ("states", ctypes.POINTER(ctypes.c_void_p)),
                 ("startup_states", ctypes.POINTER(ctypes.c_void_p)), ("guess", _DOUBLES), ("saved_time", _DOUBLES),
                 ("failed_instance", ctypes.c_int), ("failed_call", ctypes.c_int), ("threads", ctypes.c_int),
-                ("stage_end", _INTS), ("helper", ctypes.c_void_p)]
+                ("stage_end", _INTS), ("helper", ctypes.c_void_p),
+                ("n_feeds", ctypes.c_int), ("feeds", ctypes.POINTER(_Feed)), ("feed_indices", _INTS),
+                ("feed_vrs", _UINTS), ("feed_values", _DOUBLES), ("feed_rates", _DOUBLES)]
 
 
 class _Controller(ctypes.Structure):
@@ -88,7 +95,7 @@ def _load() -> ctypes.CDLL:
         path = library_path("libcosim_kernel.so")
         lib = ctypes.CDLL(str(path))
         check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
-                                                  (_Instance, "KernelInstance"), (_Kernel, "Kernel"),
+                                                  (_Instance, "KernelInstance"), (_Kernel, "Kernel"), (_Feed, "KernelFeed"),
                                                   (_Controller, "Controller")])
         K, C = ctypes.POINTER(_Kernel), ctypes.POINTER(_Controller)
         lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int, ctypes.c_int]
@@ -239,7 +246,25 @@ class Kernel:
         s.order_one, s.order_two = _ptr(self.order_one, _INTS), _ptr(self.order_two, _INTS)
         s.states, s.startup_states = self.states, self.startup_states
         s.guess, s.saved_time = _ptr(self.guess, _DOUBLES), _ptr(self.saved_time, _DOUBLES)
+        self._set_feedthrough(coupling.feedthrough() if algorithm.feedthrough else [])
         self._controller: _Controller | None = None
+
+    def _set_feedthrough(self, plan: list[tuple[str, list[int], list[int]]]) -> None:
+        """The feed-through resolution's steps (cosim.engine.coupling.Coupling.feedthrough)."""
+        self.feedthrough_plan = plan
+        self.feeds = (_Feed * max(len(plan), 1))()
+        indices, longest = [], 1
+        for feed, (name, inputs, outputs) in zip(self.feeds, plan):
+            feed.instance, feed.first, feed.n_inputs, feed.n_outputs = self.index[name], len(indices), len(inputs), len(outputs)
+            indices += [*inputs, *outputs]
+            longest = max(longest, len(inputs), len(outputs))
+        self.feed_indices = _ints(indices or [0])
+        self.feed_vrs = np.zeros(longest, dtype=np.uintc)
+        self.feed_values, self.feed_rates = np.zeros(longest), np.zeros(2 * longest)
+        s = self.setup
+        s.n_feeds, s.feeds, s.feed_indices = len(plan), self.feeds, _ptr(self.feed_indices, _INTS)
+        s.feed_vrs, s.feed_values = _ptr(self.feed_vrs, _UINTS), _ptr(self.feed_values, _DOUBLES)
+        s.feed_rates = _ptr(self.feed_rates, _DOUBLES)
 
     # -- bookkeeping -----------------------------------------------------------------------------
 

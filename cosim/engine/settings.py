@@ -32,13 +32,17 @@ class Algorithm:
     over the first macro step (the convention of fmpy.ssp, which starts its connections at 0).
     `threads`: 2 steps each Gauss-Seidel stage of components that feed none of each other (the
     platform's six drives) on two threads, bit for bit the results of one (worth it only while
-    the second core is free: not inside a sweep that already uses every core)."""
+    the second core is free: not inside a sweep that already uses every core). `feedthrough`:
+    after each macro step, the outputs that depend on inputs at the same communication point
+    (their FMUs' declared dependencies) are read again, in dependency order, with those inputs at
+    their sources' new values, as OMSimulator does (an algebraic loop is refused, named)."""
     kind: str = "gauss-seidel"
     order: int = 1
     sequence: tuple[str, ...] | None = None
     initial_sweeps: int = 20
     zero_start: bool = False
     threads: int = 1
+    feedthrough: bool = False
 
     def __post_init__(self):
         if self.kind not in ALGORITHMS:
@@ -171,6 +175,8 @@ def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
         out["zero_start"] = "true"
     if algorithm.threads != 1:
         out["threads"] = str(algorithm.threads)
+    if algorithm.feedthrough:
+        out["feedthrough"] = "true"
     if algorithm.sequence:
         out["sequence"] = " ".join(algorithm.sequence)
     for name, value in asdict(control).items():
@@ -199,7 +205,10 @@ def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algori
         if zero_start not in ("true", "false"):
             raise SettingsError(f"zero_start '{zero_start}': true or false")
         threads = int(values.pop("threads", "1"))
-        algorithm = Algorithm(kind, order, sequence, sweeps, zero_start == "true", threads)
+        feedthrough = values.pop("feedthrough", "false")
+        if feedthrough not in ("true", "false"):
+            raise SettingsError(f"feedthrough '{feedthrough}': true or false", "feedthrough")
+        algorithm = Algorithm(kind, order, sequence, sweeps, zero_start == "true", threads, feedthrough == "true")
         name = values.pop("step_control", "fixed")
         if name not in CONTROLS:
             raise SettingsError(f"step_control '{name}': one of {', '.join(CONTROLS)}")

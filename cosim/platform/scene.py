@@ -19,7 +19,10 @@
                   threads = 2 (the drives of a Gauss-Seidel step on two threads, bit for bit the
                   same: faster only while the second core is free); interface_jacobian = true (each
                   drive's slope d effort / d flow goes to the mechanics with the flow the drive saw:
-                  the drives' damping integrated implicitly, stable at longer steps)
+                  the drives' damping integrated implicitly, stable at longer steps); feedthrough =
+                  true (after each macro step, outputs that depend on inputs at the same communication
+                  point, such as the mechanics' leg references on pose_ref, are read again with those
+                  inputs' new values, as OMSimulator does)
     [trajectory]  table = "file.csv" (relative to the scene; columns time and any of x, y, z, roll,
                   pitch, yaw, added to the signals below), interpolation = "cubic" | "linear"
     [trajectory.<dof>]  dof in x, y, z, roll, pitch, yaw: offset (a number, or "neutral": the
@@ -126,6 +129,7 @@ class Scene:
     startup_step: float = 0.0
     edge_time: float = 0.0  # [s] after each load pulse's edges at startup_step too
     interface_jacobian: bool = False  # the drives' slopes d effort / d flow wired to the mechanics
+    feedthrough: bool = False  # outputs that depend on inputs read again at each communication point
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
     drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
     overrides: dict[str, Any] = field(default_factory=dict)  # the dotted keys load_scene set over the file
@@ -137,7 +141,7 @@ SCHEMA: dict[str, set[str]] = {
     "drive": {"kind", "parameters", "tuning", "parameter_set"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max", "startup_time",
-                 "startup_step", "edge_time", "threads", "interface_jacobian"},
+                 "startup_step", "edge_time", "threads", "interface_jacobian", "feedthrough"},
     "trajectory": {*POSE, "table", "interpolation"},
     "trajectory.*": {"offset", "sines", "steps", "ramps"},
     "load": {"pulses"},
@@ -297,6 +301,9 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     threads = coupling.get("threads", 1)
     if not isinstance(threads, int) or isinstance(threads, bool) or threads not in (1, 2):
         raise fail("coupling", "threads", f"= {threads!r}: use 1, or 2 to step the drives on two threads")
+    feedthrough = coupling.get("feedthrough", False)
+    if not isinstance(feedthrough, bool):
+        raise fail("coupling", "feedthrough", f"= {feedthrough!r}: use true or false")
     interface_jacobian = coupling.get("interface_jacobian", False)
     if not isinstance(interface_jacobian, bool):
         raise fail("coupling", "interface_jacobian", f"= {interface_jacobian!r}: use true or false")
@@ -377,7 +384,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                     interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                     outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
                     tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads,
-                    interface_jacobian=interface_jacobian, **startup)
+                    interface_jacobian=interface_jacobian, feedthrough=feedthrough, **startup)
     try:
         scene_settings(loaded)
     except SettingsError as error:  # what the settings object refuses beyond the checks above
@@ -397,7 +404,8 @@ def scene_settings(scene: Scene) -> tuple[Algorithm, StepControl]:
     (cosim.engine.settings) that the SSP annotation and the OSP export carry, with its own
     defaults for what the scene leaves out. Step doubling measures the error on the mechanics'
     outputs to the drives."""
-    algorithm = dataclasses.replace(default_algorithm(scene.drive, scene.algorithm, scene.order), threads=scene.threads)
+    algorithm = dataclasses.replace(default_algorithm(scene.drive, scene.algorithm, scene.order), threads=scene.threads,
+                                    feedthrough=scene.feedthrough)
     given = {key: getattr(scene, key) for key in ("rtol", "h_min", "h_max") if getattr(scene, key) is not None}
     if scene.step_control == "doubling":
         return algorithm, StepDoubling(scene.step, atol={"mechanics": scene.atol or DOUBLING_ATOL}, **given)

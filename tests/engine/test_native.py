@@ -32,7 +32,7 @@ def drifted(structure: type[ctypes.Structure], change) -> type[ctypes.Structure]
 
 
 @pytest.mark.parametrize("change,what", [
-    (lambda f: f[:-1], "Kernel.helper: not in Python"),                                     # a field missing
+    (lambda f: f[:-1], "Kernel.feed_rates: not in Python"),                                 # a field missing
     (lambda f: f + [("extra", ctypes.c_int)], "Kernel.extra: not in C"),                   # a field too many
     (lambda f: [(n, ctypes.c_long if n == "n_bonds" else t) for n, t in f], "Kernel.n_bonds: (offset, size)"),
     (lambda f: [f[1], f[0], *f[2:]], "Kernel.instances: (offset, size)"),                  # two fields swapped

@@ -463,6 +463,50 @@ void kernel_release(Kernel *s) {
 /* One macro step from t (the master's time) to t + h: the start-up iteration if there is no
  * history yet, otherwise one sweep; the new history sample; the bonds' energy residual (largest
  * into *residual, per bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
+/* Feed-through at the newest sample (time t_new): per step of the plan, the inputs its outputs
+ * depend on set to their sources' newest values (and exact derivatives, under extrapolation, from
+ * the sources that give them), then those outputs read again into the sample. An output that
+ * depends on an input thus carries the input's value at the same communication point, as tools
+ * that order outputs along the connections (OMSimulator) have it. */
+static int resolve_feedthrough(Kernel *s) {
+    const size_t n = (size_t)s->n_sample_values;
+    double *sample = s->samples + (size_t)(s->n_samples - 1) * n;
+    for (int f = 0; f < s->n_feeds; f++) {
+        const KernelFeed *feed = &s->feeds[f];
+        const int k = feed->instance;
+        const KernelInstance *in = &s->instances[k];
+        const int *index = s->feed_indices + feed->first;
+        const double started = clock_start();
+        int top = 0;
+        for (int j = 0; j < feed->n_inputs; j++) {
+            const int i = index[j];
+            const KernelInstance *source = &s->instances[in->feed_source[i]];
+            const int at = source->output_offset + in->feed_index[i];
+            s->feed_vrs[j] = in->input_vrs[i];
+            s->feed_values[j] = sample[at];
+            const int given = s->order > 0 && in->interpolating ? source->rate_order : 0;
+            s->feed_rates[j] = given >= 1 ? s->exact_rates[at] : 0.0;
+            s->feed_rates[feed->n_inputs + j] = given >= 2 ? s->exact_rates[n + (size_t)at] : 0.0;
+            if (given > top) top = given;
+        }
+        FMI_CALL(s, k, CALL_SET_REAL, in->set_real(in->component, s->feed_vrs, (size_t)feed->n_inputs, s->feed_values));
+        if (top >= 1)
+            FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                     in->set_input_derivatives(in->component, s->feed_vrs, (size_t)feed->n_inputs, s->order_one,
+                                               s->feed_rates));
+        if (top >= 2)
+            FMI_CALL(s, k, CALL_SET_INPUT_DERIVATIVES,
+                     in->set_input_derivatives(in->component, s->feed_vrs, (size_t)feed->n_inputs, s->order_two,
+                                               s->feed_rates + feed->n_inputs));
+        for (int j = 0; j < feed->n_outputs; j++) s->feed_vrs[j] = in->output_vrs[index[feed->n_inputs + j]];
+        FMI_CALL(s, k, CALL_GET_REAL, in->get_real(in->component, s->feed_vrs, (size_t)feed->n_outputs, s->feed_values));
+        for (int j = 0; j < feed->n_outputs; j++)
+            sample[in->output_offset + index[feed->n_inputs + j]] = s->feed_values[j];
+        clock_stop(s, k, started);
+    }
+    return 1;
+}
+
 static int macro_step(Kernel *s, double t, double h, double *residual, double *bond_energy) {
     const double t_new = t + h;
     if (s->n_samples == 1 && s->order > 0) {
@@ -497,6 +541,7 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
         }
         if (!push_sample(s, t_new)) return 0;
     }
+    if (s->n_feeds > 0 && !resolve_feedthrough(s)) return 0;
     *residual = s->n_bonds > 0 && s->n_samples >= 2 ? energy_residual(s, h, bond_energy) : 0.0;
     return 1;
 }
@@ -666,8 +711,10 @@ static const StructLayout LAYOUT[] = {
     K(n_inputs_total), K(input_values), K(input_rates), K(input_curvatures), K(n_bonds), K(bonds), K(n_columns),
     K(column_of), K(record_scratch), K(instance_time), K(fmi_seconds), K(order_one), K(order_two), K(states),
     K(startup_states), K(guess), K(saved_time), K(failed_instance), K(failed_call), K(threads), K(stage_end),
-    K(helper),
+    K(helper), K(n_feeds), K(feeds), K(feed_indices), K(feed_vrs), K(feed_values), K(feed_rates),
 #undef K
+    STRUCT_LAYOUT(KernelFeed), STRUCT_LAYOUT_FIELD(KernelFeed, instance), STRUCT_LAYOUT_FIELD(KernelFeed, first),
+    STRUCT_LAYOUT_FIELD(KernelFeed, n_inputs), STRUCT_LAYOUT_FIELD(KernelFeed, n_outputs),
 #define C(field) STRUCT_LAYOUT_FIELD(Controller, field)
     STRUCT_LAYOUT(Controller), C(h), C(h_min), C(h_max), C(rtol), C(atol), C(atol_energy), C(k_i), C(k_p),
     C(previous), C(safety), C(change_min), C(change_max), C(t), C(rejected), C(accepted_count), C(force_reject), C(n_force_reject), C(saved_time),

@@ -29,6 +29,13 @@ typedef struct {
     KernelPort effort_out, effort_in, flow_out, flow_in, slope_in;
 } KernelBond;
 
+/* A step of the feed-through resolution at each communication point: instance, and at
+ * feed_indices[first ...] the n_inputs indices of the inputs to set, then the n_outputs indices
+ * of its coupled outputs to read again. */
+typedef struct {
+    int instance, first, n_inputs, n_outputs;
+} KernelFeed;
+
 typedef struct {
     void *component;
     SetRealFn set_real;
@@ -81,6 +88,14 @@ typedef struct {
     int threads;                      /* 2: a stage of independent instances steps on two threads */
     const int *stage_end;             /* per sequence position j: the stage j belongs to ends before it */
     void *helper;                     /* the second thread (Helper), made when first needed */
+    /* feed-through resolution (none if n_feeds is 0): after each macro step, in dependency order,
+     * the inputs that feed-through outputs depend on are set to their sources' values at t + h
+     * (with the exact derivatives of the sources that give them) and those outputs read again */
+    int n_feeds;
+    const KernelFeed *feeds;
+    const int *feed_indices;
+    unsigned *feed_vrs;               /* scratch, as long as the longest step's inputs or outputs */
+    double *feed_values, *feed_rates; /* scratch: values; rates then curvatures (2 x as long) */
 } Kernel;
 
 typedef struct {
