@@ -67,6 +67,7 @@ def execute(structure: SystemStructure, algorithm: Algorithm, control: StepContr
     says which one held (cosim.engine.advice). Raises before a single step for what makes the run
     impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path."""
     with Execution(structure, algorithm, control, record, names, clock=clock) as execution:
+        setup_fmi = execution.fmi_seconds  # instantiation and parameters: not part of the stepping
         start = time.perf_counter()
         failure = None
         try:
@@ -75,7 +76,7 @@ def execute(structure: SystemStructure, algorithm: Algorithm, control: StepContr
             result, failure = failed.result, failed
         wall = time.perf_counter() - start
         outcome = Outcome(structure.name, result, execution.energy_residuals, execution.steps, execution.rejected,
-                          wall, execution.fmi_seconds, control_name(control), execution.messages(),
+                          wall, execution.fmi_seconds - setup_fmi, control_name(control), execution.messages(),
                           dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers))
     if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
         from .advice import advice_text
