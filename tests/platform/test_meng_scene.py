@@ -9,13 +9,14 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.runner import run_scene
+from conftest import paper_scene
 from cosim.platform.scene import load_scene
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 def meng(duration: float, impact: bool = True):
-    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
+    scene = paper_scene("meng_eq35")
     scene.duration = duration
     if not impact:
         scene.pulses = []
@@ -83,7 +84,7 @@ def test_the_readmes_main_job_numbers_are_what_the_main_job_prints():
     quoted = re.search(r"prints; a test holds this line to it\): ([\d.]+) / ([\d.]+) / ([\d.]+) mm in surge / sway / "
                        r"heave, ([\d.]+) / ([\d.]+) / ([\d.]+) mrad", text)
     assert quoted, "the README's main-job sentence changed form"
-    _, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml"))
+    _, report = run_scene(paper_scene("meng_eq35"))
     printed = [float(f"{1e3 * e:.3g}") for e in report.largest_error]  # mm and mrad, as quoted
     assert [float(q) for q in quoted.groups()] == printed, (quoted.groups(), printed)
 
@@ -98,10 +99,10 @@ def test_the_fast_scene_keeps_the_pose_within_1e_5_and_the_torques_within_1_perc
     over the whole 10 s)."""
     from cosim.platform.sweep import difference
     torques, poses = [f"torque[{i}]" for i in range(1, 7)], [f"pose.{a}" for a in POSE]
-    reference, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", {
+    reference, _ = run_scene(paper_scene("meng_eq35", {
         "scene.duration": 3.0, "scene.step": 6.25e-5, "coupling.startup_time": 0.0}), plots=False)
     fast, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35_fast.toml", {"scene.duration": 3.0}), plots=False)
-    _, shipped = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.0}), plots=False)
+    _, shipped = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0}), plots=False)
     peak = max(np.abs(reference[n]).max() for n in torques)
     assert difference(fast, reference, poses) < 1e-5
     assert difference(fast, reference, torques) / peak < 0.01

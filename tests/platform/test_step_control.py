@@ -8,6 +8,7 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.runner import run_scene, scene_record, scene_settings, scene_structure
+from conftest import paper_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.system import POSE, run
 
@@ -105,7 +106,7 @@ def start_reference():
     """The Meng scene's first half second at a sixteenth of its step throughout, and its torque
     peak. Its difference to the run at an eighth, 0.48 % of the peak torque and 1e-6 in pose,
     bounds its own error (Gauss-Seidel order 1 converges at first order)."""
-    reference, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml",
+    reference, _ = run_scene(paper_scene("meng_eq35",
                                         {**START, "scene.step": 6.25e-5, "coupling.startup_time": 0.0}), plots=False)
     return reference, max(np.abs(reference[n]).max() for n in TORQUES)
 
@@ -117,12 +118,12 @@ def test_a_finer_start_resolves_the_drives_start_up_shock(start_reference):
     of their peak and the pose within 2e-6, for 7 % more macro steps over the 10 s scene."""
     from cosim.platform.sweep import difference
     reference, peak = start_reference
-    plain, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", {**START, "coupling.startup_time": 0.0}),
+    plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0}),
                          plots=False)
     error, when = difference(plain, reference, TORQUES, with_time=True)
     assert error / peak > 0.15 and when < 5e-3
     assert difference(plain, reference, POSES) > 1e-5
-    fine, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", START), plots=False)
+    fine, report = run_scene(paper_scene("meng_eq35", START), plots=False)
     assert report.macro_steps == 100 * 8 + 400  # 0.1 s at 0.125 ms, then 0.4 s at 1 ms
     assert difference(fine, reference, TORQUES) / peak < 0.01
     assert difference(fine, reference, POSES) < 2e-6
@@ -137,9 +138,9 @@ def test_drives_on_the_l_stable_solver_at_the_macro_step_need_a_sixteenth_at_the
     from cosim.platform.sweep import difference
     reference, peak = start_reference
     rosenbrock = {**START, 'drive.parameters."solver.method"': 3, 'drive.parameters."solver.step"': 1e-3}
-    eighth, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", rosenbrock), plots=False)
+    eighth, _ = run_scene(paper_scene("meng_eq35", rosenbrock), plots=False)
     assert difference(eighth, reference, TORQUES) / peak > 0.01
-    sixteenth, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml",
+    sixteenth, _ = run_scene(paper_scene("meng_eq35",
                                         {**rosenbrock, "coupling.startup_step": 6.25e-5}), plots=False)
     assert difference(sixteenth, reference, TORQUES) / peak < 0.01
     assert difference(sixteenth, reference, POSES) < 2e-6
@@ -179,7 +180,7 @@ IMPACT = {"scene.duration": 0.45, "load.pulses": [{"component": "force.z", "valu
 def impact_reference():
     """The Meng scene's first 0.45 s with Eq 36's impact moved to 0.3 s, at a sixteenth of the
     step throughout, and its torque peak after the start (the start is another test's)."""
-    reference, _ = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml",
+    reference, _ = run_scene(paper_scene("meng_eq35",
                                         {**IMPACT, "scene.step": 6.25e-5, "coupling.startup_time": 0.0}), plots=False)
     late = reference["time"] > 0.1
     return reference, max(np.abs(reference[n][late]).max() for n in TORQUES)
@@ -196,7 +197,7 @@ def test_finer_steps_after_the_loads_edges_resolve_the_drives_answer_to_an_impac
     settings = {**IMPACT, "scene.step": 1e-3, "coupling.startup_step": 1.25e-4, "coupling.interface_jacobian": False}
     errors, steps = {}, {}
     for edge_time in (0.0, 0.02):
-        result, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml",
+        result, report = run_scene(paper_scene("meng_eq35",
                                               {**settings, "coupling.edge_time": edge_time}), plots=False)
         errors[edge_time] = difference(result[result["time"] > 0.1], reference, TORQUES) / peak
         steps[edge_time] = report.macro_steps
