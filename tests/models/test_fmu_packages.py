@@ -200,9 +200,9 @@ def test_a_whole_scene_runs_in_libcosim():
 
     from cosim.platform.libcosim import run_in_libcosim
     from cosim.platform.runner import run_scene
-    from cosim.platform.scene import load_scene
+    from conftest import paper_scene
 
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=3.0)
+    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=3.0)  # libcosim at the paper's 1 ms
     peer = run_in_libcosim(scene)
     ours, _ = run_scene(scene)
     final = np.array([ours[f"pose.{a}"][-1] for a in ("x", "y", "z", "roll", "pitch", "yaw")])

@@ -86,11 +86,10 @@ def test_the_numbers_on_the_page_are_the_runs(page):
 
 def test_a_failed_run_says_where_and_why_it_stopped(tmp_path):
     from cosim.platform.runner import SceneFailed
-    text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace("duration = 10.0", "duration = 1.0")
-    path = tmp_path / "scene.toml"
-    path.write_text(text + '[mechanics.parameters]\n"limit.hard_stop" = true\n')
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0,
+                                                           'mechanics.parameters."limit.hard_stop"': True})
     with pytest.raises(SceneFailed):
-        run_scene(load_scene(path), tmp_path / "out")
-    page = (tmp_path / "out" / "scene.html").read_text()
+        run_scene(scene, tmp_path / "out")
+    page = (tmp_path / "out" / "meng_eq35.html").read_text()
     assert '<div class="failure" data-name="failure"><h2>The run stopped</h2>' in page
     assert "mechanics: fmi2DoStep failed at t = 0.63" in page and "stroke" in page
