@@ -6,6 +6,7 @@ reports (docs in the README's "Sweeps" section):
     [sweep]
     scene = "../scenes/meng_eq35.toml"      # or system = "meng.ssp" (paths relative to this file)
     duration = 1.0                          # optional: shorter runs than the target's own
+    set = { "coupling.interface_jacobian" = false }   # optional: values every point takes
     sample = "grid"                         # every combination; "zip": the i-th values together;
                                             # "latin-hypercube": `points` points, `seed`
     [[axis]]
@@ -148,8 +149,10 @@ def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str], 
 
 # -- the sweep file: the scene as a target beside the SSP system ----------------------------------
 
-def _scene_point(target: Path, reports: tuple[str, ...], outputs: tuple, duration: float | None) -> ScenePoint:
-    return ScenePoint(str(target), reports, outputs, (("scene.duration", duration),) if duration is not None else ())
+def _scene_point(target: Path, reports: tuple[str, ...], outputs: tuple, duration: float | None,
+                 fixed: tuple = ()) -> ScenePoint:
+    return ScenePoint(str(target), reports, outputs,
+                      (*((("scene.duration", duration),) if duration is not None else ()), *fixed))
 
 
 SCENE = Target(SCENE_REPORTS, ("tracking_error", "energy_residual", "steps"), _scene_point,

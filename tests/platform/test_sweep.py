@@ -22,11 +22,15 @@ from cosim.engine.sweep import Axis, SweepError, grid, latin_hypercube, run_swee
 from cosim.platform.sweep import load_sweep
 
 SCENE = ROOT / "scenes" / "meng_eq35.toml"
+# the numerics the studies below count their steps at, whatever the shipped scene's (a sweep file's set)
+FIXED = {"coupling.interface_jacobian": False, "coupling.startup_time": 0.1, "coupling.startup_step": 1.25e-4,
+         "coupling.edge_time": 0.0}
+FIXED_TOML = "set = { " + ", ".join(f'"{k}" = {str(v).lower()}' for k, v in FIXED.items()) + " }"
 
 
 def sweep_file(folder: Path, axes: str, duration: float = 0.2, extra: str = "", report: str = "") -> Path:
     path = folder / "study.toml"
-    path.write_text(f'[sweep]\nscene = "{SCENE}"\nduration = {duration}\n{extra}\n{axes}\n'
+    path.write_text(f'[sweep]\nscene = "{SCENE}"\nduration = {duration}\n{FIXED_TOML}\n{extra}\n{axes}\n'
                     + (report or '[report]\nvalues = ["tracking_error", "peak_effort", "energy_residual", "steps"]\n'
                                  'outputs = { "pose.z" = ["max", "rms"] }\n'))
     return path
@@ -77,7 +81,8 @@ def test_a_sweep_on_a_local_cluster_gives_the_rows_of_the_same_points_run_in_one
     # a point's reports are those of the scene run on its own
     from cosim.platform.runner import run_scene
     from cosim.platform.scene import load_scene
-    result, report = run_scene(load_scene(SCENE, {"scene.duration": 0.2, "scene.step": 1e-3, "coupling.order": 1}),
+    result, report = run_scene(load_scene(SCENE, {**FIXED, "scene.duration": 0.2, "scene.step": 1e-3,
+                                                  "coupling.order": 1}),
                                plots=False)
     point = next(r for r in rows if r["scene.step"] == 1e-3 and r["coupling.order"] == 1)
     assert point["tracking_error.z"] == report.largest_error[2]
@@ -111,6 +116,10 @@ def test_a_bad_sweep_file_is_one_line_naming_its_line(tmp_path, capsys):
         '["median"] }\n': ":7: 'report.outputs'",
         '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.q" = '
         '["max"] }\n': ":7: 'report.outputs' names 'pose.q', which the run does not record (did you mean",
+        '[sweep]\nscene = "SCENE"\nset = 3\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":3: 'sweep.set' = 3 must be a "
+        "table",
+        '[sweep]\nscene = "SCENE"\nset = { "coupling.order" = 7 }\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n':
+        ":3: [sweep] set: the sweep's target cannot run as it is: 'coupling.order' = 7: use 0, 1 or 2",
     }
     for number, (text, expected) in enumerate(cases.items()):
         path = tmp_path / f"bad{number}.toml"

@@ -27,7 +27,8 @@ class Target:
     """A kind of sweep target: `reports` (name -> what it adds to a row), the ones a file gets
     when it names none, `internal` ones a file may not ask for (they need a reference run), units
     of its columns (for plots), what an axis key is (for messages), the exceptions a point that
-    cannot start raises, and `point(target file, reports, outputs, duration)`: the evaluator."""
+    cannot start raises, and `point(target file, reports, outputs, duration, fixed)`: the evaluator
+    (fixed: the [sweep] table's `set`, values every point takes, under the axes' own)."""
     reports: Mapping[str, str]
     default_reports: tuple[str, ...]
     point: Callable[..., Any]
@@ -38,7 +39,7 @@ class Target:
 
 
 SCHEMA = {"": {"sweep", "axis", "report", "plot"},
-          "sweep": {"duration", "sample", "points", "seed", "points_per_task", "retries"},  # and the targets' kinds
+          "sweep": {"duration", "set", "sample", "points", "seed", "points_per_task", "retries"},  # and the targets'
           "axis": {"key", "values", "linspace", "geomspace", "between"},
           "report": {"values", "outputs"}, "plot": {"report", "x", "y", "log_x", "log_y", "log_color"}}
 
@@ -103,6 +104,9 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
                                  or not duration > 0 or duration == float("inf")):
         raise fail("sweep", "duration", f"= {duration!r} must be a positive number of seconds")
 
+    fixed = sweep.get("set", {})
+    if not isinstance(fixed, dict):
+        raise fail("sweep", "set", f"= {fixed!r} must be a table of key = value that every point takes")
     axes = []
     raw_axes = data.get("axis", [])
     if not raw_axes:
@@ -175,8 +179,9 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
             raise fail("report", "outputs", f"{column!r} = {stats!r}: statistics are {', '.join(STATISTICS)}")
     output_spec = tuple((c, tuple(s)) for c, s in outputs.items())
 
-    evaluate = target_kind.point(target, tuple(wanted), output_spec, float(duration) if duration is not None else None)
-    _check_points(path, text, evaluate, axes, points, target_kind.errors)
+    evaluate = target_kind.point(target, tuple(wanted), output_spec, float(duration) if duration is not None else None,
+                                 tuple(fixed.items()))
+    _check_points(path, text, evaluate, axes, points, target_kind.errors, line_of(text, "sweep", "set"))
     recorded = evaluate.recorded()
     for column in outputs:
         if column not in recorded:
@@ -196,20 +201,23 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
             raise SweepError(f"{path}:{line_of(text, '', 'plot')}: [plot] needs report = \"column\" and x = \"axis\"")
     digest = hashlib.sha1()
     digest.update(target.read_bytes())
-    digest.update(repr((kind, duration, [column_name(n) for n in names], evaluate.columns())).encode())
+    digest.update(repr((kind, duration, sorted(fixed.items(), key=str), [column_name(n) for n in names],
+                        evaluate.columns())).encode())
     return Sweep(path, path.stem, evaluate, axes, points, digest.hexdigest(), sweep.get("points_per_task"),
                  sweep.get("retries", 3), plot, dict(target_kind.units))
 
 
 def _check_points(path: Path, text: str, evaluate, axes: list[Axis], points: list[dict],
-                  errors: tuple[type[Exception], ...]) -> None:
+                  errors: tuple[type[Exception], ...], fixed_line: int = 0) -> None:
     """The target as it is, then each axis at the first point's value: a wrong key or a value the
     target cannot take is named at its axis' line before anything runs. (Other points' values
     are checked when they run: a point that cannot start is a row with its message.)"""
     try:
         evaluate.check({})
-    except errors as error:
-        raise SweepError(f"{path}: the sweep's target cannot run as it is: {error}") from None
+    except (*errors, KeyError) as error:
+        reason = re.sub(r"^\S+?:\d+: ", "", str(error).strip("'\""))
+        where = f"{path}:{fixed_line}: [sweep] set:" if fixed_line else f"{path}:"
+        raise SweepError(f"{where} the sweep's target cannot run as it is: {reason}") from None
     first = points[0] if points else {}
     for axis in axes:
         value = first.get(axis.name)

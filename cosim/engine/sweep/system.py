@@ -20,6 +20,7 @@ class SystemPoint:
     path: str
     stop_time: float | None = None
     outputs: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    fixed: tuple[tuple[str, Value], ...] = ()  # values every point takes (the sweep file's [sweep] set)
 
     def columns(self) -> list[str]:
         return ["steps", "rejected", "energy_residual", "real_time_factor",
@@ -38,6 +39,7 @@ class SystemPoint:
         """Raises ValueError (one line) when a point's names or values cannot run."""
         from ..checks import check_parameters
         from ..settings import system_settings
+        values = {**dict(self.fixed), **values}
         structure = self._with(self.structure(), values)
         system_settings(structure.settings, structure.experiment.step, self._settings(values))
         check_parameters(structure)
@@ -63,6 +65,7 @@ class SystemPoint:
     def __call__(self, values: Mapping[str, Value]) -> dict[str, Value]:
         from ..command import run_structure
         from ..outcome import RunStopped
+        values = {**dict(self.fixed), **values}
         structure = self._with(self.structure(), values)
         try:
             result, report = run_structure(structure, self._settings(values), self.stop_time, progress=False,
@@ -76,8 +79,9 @@ class SystemPoint:
         return {**row, **statistics(result, dict(self.outputs)), "status": status, "message": message}
 
 
-def _system_point(target: Path, reports: tuple[str, ...], outputs: tuple, duration: float | None) -> SystemPoint:
-    return SystemPoint(str(target), duration, outputs)
+def _system_point(target: Path, reports: tuple[str, ...], outputs: tuple, duration: float | None,
+                  fixed: tuple = ()) -> SystemPoint:
+    return SystemPoint(str(target), duration, outputs, fixed)
 
 
 SYSTEM_REPORTS = {"energy_residual": "largest energy residual of a power bond in one macro step [J]",
