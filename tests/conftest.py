@@ -53,14 +53,20 @@ PAPER_NUMERICS = {"scene.step": 1e-3, "coupling.startup_time": 0.1, "coupling.st
 
 
 def paper_scene(name: str = "meng_eq35", overrides: dict | None = None):
-    """A shipped scene at PAPER_NUMERICS (and `overrides` over them): its own solver steps dropped
-    unless the overrides set them."""
-    import dataclasses
-    from cosim.engine.artifacts import ROOT
+    """A shipped scene at PAPER_NUMERICS (and `overrides` over them); a solver step the scene file
+    sets goes back to its FMU's own unless the overrides set it. Everything goes through
+    load_scene's overrides, so whatever reloads the scene from its file (advise, sweeps) gets the
+    same scene."""
+    from cosim.engine.artifacts import ROOT, fmu_path
+    from cosim.engine.checks import variables
+    from cosim.platform.ports import DRIVES
     from cosim.platform.scene import load_scene
+    path = ROOT / "scenes" / f"{name}.toml"
     overrides = {**PAPER_NUMERICS, **(overrides or {})}
-    scene = load_scene(ROOT / "scenes" / f"{name}.toml", overrides)
-    keep = {key.split(".", 2)[-1].strip('"') for key in overrides if key.endswith('"solver.step"')}
-    return dataclasses.replace(
-        scene, drive_parameters={k: v for k, v in scene.drive_parameters.items() if k != "solver.step" or k in keep},
-        mechanics_parameters={k: v for k, v in scene.mechanics_parameters.items() if k != "solver.step" or k in keep})
+    scene = load_scene(path, overrides)
+    for table, fmu, given in (("drive", DRIVES[scene.drive].fmu, scene.drive_parameters),
+                              ("mechanics", "mechanics", scene.mechanics_parameters)):
+        key = f'{table}.parameters."solver.step"'
+        if "solver.step" in given and key not in overrides:
+            overrides[key] = float(variables(fmu_path(fmu))["solver.step"].start)
+    return load_scene(path, overrides)

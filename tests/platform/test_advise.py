@@ -7,7 +7,7 @@ from __future__ import annotations
 from cosim.__main__ import main
 from cosim.platform.advise import advise, recommend, within
 from cosim.engine.artifacts import ROOT
-from cosim.platform.scene import load_scene
+from conftest import paper_scene
 
 
 def test_advice_on_the_meng_scene():
@@ -22,7 +22,7 @@ def test_advice_on_the_meng_scene():
     about fourfold per halved step, 24 % of the peak at 1 ms, 5 % at 0.5 ms, at t of one or two
     steps), and at 1 % nothing is recommended. The interface-Jacobian candidates hold the full model
     at 2 ms (where the scene's own coupling diverges), not at 4 ms."""
-    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
+    scene = paper_scene("meng_eq35")
     candidates, info = advise(scene, 1e-4, probe=0.5)
     assert info["convergence"] < 1e-5
     best = recommend(candidates, 1e-4, 0.01)
@@ -44,7 +44,7 @@ def test_advice_on_the_meng_scene():
                   and c.fidelity == "averaged inverter"}
     assert within(slopes[2e-3], 1e-4, 0.01) and plain_full[2e-3].diverged and slopes[4e-3].diverged
 
-    plain = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"coupling.startup_time": 0.0})
+    plain = paper_scene("meng_eq35", {"coupling.startup_time": 0.0})
     kept, _ = advise(plain, 1e-4, probe=0.5, redesign=False)
     assert all(c.diverged for c in kept if "effects.motor_inertia" in c.effects_off)
     assert recommend(kept, 1e-4, 0.01) is None

@@ -8,14 +8,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cosim.engine.artifacts import ROOT
 from cosim.platform.parameter_sets import mechanics_start_values
 from cosim.platform.runner import SceneFailed, run_scene
-from cosim.platform.scene import Pulse, Signal, Sine, load_scene
+from conftest import paper_scene
+from cosim.platform.scene import Pulse, Signal, Sine
 from cosim.platform.signals import scene_trajectory
 from cosim.platform.system import POSE, simulate
 
-BASE = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=3.0)
+BASE = dataclasses.replace(paper_scene("meng_eq35"), duration=3.0)
 NOMINAL_ERROR = 3.5e-3  # the scene's largest tracking error after 0.3 s, m or rad, with margin (measured 3.0e-3)
 
 

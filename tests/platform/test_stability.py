@@ -10,10 +10,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cosim.engine.artifacts import ROOT
 from cosim.platform.parameter_sets import mechanics_start_values
 from cosim.platform.runner import SceneFailed, run_scene
-from cosim.platform.scene import load_scene
+from conftest import paper_scene
 from cosim.platform.signals import scene_trajectory
 from cosim.engine import RunFailed
 from cosim.platform.system import simulate
@@ -61,7 +60,7 @@ def test_divergence_verdict_agrees_with_torque_chatter(algorithm, order):
     found (the README's table): Gauss-Seidel order 0: 1.5 ms, order 1: 1 ms, order 2: 0.5 ms; Jacobi
     order 0: 0.5 ms, orders 1 and 2: 0.25 ms. Extrapolation buys accuracy at the price of stability,
     and Gauss-Seidel, which gives the mechanics the drives' new torques, is twice as stable."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=0.6, pulses=[],
+    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.6, pulses=[],
                                 algorithm=algorithm, order=order)
     found = verdicts(scene, STEPS)
     assert all(stopped == chattering for stopped, chattering in found.values()), found
@@ -80,7 +79,7 @@ def test_the_interface_jacobian_doubles_the_largest_stable_step(algorithm, order
     verdict, which counts the energy the slope's correction carries, still agrees with the torques'
     chatter at every step up to 4 ms. Order 2 gains nothing (0.5 ms either way); order 0 is refused
     with the slope (tests/platform/test_scenes.py)."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=0.6, pulses=[],
+    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.6, pulses=[],
                                 algorithm=algorithm, order=order, interface_jacobian=True)
     steps = (*STEPS, 3e-3, 4e-3)
     found = verdicts(scene, steps)
@@ -93,7 +92,7 @@ def test_a_diverging_run_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
     """The Meng scene without the rotors' inertia at 1 ms (the drives' speed loops then three times
     faster than designed): the run stops early, names the worst bond, suggests a quarter of the step only after a probe ran stable at it,
     and keeps the results up to there; at the suggested 0.25 ms it runs through."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=1.0, pulses=[],
+    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=1.0, pulses=[],
                                 mechanics_parameters={"effects.motor_inertia": False})
     with pytest.raises(SceneFailed) as failed:
         run_scene(scene, out=tmp_path, plots=False)
@@ -109,7 +108,7 @@ def test_a_diverging_run_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
 def test_step_doubling_runs_through_where_the_fixed_step_diverges():
     """The same scene under step doubling from 1 ms: the controller shrinks the step where the fixed
     step diverged, and the torques do not chatter."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=0.5, pulses=[],
+    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.5, pulses=[],
                                 mechanics_parameters={"effects.motor_inertia": False}, step_control="doubling",
                                 rtol=1e-3, atol=1e-3)
     result, report = run_scene(scene)
@@ -127,7 +126,7 @@ def test_the_slopes_work_shows_in_the_energy_residual():
     converged reference)."""
     runs = {}
     for interface_jacobian in (False, True):
-        runs[interface_jacobian] = run_scene(load_scene(ROOT / "scenes" / "meng_eq35.toml", {
+        runs[interface_jacobian] = run_scene(paper_scene("meng_eq35", {
             "scene.duration": 0.3, "coupling.interface_jacobian": interface_jacobian}), plots=False)
     plain, slopes = runs[False][1].largest_energy_residual, runs[True][1].largest_energy_residual
     assert 5 * plain < slopes < 20 * plain, (plain, slopes)
