@@ -319,6 +319,9 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         startup = {}  # no finer start
     elif "startup_step" not in startup:
         raise fail("coupling", "startup_time", "needs startup_step, the finer step of the start")
+    elif not startup["startup_step"] > 0:
+        raise fail("coupling", "startup_step", f"= {startup['startup_step']!r} must be a positive number (the finer "
+                   "step of the start)")
     if "edge_time" in coupling:
         startup["edge_time"] = number("coupling", coupling, "edge_time")
         if startup["edge_time"] < 0 or ("startup_step" not in startup and startup["edge_time"] > 0):

@@ -73,6 +73,8 @@ CASES = {
     "a start pose that is a table": (MENG.replace('parameter_set = "meng2010"', 'parameter_set = "meng2010"\n'
                                                   '[mechanics.parameters]\n"initial.pose.z" = {}'),
                                      ':12: mechanics.parameters."initial.pose.z" = {}: must be a finite number (mechanics)'),
+    "a finer start at a step of 0": (MENG.replace("order = 1", "order = 1\nstartup_time = 0.01\nstartup_step = 0"),
+                                     ":16: 'coupling.startup_step' = 0.0 must be a positive number"),
     "a start pose out of reach": (MENG.replace('parameter_set = "meng2010"', 'parameter_set = "meng2010"\n'
                                                '[mechanics.parameters]\n"initial.pose.y" = -1e300'),
                                   ":11: the platform of [mechanics] at its start pose: the legs are singular at the pose"),
