@@ -191,19 +191,11 @@ FMU_LAYER_VARIABLES(X)
     VR_leg##i##_force_velocity_slope, VR_leg##i##_velocity_seen
 #define LEG_TORQUE_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen
 #define ALL_LEGS(inputs) inputs(1), inputs(2), inputs(3), inputs(4), inputs(5), inputs(6)
+#define LEG_REFERENCES(D, i) D(leg##i##_length_ref, POSE_REF_INPUTS) D(leg##i##_angle_ref, POSE_REF_INPUTS) \
+    D(leg##i##_velocity_ref, POSE_REF_INPUTS) D(leg##i##_speed_ref, POSE_REF_INPUTS)
 #define MODEL_FEEDTHROUGH(D) \
-D(leg1_length_ref, POSE_REF_INPUTS) D(leg1_angle_ref, POSE_REF_INPUTS) \
-D(leg1_velocity_ref, POSE_REF_INPUTS) D(leg1_speed_ref, POSE_REF_INPUTS) \
-D(leg2_length_ref, POSE_REF_INPUTS) D(leg2_angle_ref, POSE_REF_INPUTS) \
-D(leg2_velocity_ref, POSE_REF_INPUTS) D(leg2_speed_ref, POSE_REF_INPUTS) \
-D(leg3_length_ref, POSE_REF_INPUTS) D(leg3_angle_ref, POSE_REF_INPUTS) \
-D(leg3_velocity_ref, POSE_REF_INPUTS) D(leg3_speed_ref, POSE_REF_INPUTS) \
-D(leg4_length_ref, POSE_REF_INPUTS) D(leg4_angle_ref, POSE_REF_INPUTS) \
-D(leg4_velocity_ref, POSE_REF_INPUTS) D(leg4_speed_ref, POSE_REF_INPUTS) \
-D(leg5_length_ref, POSE_REF_INPUTS) D(leg5_angle_ref, POSE_REF_INPUTS) \
-D(leg5_velocity_ref, POSE_REF_INPUTS) D(leg5_speed_ref, POSE_REF_INPUTS) \
-D(leg6_length_ref, POSE_REF_INPUTS) D(leg6_angle_ref, POSE_REF_INPUTS) \
-D(leg6_velocity_ref, POSE_REF_INPUTS) D(leg6_speed_ref, POSE_REF_INPUTS) \
+LEG_REFERENCES(D, 1) LEG_REFERENCES(D, 2) LEG_REFERENCES(D, 3) \
+LEG_REFERENCES(D, 4) LEG_REFERENCES(D, 5) LEG_REFERENCES(D, 6) \
 D(power_drive, ALL_LEGS(LEG_EFFORT_INPUTS)) \
 D(power_transmission_loss, ALL_LEGS(LEG_TORQUE_INPUTS)) \
 D(power_load, VR_load_force_x, VR_load_force_y, VR_load_force_z, VR_load_torque_x, VR_load_torque_y, VR_load_torque_z, \
