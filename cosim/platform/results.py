@@ -24,7 +24,8 @@ def save_figure(fig, path: Path) -> None:
 
 
 DRIVE_QUANTITIES = {"torque": "motor torque", "speed": "motor speed", "current.q": "i_q", "force": "motor force",
-                    "velocity": "leg velocity", "current": "current"}
+                    "velocity": "leg velocity", "current": "current", "torque_applied": "applied motor torque",
+                    "force_applied": "applied force"}
 
 
 def _steady_limits(ax, t, values, start: float, margin: float = 0.15) -> None:

@@ -65,7 +65,7 @@ FIGURES = {"meng2010": ("as Meng et al. 2010, Fig 7", "as Meng et al. 2010, Fig 
 
 def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
     drive_outputs = scene.outputs_drive if scene.outputs_drive is not None else list(DRIVES[scene.drive].outputs)
-    return columns(scene.drive, scene.outputs_mechanics, drive_outputs)
+    return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian)
 
 
 def scene_values(scene: Scene) -> tuple[dict, dict]:
@@ -198,6 +198,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
         report.log = out / f"{scene.path.stem}.log"
         write_log(outcome.messages, report.log)
         effort, speed = DRIVES[scene.drive].outputs[:2]
+        if scene.interface_jacobian:  # the legs feel the drives' efforts corrected by their slopes: plot what they feel
+            effort = f"{effort}_applied"
         if plots and len(result) > 1:
             from . import results
             tracking, drives = FIGURES.get(scene.parameter_set, ("", ""))

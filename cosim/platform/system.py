@@ -80,18 +80,24 @@ def units(drive: str) -> dict[str, str]:
     for v in sorted(found, key=lambda v: v.causality != "output"):
         if v.unit:
             out.setdefault(v.name, v.unit.replace(".", " "))
+            if v.name.startswith("leg[1]."):  # a per-leg mechanics output, recorded as <name>[i]
+                out.setdefault(v.name[len("leg[1]."):], v.unit.replace(".", " "))
     return out
 
 
-def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = ()
-            ) -> tuple[list[tuple[str, str]], list[str]]:
+def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = (),
+            applied: bool = False) -> tuple[list[tuple[str, str]], list[str]]:
     """What a platform run records and how the columns are named: pose_ref.<dof> (trajectory),
-    pose.<dof> and the chosen mechanics outputs (mechanics), <output>[i] for each drive output."""
+    pose.<dof> and the chosen mechanics outputs (mechanics), <output>[i] for each drive output;
+    with `applied` (the interface-Jacobian coupling, where the legs feel the drives' efforts
+    corrected by their slopes) the efforts the mechanics applied, <effort>_applied[i]."""
+    effort = DRIVES[drive].effort[0]
     record = [*[("trajectory", f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
               *[("mechanics", n) for n in mechanics_outputs],
-              *[(instance, n) for n in drive_outputs for instance in drive_names(drive)]]
+              *[(instance, n) for n in drive_outputs for instance in drive_names(drive)],
+              *[("mechanics", f"leg[{i}].{effort}_applied") for i in LEGS if applied]]
     names = [*[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *mechanics_outputs,
-             *[f"{n}[{i}]" for n in drive_outputs for i in LEGS]]
+             *[f"{n}[{i}]" for n in drive_outputs for i in LEGS], *[f"{effort}_applied[{i}]" for i in LEGS if applied]]
     return record, names
 
 

@@ -26,7 +26,8 @@ static const int VR_TORQUE_SPEED_SLOPE[] = LEG_VRS(torque_speed_slope), VR_SPEED
 static const int VR_TORQUE[] = LEG_VRS(torque), VR_FORCE[] = LEG_VRS(force), VR_LENGTH[] = LEG_VRS(length),
                  VR_VELOCITY[] = LEG_VRS(velocity), VR_ANGLE[] = LEG_VRS(angle), VR_SPEED[] = LEG_VRS(speed),
                  VR_LENGTH_REF[] = LEG_VRS(length_ref), VR_ANGLE_REF[] = LEG_VRS(angle_ref),
-                 VR_VELOCITY_REF[] = LEG_VRS(velocity_ref), VR_SPEED_REF[] = LEG_VRS(speed_ref);
+                 VR_VELOCITY_REF[] = LEG_VRS(velocity_ref), VR_SPEED_REF[] = LEG_VRS(speed_ref),
+                 VR_TORQUE_APPLIED[] = LEG_VRS(torque_applied), VR_FORCE_APPLIED[] = LEG_VRS(force_applied);
 static const int VR_POSE_REF[] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z,
                                   VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw};
 static const int VR_WRENCH[] = {VR_load_force_x, VR_load_force_y, VR_load_force_z,
@@ -212,6 +213,12 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->twist_wx = x[10]; v->twist_wy = x[11]; v->twist_wz = x[12];
     PlatformDriveSlopes slopes;
     inputs_at(fmu, t, x, torque, force, &slopes, wrench);
+    double torque_applied[PLATFORM_LEGS], force_applied[PLATFORM_LEGS];
+    platform_applied_efforts(p, legs, torque, force, &slopes, torque_applied, force_applied);
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        *fmu_real(fmu, VR_TORQUE_APPLIED[i]) = torque_applied[i];
+        *fmu_real(fmu, VR_FORCE_APPLIED[i]) = force_applied[i];
+    }
     if (platform_derivatives(p, x, torque, force, &slopes, wrench, dxdt, &d) != 0) d.drive_power = NAN;
     v->energy_kinetic = d.kinetic;
     v->energy_potential = d.potential;

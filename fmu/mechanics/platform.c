@@ -395,6 +395,20 @@ static void assemble(const Platform *p, const double *x, const double wrench[6],
     }
 }
 
+void platform_applied_efforts(const Platform *p, const LegGeometry legs[PLATFORM_LEGS],
+                              const double torque_in[PLATFORM_LEGS], const double force_in[PLATFORM_LEGS],
+                              const PlatformDriveSlopes *slopes, double torque[PLATFORM_LEGS],
+                              double force[PLATFORM_LEGS]) {
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        torque[i] = torque_in[i];
+        force[i] = force_in[i];
+        if (slopes) { /* the drives' interface Jacobians (see platform.h) */
+            torque[i] += slopes->torque_speed_slope[i] * (p->screw_ratio * legs[i].velocity - slopes->speed_seen[i]);
+            force[i] += slopes->force_velocity_slope[i] * (legs[i].velocity - slopes->velocity_seen[i]);
+        }
+    }
+}
+
 int platform_derivatives(const Platform *p, const double *x, const double torque_in[PLATFORM_LEGS],
                          const double force_in[PLATFORM_LEGS], const PlatformDriveSlopes *slopes,
                          const double wrench[6], double *dxdt, PlatformDiagnostics *diag) {
@@ -404,14 +418,7 @@ int platform_derivatives(const Platform *p, const double *x, const double torque
     if (!diag) diag = &local;
     assemble(p, x, wrench, M, rhs, legs, diag);
     double drive_power = 0.0, transmission_loss = 0.0, torque[PLATFORM_LEGS], force[PLATFORM_LEGS];
-    for (int i = 0; i < PLATFORM_LEGS; i++) {
-        torque[i] = torque_in[i];
-        force[i] = force_in[i];
-        if (slopes) { /* the drives' interface Jacobians (see platform.h) */
-            torque[i] += slopes->torque_speed_slope[i] * (p->screw_ratio * legs[i].velocity - slopes->speed_seen[i]);
-            force[i] += slopes->force_velocity_slope[i] * (legs[i].velocity - slopes->velocity_seen[i]);
-        }
-    }
+    platform_applied_efforts(p, legs, torque_in, force_in, slopes, torque, force);
     for (int i = 0; i < PLATFORM_LEGS; i++) {
         /* Eq 22: the screw turns motor torque into leg force K_FT T = eta i_theta T */
         const double F = p->force_torque * torque[i] + force[i];

@@ -116,6 +116,14 @@ typedef struct {
     double force_velocity_slope[PLATFORM_LEGS], velocity_seen[PLATFORM_LEGS]; /* [N s/m], [m/s] */
 } PlatformDriveSlopes;
 
+/* The efforts the legs feel at their current velocities: each drive's torque (force) plus its
+ * slope times (the leg's motor speed (extension rate) - the one the drive was given); the inputs
+ * themselves where slopes is NULL. */
+void platform_applied_efforts(const Platform *p, const LegGeometry legs[PLATFORM_LEGS],
+                              const double torque_in[PLATFORM_LEGS], const double force_in[PLATFORM_LEGS],
+                              const PlatformDriveSlopes *slopes, double torque[PLATFORM_LEGS],
+                              double force[PLATFORM_LEGS]);
+
 /* dx/dt for motor torques (screw legs), direct axial forces (with the drives' slopes, or NULL) and
  * the external wrench [F (3), M (3)] at the platform origin, base frame. Returns 0, or -1 if the
  * mass matrix is not positive definite (diag may be NULL). */

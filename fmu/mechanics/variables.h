@@ -56,7 +56,12 @@ X(Real, leg##i##_velocity_ref, "leg[" #i "].velocity_ref", output, continuous, "
   "Extension rate of leg " #i " at pose_ref moving at the rate of pose_ref (its inputs' derivatives): the rate " \
   "of leg[" #i "].length_ref") \
 X(Real, leg##i##_speed_ref, "leg[" #i "].speed_ref", output, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
-  "Motor speed of leg " #i " at pose_ref: screw ratio times velocity_ref")
+  "Motor speed of leg " #i " at pose_ref: screw ratio times velocity_ref") \
+X(Real, leg##i##_torque_applied, "leg[" #i "].torque_applied", output, continuous, "N.m", 0.0, -FMU_INF, FMU_INF, \
+  "Motor torque the screw of leg " #i " feels: torque + torque_speed_slope (speed - speed_seen), the drive's " \
+  "torque corrected by its interface Jacobian (the torque input itself without one)") \
+X(Real, leg##i##_force_applied, "leg[" #i "].force_applied", output, continuous, "N", 0.0, -FMU_INF, FMU_INF, \
+  "Direct-drive force leg " #i " feels: force + force_velocity_slope (velocity - velocity_seen)")
 
 /* What a drive designer needs of leg i, at the start pose (computed once, at initialization): the
  * leg's inertia with the other legs held, M_ii of the joint-space mass matrix J^-T M J^-1, and the
@@ -184,7 +189,7 @@ FMU_LAYER_VARIABLES(X)
 /* Direct feed-through (the ModelStructure's output dependencies): D(output, the value references of
  * the inputs it depends on at the same communication point), one row per such output; every other
  * output depends on no input (on the state alone). The legs' references follow pose_ref (and
- * its derivatives); the powers follow the efforts and the load.
+ * its derivatives); the applied efforts and the powers follow the efforts; the load's power the load.
  * tests/models/test_dependencies.py perturbs each input and holds this table to what moves. */
 #define POSE_REF_INPUTS VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw
 #define LEG_EFFORT_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_force, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen, \
@@ -192,7 +197,9 @@ FMU_LAYER_VARIABLES(X)
 #define LEG_TORQUE_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen
 #define ALL_LEGS(inputs) inputs(1), inputs(2), inputs(3), inputs(4), inputs(5), inputs(6)
 #define LEG_REFERENCES(D, i) D(leg##i##_length_ref, POSE_REF_INPUTS) D(leg##i##_angle_ref, POSE_REF_INPUTS) \
-    D(leg##i##_velocity_ref, POSE_REF_INPUTS) D(leg##i##_speed_ref, POSE_REF_INPUTS)
+    D(leg##i##_velocity_ref, POSE_REF_INPUTS) D(leg##i##_speed_ref, POSE_REF_INPUTS) \
+    D(leg##i##_torque_applied, VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen) \
+    D(leg##i##_force_applied, VR_leg##i##_force, VR_leg##i##_force_velocity_slope, VR_leg##i##_velocity_seen)
 #define MODEL_FEEDTHROUGH(D) \
 LEG_REFERENCES(D, 1) LEG_REFERENCES(D, 2) LEG_REFERENCES(D, 3) \
 LEG_REFERENCES(D, 4) LEG_REFERENCES(D, 5) LEG_REFERENCES(D, 6) \
