@@ -30,12 +30,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping
 
 import numpy as np
 
 from ..engine.sweep import SYSTEM, Sweep, Target, statistics
 from ..engine.sweep import load_sweep as engine_load_sweep
+from .accuracy import difference
 from .ports import DRIVES, LEGS, POSE, per_leg
 from .scene import SceneError, load_scene
 
@@ -134,17 +135,6 @@ class ScenePoint:
                 row.update(effort_error=error / peak, effort_error_time=when)
         row.update(statistics(result, dict(self.outputs)))
         return {**row, "status": status, "message": message}
-
-
-def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str], with_time: bool = False):
-    """Largest |result - reference| over `names` at the result's own times, the (finer) reference
-    interpolated there (and when, with_time); inf when the result stops before the reference does."""
-    if not len(result) or result["time"][-1] < reference["time"][-1] - 1e-9:
-        return (float("inf"), float("nan")) if with_time else float("inf")
-    t = result["time"]
-    gap = np.max([np.abs(result[n] - np.interp(t, reference["time"], reference[n])) for n in names], axis=0)
-    k = int(np.argmax(gap))
-    return (float(gap[k]), float(t[k])) if with_time else float(gap[k])
 
 
 # -- the sweep file: the scene as a target beside the SSP system ----------------------------------

@@ -1,0 +1,81 @@
+"""How far a run is from a reference run of the same scene, judged where people look (issue 24):
+per window of time, the start-up, each load pulse with the time after it, and the steady tracking
+between, each against its own scale (the reference's own change of the quantity there), beside the
+largest difference over the whole run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+START_UP = 0.2  # [s] the drives' start-up shock and its settling
+AFTER = 0.2     # [s] judged with each load pulse after its end
+
+
+@dataclass(frozen=True)
+class Window:
+    name: str
+    spans: tuple[tuple[float, float], ...]  # the time spans it covers, each [start, end)
+
+    def mask(self, t: np.ndarray) -> np.ndarray:
+        return np.any([(t >= a) & (t < b) for a, b in self.spans], axis=0)
+
+
+def windows(duration: float, pulses: Sequence = ()) -> list[Window]:
+    """The start-up, each load pulse (from its start to AFTER past its end) and the steady
+    tracking: the rest after the start-up. Spans are half open; the last one takes the run's end."""
+    end = duration + 1e-9 * max(1.0, duration)
+    out = [Window("start-up", ((0.0, min(START_UP, end)),))]
+    edges = sorted({(p.start, min(end, p.end + AFTER)) for p in pulses if p.start < duration})
+    out += [Window(f"load pulse at {a:g} s", ((a, b),)) for a, b in edges]
+    steady, t = [], START_UP
+    for a, b in edges:
+        if a > t:
+            steady.append((t, a))
+        t = max(t, b)
+    if t < end:
+        steady.append((t, end))
+    if steady:
+        out.append(Window("steady tracking", tuple(steady)))
+    return out
+
+
+def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str], with_time: bool = False):
+    """Largest |result - reference| over `names` at the result's own times, the (finer) reference
+    interpolated there (and when, with_time); inf when the result stops before the reference does."""
+    if not len(result) or result["time"][-1] < reference["time"][-1] - 1e-9:
+        return (float("inf"), float("nan")) if with_time else float("inf")
+    t = result["time"]
+    gap = np.max([np.abs(result[n] - np.interp(t, reference["time"], reference[n])) for n in names], axis=0)
+    k = int(np.argmax(gap))
+    return (float(gap[k]), float(t[k])) if with_time else float(gap[k])
+
+
+@dataclass(frozen=True)
+class WindowError:
+    window: str
+    error: float  # largest |result - reference| in the window, the quantity's unit
+    scale: float  # the reference's own change there: the largest (max - min) over `names`
+
+    @property
+    def relative(self) -> float:
+        return self.error / self.scale if self.scale > 0 else float("inf")
+
+
+def window_errors(result: np.ndarray, reference: np.ndarray, names: Sequence[str],
+                  spans: Sequence[Window]) -> list[WindowError]:
+    """Per window, the largest difference of `names` (at the result's times, the reference
+    interpolated) against the reference's own change in that window."""
+    t = result["time"]
+    out = []
+    for window in spans:
+        here, there = window.mask(t), window.mask(reference["time"])
+        if not here.any() or not there.any():
+            continue
+        error = max(float(np.max(np.abs(result[n][here] - np.interp(t[here], reference["time"], reference[n]))))
+                    for n in names)
+        scale = max(float(np.ptp(reference[n][there])) for n in names)
+        out.append(WindowError(window.name, error, scale))
+    return out
