@@ -41,7 +41,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m cosim", description="Stewart platform co-simulation")
+    prog = "cosim" if Path(sys.argv[0]).name == "cosim" else "python -m cosim"  # the console script, or -m
+    parser = argparse.ArgumentParser(prog=prog, description="Stewart platform co-simulation")
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
     run.add_argument("scene", type=Path)
@@ -263,5 +264,10 @@ def run_system(path: Path, out: Path, settings: list[str], duration: float | Non
                   f"{out}/{path.stem}.csv and .mat", out)
 
 
-if __name__ == "__main__":
+def main_exit() -> None:
+    """The `cosim` console script: the same CLI as `python -m cosim`."""
     sys.exit(main())
+
+
+if __name__ == "__main__":
+    main_exit()

@@ -183,12 +183,24 @@ def with_overrides(data: dict, overrides: dict[str, Any]) -> dict:
     return data
 
 
+def shipped_scenes() -> list[str]:
+    """The names of the shipped scenes (scenes/<name>.toml), which load_scene takes by name."""
+    from ..engine.artifacts import ROOT
+    return sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
+
+
 def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Scene:
-    """Reads and checks a scene file; `overrides` sets values at dotted keys of its document
-    first (a sweep's point), checked as if the file said them."""
+    """Reads and checks a scene file, or a shipped scene by its name (`meng_eq35`); `overrides`
+    sets values at dotted keys of its document first (a sweep's point), checked as if the file
+    said them."""
     path = Path(path)
+    if not path.exists() and path.suffix == "" and len(path.parts) == 1 and str(path) in shipped_scenes():
+        from ..engine.artifacts import ROOT
+        path = ROOT / "scenes" / f"{path}.toml"
     if not path.exists():
-        raise SceneError(f"{path}: no such scene file")
+        import difflib
+        near = difflib.get_close_matches(path.stem, shipped_scenes(), 1)
+        raise SceneError(f"{path}: no such scene file" + (f" (a shipped scene is named {near[0]!r})" if near else ""))
     if path.is_dir():
         raise SceneError(f"{path}: is a folder, not a scene file (the shipped scenes are scenes/*.toml)")
     try:

@@ -251,3 +251,20 @@ def test_explicit_gains_win_over_the_design_and_the_design_is_reported(tmp_path)
 def test_a_bad_tuning_is_named_with_its_line(tmp_path):
     with pytest.raises(SceneError, match=r"scene.toml:4: 'drive.tuning' = 'manual'"):
         load_scene(write(tmp_path, '[scene]\nduration = 1.0\n[drive]\ntuning = "manual"\n'))
+
+
+def test_a_shipped_scene_is_reachable_by_name_and_the_cli_is_a_console_script(tmp_path, capsys):
+    """`cosim run meng_eq35` (the console script pip installs, the same CLI as python -m cosim)
+    runs the shipped scene by its name; a name close to one is a one-line error that names it."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    assert load_scene("meng_eq35").path == ROOT / "scenes" / "meng_eq35.toml"
+    with pytest.raises(SceneError, match=r"meng_eq53: no such scene file \(a shipped scene is named 'meng_eq35'\)"):
+        load_scene("meng_eq53")
+    script = Path(sys.executable).parent / "cosim"
+    run = subprocess.run([str(script), "run", "sumnu_case_1", "--duration", "0.02", "--no-plots", "--out",
+                          str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and (tmp_path / "sumnu_case_1.csv").exists(), run.stderr
+    usage = subprocess.run([str(script), "--help"], capture_output=True, text=True, timeout=60)
+    assert usage.returncode == 0 and usage.stdout.startswith("usage: cosim ")
