@@ -45,6 +45,17 @@ def _check(path: Path, what: str) -> Path:
     return path
 
 
+def data_dir(name: str) -> Path:
+    """A folder of the checkout's data (params/, scenes/). A copy installed without the checkout
+    (`pip install <checkout>`) has none of it, nor the FMUs and libraries: one line says so."""
+    path = ROOT / name
+    if not path.is_dir():
+        raise ArtifactMissing(f"this cosim ({Path(__file__).parents[1]}) is installed without its checkout, "
+                              f"which holds {name}/, the FMUs and the native libraries: install it from the "
+                              f"checkout with `{BUILD_COMMAND}` (an editable install) and run that one")
+    return path
+
+
 def fmu_path(name: str, test: bool = False) -> Path:
     """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test-only FMU)."""
     return _check((TEST_FMU_DIR if test else FMU_DIR) / f"{name}.fmu", f"FMU '{name}'")

@@ -16,14 +16,14 @@ from __future__ import annotations
 import math
 import tomllib
 
-from ..engine.artifacts import ROOT
+from ..engine.artifacts import ROOT, data_dir
 from .ports import LEGS, POSE
 
 PARAMS = ROOT / "params"
 
 
 def load(name: str) -> dict:
-    path = PARAMS / f"{name}.toml"
+    path = data_dir("params") / f"{name}.toml"
     if not path.exists():
         known = ", ".join(p.stem for p in sorted(PARAMS.glob("*.toml")))
         raise FileNotFoundError(f"no parameter set '{name}' in {PARAMS} (known: {known})")

@@ -194,9 +194,11 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     sets values at dotted keys of its document first (a sweep's point), checked as if the file
     said them."""
     path = Path(path)
-    if not path.exists() and path.suffix == "" and len(path.parts) == 1 and str(path) in shipped_scenes():
-        from ..engine.artifacts import ROOT
-        path = ROOT / "scenes" / f"{path}.toml"
+    if not path.exists() and path.suffix == "" and len(path.parts) == 1:  # a shipped scene's name
+        from ..engine.artifacts import data_dir
+        scenes = data_dir("scenes")  # an install without the checkout has none: one line says so
+        if str(path) in shipped_scenes():
+            path = scenes / f"{path}.toml"
     if not path.exists():
         import difflib
         near = difflib.get_close_matches(path.stem, shipped_scenes(), 1)
