@@ -9,11 +9,11 @@ from .artifacts import ArtifactMissing, fmu_path
 from .checks import ParameterError
 from .execution import Execution, NoStep, RunFailed
 from .fmi import FmuError, FmuInstance
-from .observers import DivergenceMonitor, Diverged, Observer, Progress, Recorder
+from .observers import DivergenceMonitor, Diverged, Observer, Progress, RecordFull, Recorder
 from .settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .structure import Bond, Component, Connection, Experiment, SystemStructure
 
 __all__ = ["Algorithm", "ArtifactMissing", "NoStep", "ParameterError", "Bond", "Component", "Connection", "DivergenceMonitor", "Diverged",
            "EnergyControl", "Execution", "Experiment", "FixedStep", "FmuError", "FmuInstance", "Observer",
-           "Progress", "Recorder", "RunFailed", "SettingsError", "StepControl", "StepDoubling", "SystemStructure",
+           "Progress", "RecordFull", "Recorder", "RunFailed", "SettingsError", "StepControl", "StepDoubling", "SystemStructure",
            "fmu_path"]

@@ -17,7 +17,7 @@ from .checks import check_parameters
 from .coupling import Coupling
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
-from .observers import Diverged, Observer, Recorder
+from .observers import Diverged, Observer, RecordFull, Recorder
 from .settings import Algorithm, FixedStep, SettingsError, StepControl, control_name
 from .structure import SystemStructure
 
@@ -63,6 +63,7 @@ class Execution:
         self.steps = np.zeros(0)              # the accepted macro steps [s]
         self.bond_residual_max = np.zeros(len(self.bond_names))  # per bond, the largest |residual| of a step [J]
         self.start_time = self.stop_time = structure.experiment.start
+        self.record_budget = 0.5 * _memory()  # [bytes] of recorded rows; a fixed-step run is refused above it
 
     @property
     def rejected(self) -> int:
@@ -85,7 +86,7 @@ class Execution:
         Raises RunFailed with the results up to the last good step when an FMU fails, an observer
         stops the run, or not a single step fits before stop_time."""
         self._check_stop(stop_time)
-        recorder = Recorder(self.names)
+        recorder = Recorder(self.names, self.record_budget)
         observers = [recorder, *observers]
         self.start_time, self.stop_time = self.time, stop_time
         parts_residuals, parts_steps = [], []
@@ -116,7 +117,7 @@ class Execution:
                 parts_residuals.append(batch.residuals)
                 parts_steps.append(batch.steps)
             raise RunFailed(error, recorder.result()) from error
-        except Diverged as error:
+        except (Diverged, RecordFull) as error:
             raise RunFailed(error, recorder.result()) from error
         finally:
             self.energy_residuals = np.concatenate([self.energy_residuals, *parts_residuals])
@@ -136,11 +137,11 @@ class Execution:
             finer = round(self.control.step / self.control.startup_step) if self.control.startup_time > 0 else 1
             rows = steps + (finer - 1) * (round(self.control.startup_time / self.control.step)
                                           + sum(round((b - a) / self.control.step) + 1 for a, b in self.control.windows))
-            needed, available = 8.0 * rows * len(self.names), _memory()
-            if needed > 0.5 * available:
+            needed = 8.0 * rows * len(self.names)
+            if needed > self.record_budget:
                 raise NoStep(f"the run would record {rows:.3g} rows of {len(self.names)} columns ({needed / 2 ** 30:.3g} "
-                             f"GiB), more than half of this machine's {available / 2 ** 30:.3g} GiB: shorten it, or "
-                             "record fewer outputs or take longer steps")
+                             f"GiB), more than half of this machine's {2 * self.record_budget / 2 ** 30:.3g} GiB: "
+                             "shorten it, or record fewer outputs or take longer steps")
         elif stop_time - self.time <= 1e-12 * max(1.0, abs(stop_time)):
             raise NoStep(f"the stop time {stop_time:g} s is not after the start {self.time:g} s")
 

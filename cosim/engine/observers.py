@@ -7,6 +7,7 @@ the run stopped sets `stop` to an exception; the execution raises it with the re
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from typing import TYPE_CHECKING, Sequence
@@ -31,22 +32,41 @@ class Observer:
         """After the run, whether it finished or failed."""
 
 
+class RecordFull(RuntimeError):
+    """The record reached its memory budget (an adaptive step that collapsed, a run too long for
+    this machine): stopped at `time` with the rows so far."""
+
+    def __init__(self, message: str, time: float):
+        super().__init__(message)
+        self.time = time
+
+
 class Recorder(Observer):
     """Every accepted step's row (time and the recorded columns) into fmpy's result convention: a
-    numpy structured array with `time` and one named float column per recorded variable."""
+    numpy structured array with `time` and one named float column per recorded variable. Past
+    `budget` bytes of rows it stops the run (RecordFull) and keeps what it has."""
 
-    def __init__(self, names: Sequence[str]):
+    def __init__(self, names: Sequence[str], budget: float = math.inf):
         if len(set(names)) != len(names):
             raise ValueError(f"recorded column names must be unique: {list(names)}")
-        self.names = list(names)
+        self.names, self.budget = list(names), budget
         self.dtype = np.dtype([(name, "<f8") for name in self.names])
         self._parts: list[np.ndarray] = []
+        self.rows = 0
 
     def add(self, rows: np.ndarray) -> None:
         self._parts.append(np.array(rows, dtype=float, ndmin=2))
+        self.rows += len(self._parts[-1])
 
     def batch(self, execution: "Execution", batch: "Batch") -> None:
         self.add(batch.rows)
+        size = 8.0 * self.rows * len(self.names)
+        if size > self.budget and self.stop is None and len(batch.rows):
+            self.stop = RecordFull(
+                f"the run stopped at t = {batch.rows[-1, 0]:.6g} s: its record reached {self.rows:.3g} rows of "
+                f"{len(self.names)} columns ({size / 2 ** 30:.3g} GiB), half of this machine's memory; an adaptive "
+                "step that shrank to its minimum does this: raise the minimum step, shorten the run or record "
+                "fewer outputs", batch.rows[-1, 0])
 
     def result(self) -> np.ndarray:
         rows = np.ascontiguousarray(np.concatenate(self._parts) if self._parts else np.zeros((0, len(self.names))))

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import oracle
-from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RunFailed, StepDoubling,
-                          SystemStructure)
+from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RecordFull, RunFailed,
+                          StepDoubling, SystemStructure)
 from cosim.engine.artifacts import ROOT
 from cosim.platform.runner import scene_record, scene_settings, scene_structure
 from cosim.platform.scene import load_scene
@@ -70,6 +70,28 @@ def test_the_energy_law_s_safety_and_change_limits_reach_the_kernel():
     _, _, ours, _ = both(oscillator(), settings, EnergyControl(1e-2, rtol=1e-2, atol=1e-4, h_min=1e-4), 1.0,
                          record, names, "mass")
     assert max(np.diff(np.log(execution.steps))) <= np.log(1.5) + 1e-12 < max(np.diff(np.log(ours.steps)))
+
+
+@pytest.mark.parametrize("control", [StepDoubling(1e-2, rtol=1e-9, atol=1e-12, h_min=1e-7),
+                                     EnergyControl(1e-2, rtol=1e-9, atol=1e-12, h_min=1e-7)], ids=["doubling", "energy"])
+def test_an_adaptive_run_stops_at_its_record_budget_and_keeps_the_rows(control):
+    """An adaptive step driven to its minimum could record without bound (a fixed-step run is
+    refused up front by its size): past the record budget the run stops, says when, how big and what
+    to try, and keeps every row up to there, equal to an unbounded run's."""
+    settings, record, names = Algorithm("jacobi", 1), [("mass", "position")], ["x1"]
+    with Execution(oscillator(), settings, control, record, names, clock="mass") as free:
+        full = free.run(1.0)
+    budget_rows = len(full) // 3
+    with Execution(oscillator(), settings, control, record, names, clock="mass") as bounded:
+        bounded.record_budget = 8.0 * budget_rows * 2  # two columns: time and x1
+        with pytest.raises(RunFailed) as failed:
+            bounded.run(1.0)
+    error, kept = failed.value.error, failed.value.result
+    assert isinstance(error, RecordFull) and str(error).startswith(f"the run stopped at t = {error.time:.6g} s:")
+    assert "raise the minimum step" in str(error) and error.time < 1.0
+    assert budget_rows < len(kept) <= budget_rows + 500  # stopped within the batch that crossed the budget
+    assert kept["time"][-1] == error.time
+    assert np.array_equal(kept["x1"], full["x1"][:len(kept)]) and np.array_equal(kept["time"], full["time"][:len(kept)])
 
 
 @pytest.mark.parametrize("kind,order", [("jacobi", 0), ("jacobi", 1), ("gauss-seidel", 1), ("gauss-seidel", 2)])
