@@ -364,7 +364,7 @@ def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructur
                 archive.extractall(folder)
         except zipfile.BadZipFile:
             raise SspError(f"{path}: not an SSP archive (not a zip file)") from None
-        except (OSError, EOFError, ValueError, zlib.error, NotImplementedError) as error:  # a damaged archive
+        except (OSError, EOFError, ValueError, zlib.error, NotImplementedError) as error:  # damaged, or a method zipfile lacks
             raise SspError(f"{path}: a damaged SSP archive, its files cannot be unpacked ({error})") from None
         ssd, where = folder / "SystemStructure.ssd", f"{path}!SystemStructure.ssd"
         if not ssd.exists():

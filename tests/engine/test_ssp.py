@@ -71,6 +71,35 @@ def test_a_broken_archive_is_one_clear_error(archive, tmp_path, damage, message)
         read_ssp(broken)
 
 
+@pytest.mark.parametrize("damage", ["compression", "crc", "truncated"])
+def test_an_archive_that_cannot_be_unpacked_is_one_clear_error(archive, tmp_path, damage):
+    """A zip whose entries cannot be unpacked: a compression method zipfile lacks (its
+    NotImplementedError), a wrong checksum, a cut-off deflate stream, each one line naming the file."""
+    import struct
+    _, path = archive
+    data = bytearray(path.read_bytes())
+    with zipfile.ZipFile(path) as z:
+        info = z.getinfo("SystemStructure.ssd")
+    header = info.header_offset
+    if damage == "compression":  # method 99 in both the local and the central header
+        data[header + 8:header + 10] = struct.pack("<H", 99)
+        central = data.find(b"PK\x01\x02")
+        while central >= 0 and struct.unpack("<I", data[central + 42:central + 46])[0] != header:
+            central = data.find(b"PK\x01\x02", central + 4)
+        data[central + 10:central + 12] = struct.pack("<H", 99)
+    else:
+        start = header + 30 + len(info.filename.encode()) + len(info.extra)
+        if damage == "crc":
+            data[start] ^= 0xFF
+        else:
+            data[start + 1:start + info.compress_size] = bytes(info.compress_size - 1)
+    broken = tmp_path / "broken.ssp"
+    broken.write_bytes(bytes(data))
+    with pytest.raises(SspError) as error:
+        read_ssp(broken)
+    assert str(error.value).startswith(f"{broken}: ") and "\n" not in str(error.value)
+
+
 def test_not_an_archive(tmp_path):
     (tmp_path / "x.ssp").write_text("hello")
     with pytest.raises(SspError, match="not an SSP archive"):
