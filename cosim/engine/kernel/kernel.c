@@ -460,9 +460,6 @@ void kernel_release(Kernel *s) {
     s->helper = NULL;
 }
 
-/* One macro step from t (the master's time) to t + h: the start-up iteration if there is no
- * history yet, otherwise one sweep; the new history sample; the bonds' energy residual (largest
- * into *residual, per bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
 /* Feed-through at the newest sample (time t_new): per step of the plan, the inputs its outputs
  * depend on set to their sources' newest values (and exact derivatives, under extrapolation, from
  * the sources that give them), then those outputs read again into the sample. An output that
@@ -507,6 +504,9 @@ static int resolve_feedthrough(Kernel *s) {
     return 1;
 }
 
+/* One macro step from t (the master's time) to t + h: the start-up iteration if there is no
+ * history yet, otherwise one sweep; the new history sample; the bonds' energy residual (largest
+ * into *residual, per bond into bond_energy if not NULL). Returns 0 when an FMI call failed. */
 static int macro_step(Kernel *s, double t, double h, double *residual, double *bond_energy) {
     const double t_new = t + h;
     if (s->n_samples == 1 && s->order > 0) {
@@ -564,7 +564,6 @@ int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, 
 }
 
 /* ---- step control: step doubling and energy ---- */
-
 
 static void save_memory(Kernel *s, Controller *a, int *n_samples) {
     const size_t n = (size_t)s->n_sample_values, m = (size_t)s->n_inputs_total;
@@ -662,8 +661,9 @@ int kernel_run_doubling(Kernel *s, Controller *a, int clock, double t_end, int m
 
 /* Energy control (ECCO) from a->t towards t_end: after each step of H, eps = max over the bonds of
  * |dE| / (atol + rtol |E|) (at least 1e-10), and H_next = H safety (1/eps)^k_I (eps_prev/eps)^k_P,
- * limited to [change_min H, change_max H] and [h_min, h_max] (cosim/engine/settings.py: EnergyControl). No rollback. Returns rows written as
- * kernel_run_doubling (one residual and one bond_energy block per row). */
+ * limited to [change_min H, change_max H] and [h_min, h_max] (cosim/engine/settings.py:
+ * EnergyControl). No rollback. Returns rows written as kernel_run_doubling (one residual and one
+ * bond_energy block per row). */
 int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
                       double *accepted_h, double *residuals, double *bond_energy) {
     s->failed_instance = s->failed_call = -1;
