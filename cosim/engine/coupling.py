@@ -7,6 +7,7 @@ Both the step kernel (cosim/engine/kernel.py) and the tests' Python oracle read 
 
 from __future__ import annotations
 
+import graphlib
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -80,23 +81,16 @@ class Coupling:
                 indices = [i for i, n in enumerate(inputs) if n in names]
                 if indices:
                     depends[(name, output)] = indices
-        # an output waits for the feed-through outputs that feed the inputs it depends on (Kahn's order)
+        # an output waits for the feed-through outputs that feed the inputs it depends on
         waits = {node: {(source, self.sources[source][index]) for source, index in
                         (self.feeds[node[0]][i] for i in depends[node])} & set(depends) for node in depends}
-        order, ready = [], [node for node in depends if not waits[node]]
-        while ready:
-            node = ready.pop(0)
-            order.append(node)
-            for other in depends:
-                if node in waits[other]:
-                    waits[other].discard(node)
-                    if not waits[other] and other not in order and other not in ready:
-                        ready.append(other)
-        if len(order) < len(depends):
-            loop = sorted(f"{n}.{o}" for n, o in depends if (n, o) not in order)
+        try:
+            order = list(graphlib.TopologicalSorter(waits).static_order())
+        except graphlib.CycleError as error:
+            loop = sorted(f"{n}.{o}" for n, o in set(error.args[1]))
             raise FeedthroughLoop(f"an algebraic loop: the outputs {', '.join(loop)} depend on each other's values at "
                                   "the same communication point (their FMUs' declared dependencies); switch "
-                                  "feedthrough off, or break the loop")
+                                  "feedthrough off, or break the loop") from None
         steps: list[tuple[str, list[int], list[int]]] = []
         for name, output in order:
             index = self.sources[name].index(output)
