@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Mapping
 
 
+from .settings import SettingsError
 from .structure import SystemStructure, Value
 
 SETTABLE = {"parameter", "input"}
@@ -29,6 +30,10 @@ class ParameterError(ValueError):
 
     def __str__(self) -> str:
         return f"{self.component}.{self.variable} = {self.value!r}: {self.reason} ({self.fmu})"
+
+
+class CapabilityError(SettingsError):
+    """A component whose FMU cannot do what the step control asks (its capability flags)."""
 
 
 def variables(path: Path) -> dict:
@@ -87,6 +92,41 @@ def check_values(component: str, fmu: Path, values: Mapping[str, Value]) -> None
         reason = problem(known[name], value)
         if reason:
             raise ParameterError(component, name, value, reason, fmu.stem)
+
+
+def capability_problem(fmu: Path, control: object, instances: int = 1) -> str | None:
+    """Why an FMU cannot run under this step control (a cosim.engine.settings control), as `instances`
+    components of one system, or None: its modelDescription's capability flags decide. Step
+    doubling takes steps back (canGetAndSetFMUstate); the adaptive controls and a fixed step with a
+    finer start or edge windows change the step (canHandleVariableCommunicationStepSize); an FMU
+    that can be instantiated only once per process cannot be several components."""
+    from .fmi import loaded
+    from .settings import FixedStep, StepDoubling
+    flags = loaded(fmu)[0].coSimulation
+    if flags is None:
+        return "is not a Co-Simulation FMU (Model Exchange only)"
+    if isinstance(control, StepDoubling) and not flags.canGetAndSetFMUstate:
+        return ("cannot get and set its state (canGetAndSetFMUstate = false), which step doubling needs to take a "
+                "step back: use the fixed step or the energy control")
+    varies = not isinstance(control, FixedStep) or bool(control.windows) or \
+        (control.startup_time > 0 and 0 < control.startup_step < control.step)
+    if varies and not flags.canHandleVariableCommunicationStepSize:
+        return ("takes one communication step size only (canHandleVariableCommunicationStepSize = false): use a fixed "
+                "step without a finer start or edge windows")
+    if instances > 1 and flags.canBeInstantiatedOnlyOncePerProcess:
+        return f"can be instantiated only once per process (canBeInstantiatedOnlyOncePerProcess), not {instances} times"
+    return None
+
+
+def check_capabilities(structure: SystemStructure, control: object) -> None:
+    """Raises CapabilityError for the first component whose FMU cannot run under `control`."""
+    count: dict[Path, int] = {}
+    for component in structure.components:
+        count[Path(component.fmu)] = count.get(Path(component.fmu), 0) + 1
+    for component in structure.components:
+        reason = capability_problem(Path(component.fmu), control, count[Path(component.fmu)])
+        if reason:
+            raise CapabilityError(f"{component.name} ({Path(component.fmu).name}) {reason}")
 
 
 def _near(a: str, b: str) -> bool:

@@ -13,7 +13,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .checks import check_parameters
+from .checks import check_capabilities, check_parameters
 from .coupling import Coupling
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
@@ -45,6 +45,7 @@ class Execution:
                  clock: str | None = None, logging_on: bool = False,
                  interpolating: Mapping[str, bool] | None = None):
         check_parameters(structure)  # before any FMU is instantiated
+        check_capabilities(structure, control)
         self.structure, self.algorithm, self.control = structure, algorithm, control
         self.control_name = control_name(control)
         if algorithm.sequence and sorted(algorithm.sequence) != sorted(c.name for c in structure.components):

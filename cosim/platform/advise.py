@@ -59,8 +59,13 @@ class Candidate:
         return f"{self.step * 1e3:g} ms | off: {off} | {self.fidelity} | {self.gains} gains{coupling}"
 
 
+def fidelities(scene: Scene) -> dict[str, dict]:
+    """The drive models a candidate may choose: our drive's, or the user's drive FMU as it is."""
+    return {f"{scene.drive_fmu.name} as it is": {}} if scene.drive_fmu else FIDELITY[scene.drive]
+
+
 def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: float) -> Scene:
-    drive = {**scene.drive_parameters, **FIDELITY[scene.drive][fidelity]}
+    drive = {**scene.drive_parameters, **fidelities(scene)[fidelity]}
     mechanics = {**scene.mechanics_parameters, **{e: False for e in effects_off}}
     return dataclasses.replace(scene, step=step, duration=duration, mechanics_parameters=mechanics,
                                drive_parameters=drive, step_control="fixed")
@@ -69,12 +74,13 @@ def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: fl
 def _point(scene: Scene, factor: float, effects_off, fidelity: str, interface_jacobian: bool, redesign: bool) -> dict:
     """A candidate as a sweep point: overrides at the scene's keys; with `redesign`, a reduced
     model's drives get loops designed for its plant (tuning "auto")."""
+    redesign = redesign and scene.drive_fmu is None  # a user's drive keeps its own gains
     point = {"scene.step": scene.step * factor, "drive.tuning": "auto" if redesign and effects_off else scene.tuning,
              "coupling.interface_jacobian": interface_jacobian or scene.interface_jacobian}
     for effect in EFFECTS:
         point[f'mechanics.parameters."{effect}"'] = False if effect in effects_off else \
             scene.mechanics_parameters.get(effect, True)
-    point.update({f'drive.parameters."{k}"': v for k, v in FIDELITY[scene.drive][fidelity].items()})
+    point.update({f'drive.parameters."{k}"': v for k, v in fidelities(scene)[fidelity].items()})
     return point
 
 
@@ -90,16 +96,16 @@ def advise(scene: Scene, tolerance: float, probe: float = 2.0, effort_tolerance:
     runs its drives with loops designed for its reduced plant (cosim.platform.tuning), as a
     designer would; the full-model candidates keep the scene's own gains."""
     duration = min(scene.duration, probe)
-    own = next(name for name, values in FIDELITY[scene.drive].items()
+    own = next(name for name, values in fidelities(scene).items()
                if all(scene.drive_parameters.get(k, v if name.startswith(("averaged", "electrical")) else None) == v
                       for k, v in values.items()))
     reference, _ = run_scene(_variant(scene, scene.step / 4, (), own, duration))
     half, _ = run_scene(_variant(scene, scene.step / 2, (), own, duration))
     convergence = _pose_difference(half, reference)
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
-    plan = list(itertools.product((0.5, 1, 2, 4), subsets, FIDELITY[scene.drive], (False,)))
+    plan = list(itertools.product((0.5, 1, 2, 4), subsets, fidelities(scene), (False,)))
     if scene.order > 0 and not scene.interface_jacobian:
-        plan += list(itertools.product((1, 2, 4), [()], FIDELITY[scene.drive], (True,)))
+        plan += list(itertools.product((1, 2, 4), [()], fidelities(scene), (True,)))
     evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "steps", "stepping_wall"),
                           base=(*scene.overrides.items(), ("scene.duration", duration),
                                 ("coupling.step_control", "fixed")),

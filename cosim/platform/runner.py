@@ -20,12 +20,12 @@ from ..engine.outcome import Outcome, Report, RunStopped
 from ..engine.results import thin, write as write_results, write_log
 from ..engine.settings import output_settings, to_strings
 from .parameter_sets import drive_set, scene_mechanics
-from .ports import DRIVES, POSE
+from .ports import DRIVES, LEGS, POSE
 from .scene import Scene, SceneError, line_of, scene_settings
 from .signals import scene_trajectory
 from .platform_core import LayoutImpossible, SingularPose
 from .system import columns, platform_structure, run, units
-from .tuning import SizingError, check_sizing, design, hold_currents, leg_plants, summary
+from .tuning import SizingError, check_limit, check_sizing, design, hold_currents, leg_plants, summary
 
 
 @dataclass
@@ -63,50 +63,104 @@ FIGURES = {"meng2010": ("as Meng et al. 2010, Fig 7", "as Meng et al. 2010, Fig 
            "sumnu2015": ("as Sumnu 2015, Section 5.3", "as Sumnu 2015, Section 5.3")}
 
 
+def drive_fmus(scene: Scene) -> list[Path]:
+    """Per leg, the drive FMU: the user's where the scene names one, ours for its kind otherwise."""
+    return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu) for leg in LEGS]
+
+
 def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
-    drive_outputs = scene.outputs_drive if scene.outputs_drive is not None else list(DRIVES[scene.drive].outputs)
+    """What the scene records: its [outputs], or by default the drive kind's effort, flow and
+    current (the current where every leg's drive FMU has it)."""
+    if scene.outputs_drive is not None:
+        drive_outputs = scene.outputs_drive
+    else:
+        has = [variables(fmu) for fmu in set(drive_fmus(scene))]
+        drive_outputs = [n for n in DRIVES[scene.drive].outputs if all(n in found for found in has)]
     return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian)
 
 
 def scene_values(scene: Scene) -> tuple[dict, dict]:
-    """The mechanics' and the drives' parameter values: the platform's set, the drive set (a
+    """The mechanics' and our drives' parameter values: the platform's set, the drive set (a
     drive sized for this platform), then the scene's own, which win."""
     drive_values = drive_set(scene.drive_set)[0] if scene.drive_set else {}
     mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, scene.drive_set, scene.mechanics_parameters)
-    return mechanics_values, {**drive_values, **scene.drive_parameters}
+    return mechanics_values, {**drive_values, **(scene.drive_parameters if scene.drive_fmu is None else {})}
 
 
-def scene_design(scene: Scene) -> tuple[list[dict] | None, str | None]:
-    """Per leg, the drive parameters: designed for the platform (tuning = "auto", with their
-    summary), or the defaults with the PMSM starting to hold its leg (initial.current_q from the
-    static load, unless the scene gives it); None for a drive's plain defaults. Raises SceneError
-    when a drive cannot hold its leg (sizing, checked whatever the tuning)."""
-    mechanics_values, drive_values = scene_values(scene)
+def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
+    """Per leg, the drive parameters, with a summary of the designed gains and notes on the
+    drives of the user's own. Our drives: designed for the platform (tuning = "auto"), or the
+    defaults with the PMSM starting to hold its leg (initial.current_q from the static load,
+    unless the scene gives it). A drive FMU of the user's own keeps its own parameters (the
+    scene's [drive.parameters] where it is the [drive] FMU, and its leg's). Raises SceneError when
+    a drive cannot hold its leg (sizing: ours always, a user's by its continuous_limit)."""
+    mechanics_values, ours = scene_values(scene)
     plants = leg_plants(mechanics_values)
+    text = scene.path.read_text()
+    legs = [{**({} if leg in scene.leg_fmus else scene.drive_parameters if scene.drive_fmu else ours),
+             **scene.leg_parameters.get(leg, {})} for leg in LEGS]
+    own = [k for k, leg in enumerate(LEGS) if scene.leg_fmu(leg) is None]
     try:
-        check_sizing(scene.drive, plants, drive_values)
+        for k in own:
+            check_sizing(scene.drive, [plants[k]], legs[k], leg=k + 1)
     except SizingError as error:
-        raise SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'drive', 'kind')}: drive.kind = "
+        raise SceneError(f"{scene.path}:{line_of(text, 'drive', 'kind')}: drive.kind = "
                          f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
-    if scene.tuning != "auto":
-        if scene.drive == "pmsm" and "initial.current_q" not in drive_values:
-            return [{**drive_values, "initial.current_q": q} for q in hold_currents(plants, drive_values)], None
-        return (None if not drive_values else [dict(drive_values) for _ in plants]), None
-    designed = design(scene.drive, plants, drive_values)
-    return designed, summary(scene.drive, designed)
+    notes, unchecked = user_drive_notes(scene), []
+    for k, leg in enumerate(LEGS):
+        fmu = scene.leg_fmu(leg)
+        if fmu is None:
+            continue
+        if leg not in scene.continuous_limit:
+            unchecked.append(leg)
+            continue
+        name = scene.continuous_limit[leg]
+        limit = float(legs[k].get(name, variables(fmu)[name].start))
+        try:
+            check_limit(scene.drive, plants[k], limit, f"{fmu.name}'s {name}", leg)
+        except SizingError as error:
+            table = f"drive.leg.{leg}" if "continuous_limit" in text and leg in scene.leg_fmus else "drive"
+            raise SceneError(f"{scene.path}:{line_of(text, table, 'continuous_limit')}: {error}") from None
+    if unchecked:
+        notes.append(f"sizing not checked for legs {', '.join(map(str, unchecked))}: name the parameter that holds "
+                     "the drive's continuous torque or force with drive.continuous_limit")
+    if scene.tuning != "auto" or not own:
+        if scene.drive == "pmsm":
+            for k in own:
+                if "initial.current_q" not in legs[k]:
+                    legs[k]["initial.current_q"] = hold_currents([plants[k]], legs[k])[0]
+        return legs, None, notes
+    designed = [design(scene.drive, [plants[k]], legs[k])[0] for k in own]
+    for k, values in zip(own, designed):
+        legs[k] = values
+    return legs, summary(scene.drive, designed), notes
 
 
-def scene_structure(scene: Scene, designed: list[dict] | None | bool = False) -> SystemStructure:
+def user_drive_notes(scene: Scene) -> list[str]:
+    """For the run report: each drive FMU of the user's own, its tool, legs, what fmpy's
+    validation says of it and what the master does not do with it."""
+    from .drive_fmu import inspect
+    notes = []
+    for fmu in dict.fromkeys(f for f in (scene.leg_fmu(leg) for leg in LEGS) if f is not None):
+        drive = inspect(fmu)
+        legs = [leg for leg in LEGS if scene.leg_fmu(leg) == fmu]
+        limits = drive.limits(scene.interface_jacobian)
+        notes.append(f"drive FMU {drive.name} ({drive.model}, {drive.tool}) on legs {', '.join(map(str, legs))}"
+                     + (f"; switched off: {'; '.join(limits)}" if limits else ""))
+        notes += [f"{drive.name}: fmpy's validation: {problem}" for problem in drive.problems]
+    return notes
+
+
+def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemStructure:
     """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
     the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them.
-    designed: the drives' designed parameters if scene_design was already called."""
-    mechanics_values, drive_values = scene_values(scene)
-    if designed is False:
-        designed, _ = scene_design(scene)
-    structure = platform_structure(scene.drive, mechanics_values, drive_values if designed is None else {},
-                                   scene_trajectory(scene), leg_values=designed, name=scene.path.stem,
-                                   experiment=Experiment(0.0, scene.duration, scene.step),
-                                   interface_jacobian=scene.interface_jacobian)
+    designed: the drives' parameters per leg if scene_design was already called."""
+    mechanics_values, _ = scene_values(scene)
+    if designed is None:
+        designed = scene_design(scene)[0]
+    structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
+                                   name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
+                                   interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene))
     algorithm, control = scene_settings(scene)
     structure.settings = {**to_strings(algorithm, control), **output_settings(*scene_record(scene),
                                                                                scene.output_interval)}
@@ -153,8 +207,9 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
                                                              "fmi2Setup")):
         detail = "; ".join(m.text for m in error.messages) or "the FMU logged no reason"
         named = re.search(r"'([^']+)'", detail)  # the variable the FMU names, if it is one of its variables
-        fmu = {"trajectory": "trajectory", "mechanics": "mechanics"}.get(error.instance, DRIVES[scene.drive].fmu)
-        known = named is not None and named.group(1) in variables(fmu_path(fmu))
+        fmu = {"trajectory": fmu_path("trajectory"), "mechanics": fmu_path("mechanics")}.get(
+            error.instance) or drive_fmus(scene)[int(error.instance[-1]) - 1]
+        known = named is not None and named.group(1) in variables(fmu)
         where = located(scene, error.instance, named.group(1)) if known else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):
@@ -180,7 +235,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     algorithm, control = scene_settings(scene)
     record = scene_record(scene)
     try:
-        designed, tuning = scene_design(scene)
+        designed, tuning, drive_notes = scene_design(scene)
         structure = scene_structure(scene, designed)
         outcome = run(structure, algorithm, control, scene.duration, record,
                       observers=[Progress(scene.name)] if progress else [], advice=advice)
@@ -193,6 +248,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
         raise mapped from None
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, tuning)
+    report.remarks += drive_notes
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"

@@ -6,7 +6,13 @@
                   platform) | "defaults" (the FMU's, the default on the drive's own platform);
                   parameter_set = "sumnu2015_pmsm" | ... | "none" (a drive sized for another paper's
                   platform, params/<platform>_<kind>.toml; the default for a swapped drive when the
-                  project has one); [drive.parameters] (explicit values win over the set and the design)
+                  project has one); [drive.parameters] (explicit values win over the set and the design);
+                  fmu = "my_drive.fmu" (relative to the scene: a drive FMU of your own that keeps the
+                  drive ports of INTERFACES.md; its kind comes from its ports, its parameters are its
+                  own, checked against it, and it keeps its own gains), continuous_limit = "<its
+                  parameter>" (the continuous torque or force the sizing check holds it to)
+    [drive.leg.<i>]  i in 1..6: fmu, parameters = {...}, continuous_limit: leg i's own drive FMU (the
+                  same kind as the others), or parameters on top of [drive.parameters]
     [mechanics]   parameter_set = "meng2010" | "sumnu2015", mass_set; [mechanics.parameters]
     [coupling]    algorithm = "gauss-seidel" | "jacobi", order = 0 | 1 | 2,
                   step_control = "fixed" (default: scene.step throughout) | "doubling" (local error by
@@ -51,6 +57,7 @@ from typing import Any
 
 from ..engine.tomlfile import line_of
 from ..engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
+from .drive_fmu import KIND_NAMES
 from .ports import DRIVES, POSE
 from .system import default_algorithm
 
@@ -133,12 +140,22 @@ class Scene:
     tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
     drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
     overrides: dict[str, Any] = field(default_factory=dict)  # the dotted keys load_scene set over the file
+    drive_fmu: Path | None = None  # [drive] fmu: a drive FMU of the user's own on every leg (None: ours)
+    leg_fmus: dict[int, Path] = field(default_factory=dict)  # [drive.leg.<i>] fmu: leg i's own drive FMU
+    leg_parameters: dict[int, dict[str, Any]] = field(default_factory=dict)  # [drive.leg.<i>] parameters
+    continuous_limit: dict[int, str] = field(default_factory=dict)  # per leg: the user's drive's parameter
+    #                                      that holds its continuous torque or force, for the sizing check
+
+    def leg_fmu(self, leg: int) -> Path | None:
+        """Leg `leg`'s (1..6) drive FMU when it is not ours."""
+        return self.leg_fmus.get(leg, self.drive_fmu)
 
 
 SCHEMA: dict[str, set[str]] = {
     "": {"scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"},
     "scene": {"name", "duration", "step"},
-    "drive": {"kind", "parameters", "tuning", "parameter_set"},
+    "drive": {"kind", "parameters", "tuning", "parameter_set", "fmu", "continuous_limit", "leg"},
+    "drive.leg.*": {"fmu", "parameters", "continuous_limit"},
     "mechanics": {"parameter_set", "mass_set", "parameters"},
     "coupling": {"algorithm", "order", "step_control", "rtol", "atol", "h_min", "h_max", "startup_time",
                  "startup_step", "edge_time", "threads", "interface_jacobian", "feedthrough"},
@@ -245,15 +262,16 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
             raise fail(table, key, f"= {value!r} {what} ({', '.join(map(repr, options))})")
         return value
 
-    def parameters(table: str, values: dict, fmu: str) -> dict[str, Any]:
-        """[<table>.parameters] checked against the FMU's modelDescription: names, types, bounds."""
+    def parameters(table: str, values: dict, fmu: str | Path) -> dict[str, Any]:
+        """[<table>.parameters] checked against the FMU's modelDescription (ours by name, or a
+        user's by path): names, types, bounds."""
         given = values.get("parameters", {})
         if not isinstance(given, dict):
             raise fail(table, "parameters", f"= {given!r} must be a table of FMU variable = value")
         from ..engine.artifacts import fmu_path
         from ..engine.checks import ParameterError, check_values
         try:
-            check_values(table, fmu_path(fmu), given)
+            check_values(table, fmu if isinstance(fmu, Path) else fmu_path(fmu), given)
         except ParameterError as error:
             raise SceneError(f"{path}:{line_of(text, f'{table}.parameters', error.variable)}: {table}.parameters."
                              f'"{error.variable}" = {error.value!r}: {error.reason} ({error.fmu})') from None
@@ -275,6 +293,19 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                 raise fail(table, key, f"entries need {', '.join(sorted(ITEM_KEYS[key]))}") from None
         return out
 
+    def drive_fmu(table: str, values: dict):
+        """A user's drive FMU named at <table>.fmu, inspected (cosim.platform.drive_fmu), or None."""
+        given = values.get("fmu")
+        if given is None:
+            return None
+        if not isinstance(given, str):
+            raise fail(table, "fmu", f"= {given!r} must be the path of a drive FMU (relative to the scene)")
+        from .drive_fmu import DriveFmuError, inspect
+        try:
+            return inspect(path.parent / given)
+        except DriveFmuError as error:
+            raise fail(table, "fmu", f"= {given!r}: {error}") from None
+
     check_keys("", data, SCHEMA[""])
     for table in ("scene", "drive", "mechanics", "coupling", "trajectory", "load", "outputs"):
         if not isinstance(data.get(table, {}), dict):
@@ -282,13 +313,36 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         check_keys(table, data.get(table, {}), SCHEMA[table])
     scene, drive, mechanics = data.get("scene", {}), data.get("drive", {}), data.get("mechanics", {})
     coupling = data.get("coupling", {})
-    kind = choice("drive", drive, "kind", "pmsm", tuple(DRIVES), "is not a drive kind")
+    top, legs = drive_fmu("drive", drive), drive.get("leg", {})
+    if not isinstance(legs, dict) or not all(isinstance(v, dict) for v in legs.values()):
+        raise fail("drive", "leg", "must be tables [drive.leg.<i>] for legs i = 1..6")
+    for leg, values in legs.items():
+        if leg not in {str(i) for i in range(1, 7)}:
+            raise fail("drive", "leg", f"has a table for leg {leg!r}; the legs are 1..6 ([drive.leg.3])")
+        check_keys(f"drive.leg.{leg}", values, SCHEMA["drive.leg.*"])
+    leg_fmus = {int(leg): found for leg, values in legs.items()
+                if (found := drive_fmu(f"drive.leg.{leg}", values)) is not None}
+    if top is not None:
+        kind = top.kind
+        if drive.get("kind", kind) != kind:
+            raise fail("drive", "kind", f"= {drive['kind']!r}, but drive.fmu {top.name} has the {KIND_NAMES[kind]} "
+                       f"drive's ports (kind {kind!r}); leave kind out with an fmu")
+    else:
+        kind = choice("drive", drive, "kind", "pmsm", tuple(DRIVES), "is not a drive kind")
+    for leg, found in leg_fmus.items():
+        if found.kind != kind:
+            raise fail(f"drive.leg.{leg}", "fmu", f"= {found.name} has the {KIND_NAMES[found.kind]} drive's ports, the "
+                       f"other legs' drives are {KIND_NAMES[kind]}: one platform's legs take one kind (the "
+                       "transmission is the platform's)")
     parameter_set = choice("mechanics", mechanics, "parameter_set", "meng2010", ("meng2010", "sumnu2015"),
                            "is not a platform's parameter set")
     # a drive on the platform its defaults were designed for keeps them; a swapped one is designed
-    tuning = drive.get("tuning", "defaults" if NATIVE_DRIVE.get(parameter_set) == kind else "auto")
+    tuning = drive.get("tuning", "defaults" if NATIVE_DRIVE.get(parameter_set) == kind or top else "auto")
     if tuning not in ("auto", "defaults"):
         raise fail("drive", "tuning", f"= {tuning!r}: use 'auto' (designed for this platform) or 'defaults'")
+    if tuning == "auto" and (top is not None or len(leg_fmus) == 6):
+        raise fail("drive", "tuning", "= 'auto' designs the loops of our drives (pmsm_drive, linear_motor) only; a "
+                   "drive FMU of your own keeps its own gains")
     from .parameter_sets import PARAMS, drive_set_name
     drive_set = drive.get("parameter_set", drive_set_name(parameter_set, kind)
                           if NATIVE_DRIVE.get(parameter_set) != kind else None)
@@ -383,7 +437,26 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                       tuple(load_parameter_set(parameter_set).get("mass_sets", {"heavy": None})), "is not a mass set of "
                       f"{parameter_set}")
     mechanics_parameters = parameters("mechanics", mechanics, "mechanics")
-    drive_parameters = parameters("drive", drive, DRIVES[kind].fmu)
+    drive_parameters = parameters("drive", drive, top.path if top else DRIVES[kind].fmu)
+    leg_parameters, limits = {}, {}
+    for leg, values in legs.items():
+        own = leg_fmus.get(int(leg), top)
+        leg_parameters[int(leg)] = parameters(f"drive.leg.{leg}", values, own.path if own else DRIVES[kind].fmu)
+    for leg in range(1, 7):
+        table, values = (f"drive.leg.{leg}", legs[str(leg)]) if "continuous_limit" in legs.get(str(leg), {}) \
+            else ("drive", drive)
+        if "continuous_limit" not in values:
+            continue
+        own, name = leg_fmus.get(leg, top), values["continuous_limit"]
+        if own is None:
+            if table == "drive" and leg_fmus:
+                continue  # [drive]'s limit is for the legs that take its FMU
+            raise fail(table, "continuous_limit", f"= {name!r}: our drives' limits are known (the sizing check reads "
+                       "them); continuous_limit names the parameter of a drive FMU of your own")
+        if not isinstance(name, str) or name not in own.parameters:
+            raise fail(table, "continuous_limit", f"= {name!r} is not a Real parameter of {own.name} (it has: "
+                       f"{', '.join(sorted(own.parameters)) or 'none'})")
+        limits[leg] = name
     if at_neutral:
         from .parameter_sets import scene_mechanics
         from .platform_core import neutral_pose
@@ -401,13 +474,26 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
                     interpolation=interpolation, step_control=step_control, atol=atol, **tolerances,
                     outputs_mechanics=names["mechanics"] or [], outputs_drive=names["drive"], output_interval=interval,
                     tuning=tuning, drive_set=drive_set, overrides=dict(overrides or {}), threads=threads,
-                    interface_jacobian=interface_jacobian, feedthrough=feedthrough, **startup)
+                    interface_jacobian=interface_jacobian, feedthrough=feedthrough,
+                    drive_fmu=top.path if top else None, leg_fmus={leg: f.path for leg, f in leg_fmus.items()},
+                    leg_parameters=leg_parameters, continuous_limit=limits, **startup)
     try:
         scene_settings(loaded)
     except SettingsError as error:  # what the settings object refuses beyond the checks above
         table, key = ("scene", "step") if error.setting in (None, "step") else \
             ("coupling", {"kind": "algorithm", "windows": "edge_time"}.get(error.setting, error.setting))
         raise fail(table, key, f"is refused: {error}") from None
+    user = {f.path: f for f in (top, *leg_fmus.values()) if f is not None}
+    if user:  # what the user's drive FMUs cannot do limits the step control
+        from ..engine.checks import capability_problem
+        control = scene_settings(loaded)[1]
+        for fmu in user.values():
+            reason = capability_problem(fmu.path, control, sum(loaded.leg_fmu(i) == fmu.path for i in range(1, 7)))
+            if reason:
+                key = "step_control" if "step_control" in coupling else \
+                    next((k for k in ("edge_time", "startup_time") if k in coupling), "step_control")
+                where = "drive.fmu" if fmu is top else f"drive.leg.{min(i for i, f in leg_fmus.items() if f is fmu)}.fmu"
+                raise fail("coupling", key, f"is refused: {fmu.name} ({where}) {reason}")
     return loaded
 
 

@@ -11,6 +11,7 @@ samples, then the mechanics with each effort interpolated between t and t + h.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Mapping, Sequence
 
 from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
@@ -27,33 +28,40 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
                        drive_values: Mapping[str, object] | None = None,
                        trajectory_values: Mapping[str, object] | None = None,
                        leg_values: Sequence[Mapping[str, object]] | None = None, name: str = "platform",
-                       experiment: Experiment | None = None, interface_jacobian: bool = False) -> SystemStructure:
+                       experiment: Experiment | None = None, interface_jacobian: bool = False,
+                       drive_fmus: Sequence[Path] | None = None) -> SystemStructure:
     """Trajectory, mechanics and six drives of one kind with these parameter values (leg_values:
-    per drive, on top of drive_values, e.g. each leg's force feedforward). interface_jacobian: each
-    drive's slope d effort / d flow feeds the mechanics, with the flow the drive was given (the
-    mechanics' own flow output wired back to its `*_seen` input: every coupling algorithm hands both
-    the same extrapolation), so the mechanics integrates the drives' damping implicitly."""
+    per drive, on top of drive_values, e.g. each leg's force feedforward). drive_fmus: per leg, the
+    drive's FMU (default: ours for the kind); a drive's optional ports (the reference's rate, the
+    slope) are wired where its FMU has them. interface_jacobian: each drive's slope d effort / d
+    flow feeds the mechanics, with the flow the drive was given (the mechanics' own flow output
+    wired back to its `*_seen` input: every coupling algorithm hands both the same
+    extrapolation), so the mechanics integrates the drives' damping implicitly."""
+    from ..engine.checks import variables
     if drive not in DRIVES:
         raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
     wiring = DRIVES[drive]
+    fmus = [Path(f) for f in drive_fmus] if drive_fmus else [fmu_path(wiring.fmu)] * len(LEGS)
+    has = {fmu: set(variables(fmu)) for fmu in set(fmus)}
     components = [Component("trajectory", fmu_path("trajectory"), dict(trajectory_values or {})),
                   Component("mechanics", fmu_path("mechanics"), dict(mechanics_values or {}))]
-    drive_fmu = fmu_path(wiring.fmu)
     for k, instance in enumerate(drive_names(drive)):
-        components.append(Component(instance, drive_fmu, {**dict(wiring.wired_parameters), **(drive_values or {}),
-                                                          **(leg_values[k] if leg_values else {})}))
+        wired = {key: value for key, value in wiring.wired_parameters if key in has[fmus[k]]}
+        components.append(Component(instance, fmus[k], {**wired, **(drive_values or {}),
+                                                        **(leg_values[k] if leg_values else {})}))
     connections = [Connection(("trajectory", n), ("mechanics", n))
                    for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH, *BODY_WRENCH]]
     bonds = []
-    for i, instance in zip(LEGS, drive_names(drive)):
+    for i, instance, fmu in zip(LEGS, drive_names(drive), fmus):
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
             connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
-        if wiring.reference_rate:
+        flow = connections[-1]  # speed, velocity
+        if wiring.reference_rate and wiring.reference_rate[1] in has[fmu]:
             output, drive_input = wiring.reference_rate
             connections.append(Connection(("mechanics", output.format(i=i)), (instance, drive_input)))
-        connections.append(Connection((instance, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))))
-        effort, flow, slope = connections[-1], connections[-2], None  # torque x speed, force x velocity
-        if interface_jacobian:
+        effort, slope = Connection((instance, wiring.effort[0]), ("mechanics", wiring.effort[1].format(i=i))), None
+        connections.append(effort)  # torque x speed, force x velocity
+        if interface_jacobian and wiring.slope[0] in has[fmu]:
             slope_output, slope_input, seen_input = wiring.slope
             slope = Connection((instance, slope_output), ("mechanics", slope_input.format(i=i)))
             connections.append(slope)

@@ -96,20 +96,28 @@ def hold_currents(plants: list[LegPlant], drive_values: Mapping[str, object]) ->
     return [plant.static_force / plant.force_torque / given["motor.torque_constant"] for plant in plants]
 
 
-def check_sizing(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object]) -> None:
+def check_sizing(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object], leg: int = 1) -> None:
+    """Raises SizingError for the first leg (numbered from `leg`) our drive cannot hold: the PMSM
+    up to K_m times its current limit, the linear motor up to its continuous force."""
     given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
-    for i, plant in enumerate(plants, start=1):
+    for i, plant in enumerate(plants, start=leg):
         if drive == "pmsm":
-            torque = abs(plant.static_force) / plant.force_torque
-            limit = given["motor.torque_constant"] * given["limit.current"]
-            if torque > limit:
-                raise SizingError(f"leg {i} needs {torque:.3g} N m to hold the start pose, above pmsm_drive's "
-                                  f"K_m x limit.current = {limit:.3g} N m")
+            check_limit(drive, plant, given["motor.torque_constant"] * given["limit.current"],
+                        "pmsm_drive's K_m x limit.current", i)
         else:
-            limit = given["motor.continuous_force"]
-            if abs(plant.static_force) > limit:
-                raise SizingError(f"leg {i} needs {abs(plant.static_force):.4g} N to hold the start pose, above "
-                                  f"linear_motor's motor.continuous_force = {limit:.4g} N")
+            check_limit(drive, plant, given["motor.continuous_force"], "linear_motor's motor.continuous_force", i)
+
+
+def check_limit(drive: str, plant: LegPlant, limit: float, what: str, leg: int) -> None:
+    """Raises SizingError if leg `leg`'s static load needs more than `limit` (N m of a rotary
+    drive: the leg force over K_FT; N of a linear one), named `what`."""
+    if drive == "pmsm":
+        torque = abs(plant.static_force) / plant.force_torque
+        if torque > limit:
+            raise SizingError(f"leg {leg} needs {torque:.3g} N m to hold the start pose, above {what} = {limit:.3g} N m")
+    elif abs(plant.static_force) > limit:
+        raise SizingError(f"leg {leg} needs {abs(plant.static_force):.4g} N to hold the start pose, above {what} = "
+                          f"{limit:.4g} N")
 
 
 def summary(drive: str, designed: list[dict[str, float]]) -> str:

@@ -104,6 +104,11 @@ def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
         from_drives = [c.target[1] for c in scene_structure(scene).connections
                        if c.target[0] == "mechanics" and c.target[1].startswith("leg[")]
         assert from_drives == [wiring.effort[1].format(i=i) for i in range(1, 7)]
+        # each power bond is the drive's effort times the leg's own flow (speed, velocity), not the
+        # reference's rate that a linear drive also takes
+        bonds = scene_structure(scene).bonds
+        assert [(b.effort.source[1], b.flow.source[1]) for b in bonds] == \
+            [(wiring.effort[0], wiring.velocity[0].format(i=i)) for i in range(1, 7)]
 
 
 def test_a_run_that_fails_names_the_fmu_and_keeps_its_results(tmp_path, capsys):
