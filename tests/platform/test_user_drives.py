@@ -163,6 +163,23 @@ def test_the_ssp_export_carries_the_users_fmu_and_runs_bit_for_bit(fmus, tmp_pat
     assert len(err.splitlines()) == 1 and "pmsm1 (rotary_servo.fmu) cannot get and set its state" in err, err
 
 
+def test_the_peers_run_a_users_drive_as_they_run_ours(fmus, tmp_path):
+    """Leg 3 on the Python servo beside five of ours, exported as SSP and run by Ecos and fmpy.ssp
+    (bit for bit like our master, as for the all-ours system: tests/platform/test_ssp_tools.py)
+    and libcosim (the pose to 1e-12 there too; the torques to 1e-8, not 1e-10: the servo
+    differentiates its reference over the step, which turns libcosim's integer-nanosecond clock's
+    round-off in the trajectory's times into differences 1/h = 1e3 times larger)."""
+    import test_ssp_tools as peers
+    (tmp_path / "rotary_servo.fmu").write_bytes(fmus["rotary_servo"].read_bytes())
+    drive = '[drive]\nkind = "pmsm"\n[drive.leg.3]\nfmu = "rotary_servo.fmu"\nparameters = {' + \
+        ", ".join(f"{k} = {v!r}" for k, v in gains("pmsm").items()) + "}"
+    path = tmp_path / "mixed.ssp"
+    assert main(["export", str(scene_file(tmp_path, drive, motion=True)), "--ssp", str(path)]) == 0
+    peers.ecos_matches(path)
+    peers.fmpy_matches(path)
+    peers.libcosim_matches(path, tmp_path / "libcosim", torque_rel=1e-8)
+
+
 def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     rotary = drive_section(fmus["rotary_servo"], tmp_path, "pmsm")
     with pytest.raises(SceneError, match=r"scene.toml:\d+: 'coupling.step_control' is refused: rotary_servo.fmu "
@@ -173,6 +190,21 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     scene = load_scene(scene_file(tmp_path, linear, duration=0.3, extra='[coupling]\nstep_control = "doubling"'))
     result, report = run_scene(scene, plots=False)
     assert report.failure is None and result["time"][-1] == pytest.approx(0.3)
+    # one step size only: a finer start is refused, the plain fixed step runs
+    fixed = edited(fmus["linear_servo"], tmp_path, "fixed_step", lambda t: t.replace(
+        'canHandleVariableCommunicationStepSize="true"', 'canHandleVariableCommunicationStepSize="false"'))
+    one_step = linear.replace("linear_servo.fmu", "fixed_step.fmu")
+    with pytest.raises(SceneError, match=r"'coupling.startup_time' is refused: fixed_step.fmu \(drive.fmu\) takes one "
+                                         r"communication step size only"):
+        load_scene(scene_file(tmp_path, one_step, extra="[coupling]\nstartup_time = 0.1\nstartup_step = 1e-4"))
+    assert run_scene(load_scene(scene_file(tmp_path, one_step, duration=0.1)), plots=False)[1].failure is None
+    # no input derivatives to a drive that cannot interpolate its inputs (pythonfmu's): the coupling holds them
+    from cosim.engine import Execution
+    from cosim.platform.scene import scene_settings
+    scene = load_scene(scene_file(tmp_path, linear, duration=0.1))
+    with Execution(scene_structure(scene), *scene_settings(scene)) as execution:
+        assert execution.coupling.interpolating["linear1"] is False
+        assert execution.coupling.interpolating["mechanics"] is True  # ours takes them
     # no interface Jacobian from a drive without the slope output: the run says so and keeps going
     scene = load_scene(scene_file(tmp_path, linear, duration=0.1, extra="[coupling]\ninterface_jacobian = true"))
     structure = scene_structure(scene)
