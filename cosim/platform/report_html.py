@@ -117,7 +117,12 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
                       f'</section>' for title, fig in figures)
     failure = (f'<div class="failure" data-name="failure"><h2>The run stopped</h2><p>{html.escape(report.failure)}</p>'
                f'</div>') if report.failure else ""
-    scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", scene.drive, scene.drive),
+    own: dict[str, list[str]] = {}  # a user's drive FMU: the legs it drives
+    for leg in range(1, 7):
+        if scene.leg_fmu(leg):
+            own.setdefault(scene.leg_fmu(leg).name, []).append(str(leg))
+    drive = scene.drive + "".join(f", {name} on legs {' '.join(legs)}" for name, legs in own.items())
+    scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", drive, scene.drive),
                   ("parameter set", scene.parameter_set, scene.parameter_set),
                   ("coupling", f"{scene.algorithm}, order {scene.order}"
                    + (", the drives' interface Jacobians" if scene.interface_jacobian else ""),
