@@ -16,7 +16,9 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -r requirements.txt
-.venv/bin/python -m pip install --quiet --no-deps -e .
+# the package editable, its Python files from this checkout; CMake builds the C parts into build/ below
+# (a wheel, `pip install .` or `pip wheel .`, builds them into the package instead: scikit-build-core)
+.venv/bin/python -m pip install --quiet --no-deps --no-build-isolation -C wheel.cmake=false -e .
 .venv/bin/cmake -S . -B build -DPython3_EXECUTABLE="$PWD/.venv/bin/python" > build.log 2>&1 || { cat build.log; exit 1; }
 .venv/bin/cmake --build build -j 2 >> build.log 2>&1 || { cat build.log; exit 1; }
 touch build/built.stamp  # cosim.engine.artifacts: the build is current

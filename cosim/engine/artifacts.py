@@ -1,9 +1,15 @@
-"""Where the built artifacts are: the FMUs (build/fmus/), the test FMUs (build/test_fmus/) and the
-native libraries (build/lib/: the engine's step kernel, the mechanics' dynamics core).
+"""Where the built artifacts and the shipped data are, in either of the package's two layouts:
 
-The package never builds anything: `bash scripts/setup.sh` does (CMake). A missing artifact, or a
-build older than the C sources it comes from, is an `ArtifactMissing` error with one line that
-says which command builds it. COSIM_BUILD_DIR points at another build folder.
+- installed from a wheel (`pip install stewart-cosim`, or `pip install <checkout>`, which builds
+  one with scikit-build-core): everything inside the package, `cosim/_data/`: fmus/ (the four
+  FMUs), lib/ (the engine's step kernel, the mechanics' dynamics core), params/, scenes/, sweeps/;
+- a checkout (`bash scripts/setup.sh`: CMake into build/, the Python package installed editable
+  without it): build/fmus/, build/test_fmus/, build/lib/ and the checkout's params/, scenes/,
+  sweeps/. COSIM_BUILD_DIR points at another build folder.
+
+The package never builds anything at run time. A missing artifact, or a checkout's build older
+than the C sources it comes from, is an `ArtifactMissing` error with one line that says which
+command builds it.
 """
 
 from __future__ import annotations
@@ -11,8 +17,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-BUILD_DIR = Path(os.environ.get("COSIM_BUILD_DIR", ROOT / "build"))
+PACKAGE_DATA = Path(__file__).resolve().parents[1] / "_data"  # a wheel's artifacts and data
+INSTALLED = PACKAGE_DATA.is_dir() and "COSIM_BUILD_DIR" not in os.environ
+# the checkout, or in an installed package the folder of its data (params/, scenes/, sweeps/)
+ROOT = PACKAGE_DATA if INSTALLED else Path(__file__).resolve().parents[2]
+BUILD_DIR = PACKAGE_DATA if INSTALLED else Path(os.environ.get("COSIM_BUILD_DIR", ROOT / "build"))
 FMU_DIR = BUILD_DIR / "fmus"
 TEST_FMU_DIR = BUILD_DIR / "test_fmus"
 LIB_DIR = BUILD_DIR / "lib"
@@ -28,7 +37,7 @@ class ArtifactMissing(FileNotFoundError):
 
 def _sources() -> list[Path]:
     """The C sources and build files of this checkout (none in an installed package)."""
-    if not (ROOT / "CMakeLists.txt").exists():
+    if INSTALLED or not (ROOT / "CMakeLists.txt").exists():
         return []
     return [ROOT / "CMakeLists.txt", *(ROOT / "cmake").glob("*"), *(ROOT / "fmu").rglob("*"),
             *(ROOT / "tests" / "fmus").rglob("*"), *(ROOT / "cosim" / "engine" / "kernel").rglob("*.[ch]")]
@@ -46,13 +55,14 @@ def _check(path: Path, what: str) -> Path:
 
 
 def data_dir(name: str) -> Path:
-    """A folder of the checkout's data (params/, scenes/). A copy installed without the checkout
-    (`pip install <checkout>`) has none of it, nor the FMUs and libraries: one line says so."""
+    """A folder of the shipped data (params/, scenes/, sweeps/): the wheel's or the checkout's. A
+    copy of the Python files alone (installed without the wheel's build) has none of it, nor the
+    FMUs and libraries: one line says so."""
     path = ROOT / name
     if not path.is_dir():
-        raise ArtifactMissing(f"this cosim ({Path(__file__).parents[1]}) is installed without its checkout, "
-                              f"which holds {name}/, the FMUs and the native libraries: install it from the "
-                              f"checkout with `{BUILD_COMMAND}` (an editable install) and run that one")
+        raise ArtifactMissing(f"this cosim ({Path(__file__).parents[1]}) has neither its wheel's data nor a checkout, "
+                              f"which hold {name}/, the FMUs and the native libraries: install the wheel "
+                              f"(`pip install <checkout>` builds one) or run `{BUILD_COMMAND}` in a checkout")
     return path
 
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -82,6 +82,16 @@ class ScenePoint:
     def scene(self, values: Mapping[str, Any]):
         # a sweep keeps every core busy with points: each steps on one thread unless an axis says
         return load_scene(self.path, {"coupling.threads": 1, **dict(self.base), **values})
+
+    def files(self, points: Sequence[Mapping[str, Any]] = ()) -> list[Path]:
+        """The files the points' scenes read besides the scene file (a trajectory table, drive
+        FMUs of the user's own), which travel to the Dask workers by content."""
+        variants = [{}, *(p for p in points if any(str(k).endswith(("fmu", "table")) for k in p))]
+        found: list[Path] = []
+        for values in variants:
+            scene = self.scene(values)
+            found += [f for f in (scene.table, scene.drive_fmu, *scene.leg_fmus.values()) if f is not None]
+        return list(dict.fromkeys(found))
 
     def check(self, values: Mapping[str, Any]) -> None:
         """Raises SceneError (one line) when the point cannot start: its keys, types and the

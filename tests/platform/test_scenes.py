@@ -275,26 +275,27 @@ def test_a_shipped_scene_is_reachable_by_name_and_the_cli_is_a_console_script(tm
     assert usage.returncode == 0 and usage.stdout.startswith("usage: cosim ")
 
 
-def test_a_copy_installed_without_the_checkout_says_so_in_one_line(tmp_path):
-    """`pip install <checkout>` copies the Python package alone (no FMUs, libraries, parameter sets
-    or scenes yet): run from another folder, a scene by name or by path ends in one line that says
-    what is missing and how to install, exit 2, not a traceback."""
+def test_a_copy_of_the_python_files_alone_says_so_in_one_line(tmp_path):
+    """The Python package copied without its data (neither a wheel's cosim/_data/ nor a checkout
+    around it: no FMUs, libraries, parameter sets or scenes): run from another folder, a scene by
+    name or by path ends in one line that says what is missing and how to install, exit 2, not a
+    traceback."""
     import os
     import shutil
     import subprocess
     import sys
-    source = tmp_path / "source"  # setuptools builds in the tree's build/, which is CMake's: install a copy
-    shutil.copytree(ROOT / "cosim", source / "cosim", ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(ROOT / "pyproject.toml", source)
     copy = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(copy),
-                    str(source)], check=True, capture_output=True, timeout=300)
+    shutil.copytree(ROOT / "cosim", copy / "cosim", ignore=shutil.ignore_patterns("__pycache__", "_data"))
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
+    # -S: no site module, so the editable install's import hook (a .pth file) does not take cosim
+    # from the checkout; the dependencies from site-packages on the path
+    import sysconfig
+    path = os.pathsep.join([str(copy), sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]])
     for scene in ["meng_eq35", str(ROOT / "scenes" / "meng_eq35.toml")]:
-        run = subprocess.run([sys.executable, "-m", "cosim", "run", scene, "--no-plots"], cwd=elsewhere,
-                             env={**os.environ, "PYTHONPATH": str(copy)}, capture_output=True, text=True,
-                             timeout=120)
+        run = subprocess.run([sys.executable, "-S", "-m", "cosim", "run", scene, "--no-plots"], cwd=elsewhere,
+                             env={**os.environ, "PYTHONPATH": path}, capture_output=True, text=True, timeout=120)
         assert run.returncode == 2, run.stderr
-        assert run.stderr.count("\n") == 1 and "is installed without its checkout" in run.stderr, run.stderr
+        assert str(copy / "cosim") in run.stderr
+        assert run.stderr.count("\n") == 1 and "has neither its wheel's data nor a checkout" in run.stderr, run.stderr
         assert str(copy / "cosim") in run.stderr

@@ -175,7 +175,7 @@ def dask_cluster(tmp_path_factory):
     folder = tmp_path_factory.mktemp("dask")
     scheduler_file = folder / "scheduler.json"
     dask = str(Path(sys.executable).parent / "dask")
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "COSIM_CACHE_DIR": str(folder / "cache")}
     processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                    "--scheduler-file", str(scheduler_file)], cwd=folder, env=env,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
@@ -192,7 +192,7 @@ def dask_cluster(tmp_path_factory):
     from distributed import Client
     with Client(address, timeout="30s") as client:
         client.wait_for_workers(2, timeout=60)
-    yield address, processes
+    yield address, processes, folder / "cache"
     for process in reversed(processes):
         process.terminate()
     for process in processes:
@@ -203,7 +203,7 @@ def dask_cluster(tmp_path_factory):
 
 
 def test_a_sweep_on_a_scheduler_and_workers_started_as_separate_processes(tmp_path, dask_cluster):
-    address, _ = dask_cluster
+    address, _, _ = dask_cluster
     path = sweep_file(tmp_path, STEP_AND_ORDER)
     reference = in_process(path, tmp_path / "here")
     result = subprocess.run([sys.executable, "-m", "cosim", "sweep", str(path), "--scheduler", address,
@@ -213,12 +213,47 @@ def test_a_sweep_on_a_scheduler_and_workers_started_as_separate_processes(tmp_pa
     assert comparable(pq.read_table(tmp_path / "remote" / "study.parquet").to_pylist()) == comparable(reference)
 
 
+def test_the_files_a_sweep_reads_travel_to_the_workers_by_content(tmp_path, dask_cluster):
+    """A scene of the user's with a trajectory table beside it, and an SSP archive: the workers
+    (started in another folder) get both by content, each file once into their cache under its
+    SHA-256, and run the points bit for bit like this process."""
+    import hashlib
+    address, _, cache = dask_cluster
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "motion.csv").write_text("time,z\n0,0\n1,0.05\n2,0\n")
+    scene = folder / "scene.toml"
+    scene.write_text(SCENE.read_text().replace("[trajectory.x]", '[trajectory]\ntable = "motion.csv"\n[trajectory.x]', 1))
+    path = sweep_file(tmp_path, '[[axis]]\nkey = "scene.step"\nvalues = [5e-4, 1e-3]\n').read_text()
+    (tmp_path / "study.toml").write_text(path.replace(str(SCENE), str(scene)))
+    study = tmp_path / "study.toml"
+    sweep = load_sweep(study)
+    assert sweep.evaluate.files() == [(folder / "motion.csv").resolve()]
+    reference = in_process(study, tmp_path / "here")
+    remote = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, tmp_path / "remote", sweep.signature,
+                       scheduler=address, progress=False).rows
+    assert all(r["status"] == "ok" for r in remote) and comparable(remote) == comparable(reference)
+    for file in (scene, folder / "motion.csv"):
+        assert (cache / "blobs" / hashlib.sha256(file.read_bytes()).hexdigest()).exists(), file
+    # an SSP system: the archive travels the same way
+    ssp = tmp_path / "meng.ssp"
+    assert main(["export", str(SCENE), "--ssp", str(ssp)]) == 0
+    (tmp_path / "ssp.toml").write_text(f'[sweep]\nsystem = "{ssp}"\nduration = 0.1\n[[axis]]\nkey = "step"\n'
+                                       'values = [5e-4, 1e-3]\n')
+    sweep = load_sweep(tmp_path / "ssp.toml")
+    reference = in_process(tmp_path / "ssp.toml", tmp_path / "ssp_here")
+    remote = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, tmp_path / "ssp_remote",
+                       sweep.signature, scheduler=address, progress=False).rows
+    assert all(r["status"] == "ok" for r in remote) and comparable(remote) == comparable(reference)
+    assert (cache / "blobs" / hashlib.sha256(ssp.read_bytes()).hexdigest()).exists()
+
+
 def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, dask_cluster):
     """SIGKILL to a worker process while the sweep runs: the scheduler gives its tasks to the
     other worker (the nanny restarts the killed one), and every point is a row once, as in one
     process."""
     import psutil
-    address, processes = dask_cluster
+    address, processes, _ = dask_cluster
     path = sweep_file(tmp_path, EIGHT_POINTS, duration=1.0, extra="points_per_task = 1")
     reference = in_process(path, tmp_path / "here")
     out = tmp_path / "remote"

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
+from .bundle import Bundle
 from .points import SweepError, Value, column_name, point_key
 from .table import ResultTable
 
@@ -31,6 +32,14 @@ def evaluate_task(evaluate: Callable[[Mapping[str, Value]], dict], points: Seque
         row["point"], row["wall"] = key, time.perf_counter() - start
         rows.append(row)
     return rows
+
+
+def evaluate_placed(evaluate, points: Sequence[tuple[str, dict]], bundle: Bundle,
+                    blobs: Mapping[str, bytes]) -> list[dict]:
+    """A task on a worker: the sweep's files placed in its cache by content (cosim.engine.sweep.
+    bundle), the evaluator pointed at them, then the points run."""
+    import dataclasses
+    return evaluate_task(dataclasses.replace(evaluate, path=str(bundle.place(blobs))), points)
 
 
 @dataclass
@@ -121,10 +130,18 @@ def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_
             print(f"{name}: {len(todo)} points on {n_workers} Dask workers"
                   + (f"; dashboard {dashboard}" if dashboard else ""), file=stream, flush=True)
             size = points_per_task or task_size(len(todo), n_workers)
+            # the target and the files it refers to travel by content, once to each worker
+            files = evaluate.files([v for _, v in todo]) if hasattr(evaluate, "files") else None
+            if files is not None:
+                bundle, blobs = Bundle.of(Path(evaluate.path), files)
+                shipped = client.scatter(blobs, broadcast=True, hash=True)
             tasks = {}
             for start in range(0, len(todo), size):
                 chunk = todo[start:start + size]
-                tasks[client.submit(evaluate_task, evaluate, chunk, pure=False, key=f"{name}-{chunk[0][0]}")] = chunk
+                key = f"{name}-{chunk[0][0]}"
+                future = client.submit(evaluate_task, evaluate, chunk, pure=False, key=key) if files is None else \
+                    client.submit(evaluate_placed, evaluate, chunk, bundle, shipped, pure=False, key=key)
+                tasks[future] = chunk
             for future in as_completed(list(tasks)):
                 try:
                     rows = future.result()

@@ -35,6 +35,12 @@ class SystemPoint:
         from ..command import recording
         return ["time", *recording(self.structure())[1]]
 
+    def files(self, points=()) -> list[Path]:
+        """The files the system reads besides its .ssp archive (which holds its FMUs and values):
+        an unpacked .ssd's folder; they travel to the Dask workers by content."""
+        path = Path(self.path)
+        return [] if path.suffix == ".ssp" else [p for p in sorted(path.parent.rglob("*")) if p.is_file() and p != path]
+
     def check(self, values: Mapping[str, Value]) -> None:
         """Raises ValueError (one line) when a point's names or values cannot run."""
         from ..checks import check_parameters
