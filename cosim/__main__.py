@@ -81,7 +81,12 @@ def _main(argv: list[str] | None = None) -> int:
                        "0: no Dask, in this process)")
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
+    copy = commands.add_parser("copy", help="copy a shipped scene or sweep file here to edit (no name: list them)")
+    copy.add_argument("name", nargs="?", help="a shipped scene's or sweep file's name, e.g. meng_eq35")
+    copy.add_argument("--to", type=Path, default=Path("."), help="the folder to copy into (default: this one)")
     args = parser.parse_args(argv)
+    if args.command == "copy":
+        return copy_shipped(args.name, args.to)
     out = getattr(args, "out", None)
     if out is not None and (problem := unwritable(out)):
         print(f"error: --out {out}: {problem}", file=sys.stderr)
@@ -176,6 +181,37 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
         return 1
     print(outcome.text())
     print(f"results: {written}")
+    return 0
+
+
+def copy_shipped(name: str | None, to: Path) -> int:
+    """Copies a shipped scene or sweep file into `to` (never over a file), or lists them."""
+    import difflib
+    import shutil
+    from .platform.scene import shipped, shipped_scenes
+    kinds = {"scenes": shipped_scenes("scenes"), "sweeps": shipped_scenes("sweeps")}
+    if name is None:
+        for folder, names in kinds.items():
+            print(f"{folder}: {', '.join(names)}")
+        return 0
+    source = shipped(name, "scenes") or shipped(name, "sweeps")
+    if source is None:
+        near = difflib.get_close_matches(name, [n for names in kinds.values() for n in names], 1)
+        print(f"error: {name!r} is not a shipped scene or sweep file" + (f" (did you mean {near[0]!r}?)" if near
+                                                                         else " (`cosim copy` lists them)"),
+              file=sys.stderr)
+        return 2
+    target = to / source.name
+    if target.exists():
+        print(f"error: {target} exists; copy elsewhere with --to", file=sys.stderr)
+        return 2
+    if problem := unwritable(to):
+        print(f"error: --to {to}: {problem}", file=sys.stderr)
+        return 2
+    to.mkdir(parents=True, exist_ok=True)
+    shutil.copy(source, target)
+    print(f"copied: {target} (from {source}); run it with `cosim {'sweep' if source.parent.name == 'sweeps' else 'run'} "
+          f"{target}`")
     return 0
 
 

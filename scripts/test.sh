@@ -15,8 +15,10 @@ status=0
 if [ "$status" -eq 5 ]; then
   echo "pytest collected no tests: failing the run" >&2
 fi
-# The FMUs under hostile use: random FMI call sequences under sanitizers, threads under TSan.
+# The FMUs under hostile use: random FMI call sequences under sanitizers, threads under TSan; and
+# the wheel, installed outside the checkout, running a scene, its SSP and a cluster sweep.
 if [ "$#" -eq 0 ]; then
   bash scripts/fuzz.sh ci || status=1
+  bash scripts/check_wheel.sh || status=1
 fi
 exit "$status"

@@ -200,10 +200,21 @@ def with_overrides(data: dict, overrides: dict[str, Any]) -> dict:
     return data
 
 
-def shipped_scenes() -> list[str]:
-    """The names of the shipped scenes (scenes/<name>.toml), which load_scene takes by name."""
+def shipped_scenes(folder: str = "scenes") -> list[str]:
+    """The names of the shipped scenes (scenes/<name>.toml), which load_scene takes by name (or
+    of the shipped sweep files: folder "sweeps")."""
     from ..engine.artifacts import ROOT
-    return sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
+    return sorted(p.stem for p in (ROOT / folder).glob("*.toml"))
+
+
+def shipped(name: str, folder: str = "scenes") -> Path | None:
+    """The shipped scene (or sweep file: folder "sweeps") of this name, or None; for a name, an
+    install without its data says so in one line (ArtifactMissing)."""
+    if Path(name).suffix or len(Path(name).parts) != 1:
+        return None
+    from ..engine.artifacts import data_dir
+    path = data_dir(folder) / f"{name}.toml"
+    return path if path.is_file() else None
 
 
 def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Scene:
@@ -212,10 +223,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
     said them."""
     path = Path(path)
     if not path.exists() and path.suffix == "" and len(path.parts) == 1:  # a shipped scene's name
-        from ..engine.artifacts import data_dir
-        scenes = data_dir("scenes")  # an install without the checkout has none: one line says so
-        if str(path) in shipped_scenes():
-            path = scenes / f"{path}.toml"
+        path = shipped(str(path)) or path
     if not path.exists():
         import difflib
         near = difflib.get_close_matches(path.stem, shipped_scenes(), 1)

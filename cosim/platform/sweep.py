@@ -38,7 +38,7 @@ from ..engine.sweep import SYSTEM, Sweep, Target, statistics
 from ..engine.sweep import load_sweep as engine_load_sweep
 from .accuracy import difference
 from .ports import DRIVES, LEGS, POSE, per_leg
-from .scene import SceneError, load_scene
+from .scene import SceneError, load_scene, shipped
 
 SCENE_REPORTS = {  # report name -> what it adds to a row
     "tracking_error": "largest |pose - pose_ref| per DOF after the first tenth of the run [m, rad]",
@@ -161,11 +161,14 @@ SCENE = Target(SCENE_REPORTS, ("tracking_error", "energy_residual", "steps"), _s
                       **{f"tracking_error.{a}": "m" if a in "xyz" else "rad" for a in POSE}, "steps": "-",
                       "pose_error": "m, rad", "effort_error": "of the peak", "peak_effort": "N m or N",
                       "stepping_wall": "s"},
-               internal=("pose_error", "effort_error"), errors=(SceneError, ValueError))
+               internal=("pose_error", "effort_error"), errors=(SceneError, ValueError), named=shipped)
 TARGETS = {"scene": SCENE, "system": SYSTEM}
 
 
 def load_sweep(path: str | Path) -> Sweep:
     """Reads and checks a sweep file whose target is a scene or an SSP system (see the module's
-    docstring); every mistake is a SweepError naming the file and line."""
+    docstring), or a shipped sweep file by its name (`meng_coupling`); every mistake is a
+    SweepError naming the file and line."""
+    if not Path(path).exists():
+        path = shipped(str(path), "sweeps") or path
     return engine_load_sweep(path, TARGETS)

@@ -299,3 +299,20 @@ def test_a_copy_of_the_python_files_alone_says_so_in_one_line(tmp_path):
         assert str(copy / "cosim") in run.stderr
         assert run.stderr.count("\n") == 1 and "has neither its wheel's data nor a checkout" in run.stderr, run.stderr
         assert str(copy / "cosim") in run.stderr
+
+
+def test_a_shipped_scene_or_sweep_is_copied_out_to_edit_and_runs_from_there(tmp_path, capsys):
+    """`cosim copy NAME --to DIR` copies a shipped scene or sweep file (a sweep names its scene by
+    name, so the copy runs anywhere); never over a file; a wrong name is one line with a hint."""
+    assert main(["copy"]) == 0 and "meng_eq35_linear" in capsys.readouterr().out
+    assert main(["copy", "meng_eq35", "--to", str(tmp_path / "mine")]) == 0
+    copied = tmp_path / "mine" / "meng_eq35.toml"
+    assert copied.read_text() == (ROOT / "scenes" / "meng_eq35.toml").read_text()
+    assert main(["copy", "meng_coupling", "--to", str(tmp_path / "mine")]) == 0
+    from cosim.platform.sweep import load_sweep
+    assert load_sweep(tmp_path / "mine" / "meng_coupling.toml").evaluate.path == str(ROOT / "scenes" / "meng_eq35.toml")
+    capsys.readouterr()
+    assert main(["copy", "meng_eq35", "--to", str(tmp_path / "mine")]) == 2
+    assert main(["copy", "meng_eq53"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "exists; copy elsewhere with --to" in err[0] and "did you mean 'meng_eq35'?" in err[1]

@@ -28,7 +28,8 @@ class Target:
     when it names none, `internal` ones a file may not ask for (they need a reference run), units
     of its columns (for plots), what an axis key is (for messages), the exceptions a point that
     cannot start raises, and `point(target file, reports, outputs, duration, fixed)`: the evaluator
-    (fixed: the [sweep] table's `set`, values every point takes, under the axes' own)."""
+    (fixed: the [sweep] table's `set`, values every point takes, under the axes' own); `named`
+    finds a target the application ships by its name (a scene's), where no file of that name is."""
     reports: Mapping[str, str]
     default_reports: tuple[str, ...]
     point: Callable[..., Any]
@@ -36,6 +37,7 @@ class Target:
     units: Mapping[str, str] = field(default_factory=dict)
     internal: tuple[str, ...] = ()
     errors: tuple[type[Exception], ...] = (ValueError,)
+    named: Callable[[str], Path | None] | None = None
 
 
 SCHEMA = {"": {"sweep", "axis", "report", "plot"},
@@ -97,6 +99,8 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
     kind = named[0]
     target_kind = targets[kind]
     target = (path.parent / str(sweep[kind])).resolve()
+    if not target.is_file() and target_kind.named is not None:
+        target = target_kind.named(str(sweep[kind])) or target
     if not target.is_file():
         raise fail("sweep", kind, f"= {sweep[kind]!r}: no such file (relative to the sweep file's folder)")
     duration = sweep.get("duration")
