@@ -1,6 +1,6 @@
 """Helpers shared by the benchmarks: the native drive bench (drive_bench.c) built on demand, and
-`publish`, which writes a benchmark's results into docs/benchmarks.md and the README's copy of them,
-so no measured number is ever typed by hand."""
+`publish`, which writes a benchmark's results into docs/benchmarks.md and the user guide's copies of
+them (docs/guide/*.md, the README), so no measured number is ever typed by hand."""
 
 from __future__ import annotations
 
@@ -20,7 +20,8 @@ from cosim.engine.artifacts import BUILD_DIR, ROOT, fmu_path
 
 HERE = Path(__file__).resolve().parent
 BENCHMARKS_DOC = ROOT / "docs" / "benchmarks.md"
-README = ROOT / "README.md"
+# the pages that quote benchmark blocks: the README and the user guide
+QUOTING = (ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md")))
 
 
 def _block(name: str) -> re.Pattern:
@@ -40,25 +41,28 @@ def machine() -> str:
 
 
 def publish(name: str, command: str, lines: list[str], doc_path: Path = BENCHMARKS_DOC,
-            readme_path: Path = README) -> None:
+            quoting: tuple[Path, ...] = QUOTING) -> None:
     """Writes a benchmark's results (markdown lines) as block `name` of docs/benchmarks.md (appended
-    the first time) and replaces the README's block of the same name, if it has one: the README
-    only ever holds copies that a benchmark wrote (tests/test_docs.py holds them equal)."""
+    the first time) and replaces the block of the same name in each page that quotes it (the
+    README, the user guide): those only ever hold copies that a benchmark wrote
+    (tests/platform/test_docs.py holds them equal)."""
     stamp = time.strftime("%Y-%m-%d")
     block = "\n".join([f"<!-- benchmark:{name} -->", f"`{command}` ({stamp}, {machine()}):", "", *lines,
                         f"<!-- /benchmark:{name} -->"])
     doc = doc_path.read_text() if doc_path.exists() else (
-        "# Benchmarks\n\nEach block below is written by the command it names, in one run; the README quotes "
+        "# Benchmarks\n\nEach block below is written by the command it names, in one run; the user guide quotes "
         "these blocks (its copies are rewritten by the same command). Ratios are measured within one run; "
         "lone times vary by about +-30 % between runs on this machine.\n")
     pattern = _block(name)
     doc = pattern.sub(lambda _: block, doc) if pattern.search(doc) else doc.rstrip("\n") + "\n\n" + block + "\n"
     doc_path.write_text(doc)
-    readme = readme_path.read_text()
-    if pattern.search(readme):
-        readme_path.write_text(pattern.sub(lambda _: block, readme))
-    print(f"written: {doc_path.name} [{name}]" + (f" and {readme_path.name}" if pattern.search(readme) else ""),
-          file=sys.stderr)
+    quoted = []
+    for page in quoting:
+        text = page.read_text()
+        if pattern.search(text):
+            page.write_text(pattern.sub(lambda _: block, text))
+            quoted.append(page.name)
+    print(f"written: {doc_path.name} [{name}]" + (f" and {', '.join(quoted)}" if quoted else ""), file=sys.stderr)
 
 
 def native_bench(name: str = "drive_bench") -> Path:

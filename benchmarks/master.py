@@ -136,7 +136,7 @@ def main() -> None:
               f"cosim run scenes/meng_eq35.toml --no-plots` takes {min(end_to_end):.2f} s [goal < 1 s], "
               f"{shipped.wall / min(end_to_end):.2f} of it stepping. The paper's scene "
               "keeps 1 ms for now: its linear-motor twin, one `kind` line away, needs a 0.2 s finer start with the "
-              "fast numerics (README, Step control)."]
+              "fast numerics (docs/guide/scenes.md, Step control)."]
     print("\n".join(lines))
     if args.duration == 10.0:
         publish("master", "python benchmarks/master.py", lines)

@@ -267,7 +267,7 @@ def main() -> None:
     (ROOT / "docs" / "trade.md").write_text("\n".join(doc))
     if args.probe == 1.0:  # the documented command
         publish("trade", "python benchmarks/trade.py", [*summary, "Every point's table and plot: "
-                                                        "[docs/trade.md](docs/trade.md)."])
+                                                        "`docs/trade.md`."])
 
 
 if __name__ == "__main__":

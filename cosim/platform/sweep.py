@@ -1,7 +1,7 @@
 """`python -m cosim sweep SWEEP.toml`: a scene (or any SSP system) run at many points, on Dask.
 
 A sweep file names its target and its axes, how points are drawn from them and what each point
-reports (docs in the README's "Sweeps" section):
+reports (docs/guide/sweeps.md):
 
     [sweep]
     scene = "../scenes/meng_eq35.toml"      # or system = "meng.ssp" (paths relative to this file)

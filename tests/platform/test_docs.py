@@ -1,5 +1,6 @@
-"""Numbers that cannot drift: the README's benchmark results are copies of the blocks that the
-benchmarks themselves write into docs/benchmarks.md (benchmarks/common.py: publish)."""
+"""Numbers that cannot drift: the benchmark results the user guide (docs/guide/*.md) and the README
+quote are copies of the blocks that the benchmarks themselves write into docs/benchmarks.md
+(benchmarks/common.py: publish)."""
 
 from __future__ import annotations
 
@@ -8,23 +9,25 @@ import sys
 from cosim.engine.artifacts import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from common import blocks, publish  # noqa: E402
+from common import QUOTING, blocks, publish  # noqa: E402
 
 
-def test_every_benchmark_block_in_the_readme_is_the_one_its_benchmark_wrote():
-    readme = blocks((ROOT / "README.md").read_text())
+def test_every_quoted_benchmark_block_is_the_one_its_benchmark_wrote():
     written = blocks((ROOT / "docs" / "benchmarks.md").read_text())
-    assert {"pmsm_drive", "mechanics", "linear_motor", "master", "trade"} <= set(readme)
-    for name, block in readme.items():
-        assert name in written, f"README block {name} was never written by a benchmark"
-        assert block == written[name], f"README block {name} differs from docs/benchmarks.md (edited by hand?)"
+    quoted = {}
+    for page in QUOTING:
+        for name, block in blocks(page.read_text()).items():
+            assert name in written, f"{page.name}: block {name} was never written by a benchmark"
+            assert block == written[name], f"{page.name}: block {name} differs from docs/benchmarks.md (edited by hand?)"
+            quoted[name] = page
+    assert {"pmsm_drive", "mechanics", "linear_motor", "master", "trade"} <= set(quoted)
 
 
-def test_the_readme_quotes_no_benchmark_figure_outside_a_written_block():
-    """Outside the blocks, the Benchmarks section gives commands and method, no measured times."""
+def test_the_guide_quotes_no_benchmark_figure_outside_a_written_block():
+    """Outside the blocks, the Benchmarks page gives commands and method, no measured times."""
     import re
-    text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Benchmarks\n"):text.index("\n## ", text.index("## Speed against accuracy") + 3)]
+    text = (ROOT / "docs" / "guide" / "performance.md").read_text()
+    section = text[:text.index("## Speed against accuracy")]
     for block in blocks(section).values():
         section = section.replace(block, "")
     assert not re.search(r"\d+(\.\d+)? ?(ms|s) (CPU|wall)|real-time factor (of )?\d|\d+(\.\d+)?x (less|slower|faster)",
@@ -32,13 +35,13 @@ def test_the_readme_quotes_no_benchmark_figure_outside_a_written_block():
 
 
 def test_publish_replaces_a_block_in_place_and_appends_a_new_one(tmp_path):
-    doc, readme = tmp_path / "benchmarks.md", tmp_path / "README.md"
-    readme.write_text("intro\n<!-- benchmark:a -->\nold\n<!-- /benchmark:a -->\nend\n")
-    publish("a", "python a.py", ["| x |", "| 1 |"], doc_path=doc, readme_path=readme)
-    publish("b", "python b.py", ["two"], doc_path=doc, readme_path=readme)
-    publish("a", "python a.py", ["| x |", "| 2 |"], doc_path=doc, readme_path=readme)
+    doc, page = tmp_path / "benchmarks.md", tmp_path / "scenes.md"
+    page.write_text("intro\n<!-- benchmark:a -->\nold\n<!-- /benchmark:a -->\nend\n")
+    publish("a", "python a.py", ["| x |", "| 1 |"], doc_path=doc, quoting=(page,))
+    publish("b", "python b.py", ["two"], doc_path=doc, quoting=(page,))
+    publish("a", "python a.py", ["| x |", "| 2 |"], doc_path=doc, quoting=(page,))
     written = blocks(doc.read_text())
     assert list(written) == ["a", "b"]
     assert "| 2 |" in written["a"] and "| 1 |" not in written["a"]
-    assert blocks(readme.read_text()) == {"a": written["a"]}
-    assert readme.read_text().startswith("intro\n") and readme.read_text().endswith("\nend\n")
+    assert blocks(page.read_text()) == {"a": written["a"]}
+    assert page.read_text().startswith("intro\n") and page.read_text().endswith("\nend\n")

@@ -57,7 +57,7 @@ def test_divergence_verdict_agrees_with_torque_chatter(algorithm, order):
     """The Meng scene for 0.6 s at 0.25-2 ms: wherever the monitor stops a run, the unmonitored run's
     torques chatter (over 10 % of their variation at the Nyquist frequency); wherever it lets a run
     finish, they do not (measured: 0.000 when stable, over 0.5 when not). Largest stable macro steps
-    found (the README's table): Gauss-Seidel order 0: 1.5 ms, order 1: 1 ms, order 2: 0.5 ms; Jacobi
+    found (the table of docs/guide/scenes.md): Gauss-Seidel order 0: 1.5 ms, order 1: 1 ms, order 2: 0.5 ms; Jacobi
     order 0: 0.5 ms, orders 1 and 2: 0.25 ms. Extrapolation buys accuracy at the price of stability,
     and Gauss-Seidel, which gives the mechanics the drives' new torques, is twice as stable."""
     scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.6, pulses=[],

@@ -1,6 +1,6 @@
 """Any drive on any platform: the shipped swapped scenes (Meng's platform on linear motors, Sumnu's
 on PMSMs with ball screws) differ from their papers' scenes in the drive kind alone, run at the
-default 1 ms step with drives sized and designed for their legs, and track; the README quotes their
+default 1 ms step with drives sized and designed for their legs, and track; the user guide (docs/guide/scenes.md) quotes their
 tracking errors and this test holds it to what the runs print. A platform's parameter set gives
 every value the mechanics reads, so switching the motor systems on adds nothing of another paper."""
 
@@ -72,7 +72,7 @@ def test_a_swapped_scene_tracks_at_the_default_step(name, runs):
 
 
 def test_the_readme_quotes_what_the_swapped_scenes_print(runs):
-    text = (ROOT / "README.md").read_text().replace("\n", " ")
+    text = (ROOT / "docs" / "guide" / "scenes.md").read_text().replace("\n", " ")
     for name, (_, _, label) in SWAPPED.items():
         assert f"{label} {quoted(runs[name][1].largest_error)}" in text, (name, quoted(runs[name][1].largest_error))
 
@@ -97,7 +97,7 @@ def test_the_fast_numerics_on_linear_motors_need_a_longer_finer_start():
     and 6.5 % of the force peak against 3.3e-6 and 1.9 %), both right after the finer start ends, where
     the linear drives' start-up transient is still running; with a 0.2 s finer start they keep 1e-5
     and 1 % (measured 1.0e-6 and 0.24 %, better than the scene's 1 ms). Why the paper's scene has not
-    moved to these numerics yet: README, Step control."""
+    moved to these numerics yet: docs/guide/scenes.md, Step control."""
     from cosim.platform.accuracy import difference
     path, forces = ROOT / "scenes" / "meng_eq35_linear.toml", [f"force[{i}]" for i in range(1, 7)]
     poses = [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]

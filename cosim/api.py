@@ -1,0 +1,170 @@
+"""The Python API: load a scene or an SSP system, run it, export it, sweep it, ask for advice.
+
+The same run path as the `cosim` command, for a notebook or a script:
+
+    import cosim
+    run = cosim.simulate("meng_eq35", duration=2.0)            # a shipped scene, by name
+    run["pose.z"], run["torque[1]"]                             # named result columns (numpy)
+    print(run.report.text())                                   # what the command prints
+    cosim.export_ssp("meng_eq35", "meng.ssp")                   # the whole system as SSP 1.0
+    ssp = cosim.simulate("meng.ssp", settings={"step": "5e-4"})  # any SSP system
+
+A scene is a TOML file (a shipped scene's name, or a path; `cosim copy NAME` copies one out to
+edit), or a `Scene` from `load`, which may be changed before it runs (`dataclasses.replace`).
+Mistakes in the input raise one-line errors (`SceneError`, `SspError`, `SettingsError`,
+`SweepError`); a run that stops part way raises `RunStopped`, which carries the results computed
+up to then (`.result`) and the report that says why (`.report`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from .engine.outcome import Report, RunStopped
+from .engine.structure import SystemStructure
+from .platform.scene import Scene, SceneError, load_scene
+
+SYSTEM_SUFFIXES = (".ssp", ".ssd")
+
+__all__ = ["Run", "Advice", "load", "simulate", "export_ssp", "sweep", "advise", "RunStopped", "SceneError", "Scene"]
+
+
+@dataclass
+class Run:
+    """A finished run.
+
+    Attributes:
+        values: the recorded results, a numpy structured array in fmpy's convention: a `time`
+            column [s], then one column per recorded variable (`pose.z` [m], `pose_ref.roll`
+            [rad], `torque[3]` [N m] for leg 3, ...; units as the FMUs declare them).
+        report: what the run measured: macro steps, wall time, real-time factor, energy
+            residual of the power bonds, tracking error (a scene's), the FMUs' warnings.
+    """
+    values: np.ndarray
+    report: Report
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """One result column by name, e.g. `run["pose.z"]`."""
+        return self.values[name]
+
+    @property
+    def names(self) -> list[str]:
+        """The result columns' names, `time` first."""
+        return list(self.values.dtype.names)
+
+
+@dataclass
+class Advice:
+    """What `advise` found: every candidate it tried, the cheapest that keeps the tolerances
+    (None if none does) and the text `cosim advise` prints."""
+    candidates: list
+    recommended: Any
+    text: str
+
+
+def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene | SystemStructure:
+    """A scene (a shipped scene's name or a .toml path) or an SSP system (.ssp, .ssd), read and
+    checked.
+
+    Args:
+        model: `"meng_eq35"`, `"my_scene.toml"`, `"system.ssp"`.
+        overrides: a scene's values at dotted keys, as its file writes them, e.g.
+            `{"scene.step": 5e-4, 'mechanics.parameters."platform.mass"': 800.0}`.
+
+    Raises:
+        SceneError, SspError: one line naming the file, line, key and reason.
+    """
+    if Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES:
+        from .engine.ssp import read_ssp
+        return read_ssp(Path(model))
+    return load_scene(model, dict(overrides or {}))
+
+
+def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | None = None,
+             overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
+             out: str | Path | None = None, plots: bool = False, progress: bool = False) -> Run:
+    """Runs a scene or an SSP system and returns its named results.
+
+    Args:
+        model: a scene's name or path, a `Scene` (from `load`), an .ssp/.ssd path or a
+            `SystemStructure`.
+        duration: the simulated time [s], instead of the scene's or system's own.
+        overrides: a scene's values at dotted keys (see `load`); with a `Scene`, its file is
+            read again with them over the ones it was loaded with.
+        settings: an SSP system's run settings by name (`step`, `algorithm`, `order`,
+            `step_control`, `rtol`, ...: cosim.engine.settings), as `cosim run --set`.
+        out: a folder for the results as files (CSV, .mat, the log; a scene's plots and
+            interactive report with `plots`).
+        plots: draw a scene's figures and its HTML report into `out`.
+        progress: a progress bar on a terminal.
+
+    Raises:
+        SceneError, SspError, SettingsError: the input cannot run (one line).
+        RunStopped: the run stopped part way (an FMU failed, or the coupling diverged);
+            `.result` holds the results up to then, `.report` says why.
+    """
+    target = Path(out) if out is not None else None
+    if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
+                                              and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
+        from .engine.command import run_ssp, run_structure
+        if isinstance(model, SystemStructure):
+            values, report = run_structure(model, dict(settings or {}), duration, progress=progress)
+        else:
+            values, report = run_ssp(Path(model), target, dict(settings or {}), duration)
+        return Run(values, report)
+    from .platform.runner import run_scene
+    scene = model if isinstance(model, Scene) else load_scene(model, dict(overrides or {}))
+    if isinstance(model, Scene) and overrides:
+        scene = load_scene(scene.path, {**scene.overrides, **overrides})
+    if duration is not None:
+        scene = dataclasses.replace(scene, duration=float(duration))
+    values, report = run_scene(scene, target, plots=plots and target is not None, progress=progress)
+    return Run(values, report)
+
+
+def export_ssp(scene: str | Path | Scene, path: str | Path) -> Path:
+    """Writes a scene as an SSP 1.0 archive: its FMUs, parameter values (SSV), connections, and
+    our run settings in an annotation that other tools ignore. Returns the archive's path."""
+    from .engine.ssp import write_ssp
+    from .platform.runner import scene_structure
+    loaded = scene if isinstance(scene, Scene) else load_scene(scene)
+    return write_ssp(scene_structure(loaded), Path(path))
+
+
+def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None = None,
+          out: str | Path = "out", progress: bool = False):
+    """Runs a sweep file (a shipped one's name, or a path) on Dask and returns its outcome:
+    `.rows` (one dict per point: its values, the reports asked for, status and message) and
+    `.files` (the Parquet and CSV tables written to `out`).
+
+    Args:
+        workers: worker processes of a local cluster (None: one per core; 0: in this process).
+        scheduler: the address of a running Dask scheduler instead ("tcp://host:8786"); the
+            workers need only this package installed: the files a sweep reads travel to them.
+
+    Raises:
+        SweepError: a bad sweep file (one line naming the file and line).
+    """
+    from .engine.sweep import run_sweep
+    from .platform.sweep import load_sweep
+    loaded = load_sweep(file)
+    return run_sweep(loaded.name, loaded.points, loaded.evaluate, loaded.columns, Path(out), loaded.signature,
+                     workers=workers, scheduler=scheduler, points_per_task=loaded.points_per_task,
+                     retries=loaded.retries, progress=progress)
+
+
+def advise(scene: str | Path | Scene, tolerance: float, *, effort_tolerance: float = 0.01, probe: float = 2.0,
+           workers: int | None = None) -> Advice:
+    """The cheapest effects, drive fidelity and macro step that keep a scene within `tolerance`
+    (largest pose error [m, rad]) and `effort_tolerance` (drive torque or force, a fraction of its
+    peak) against a converged reference, as `cosim advise` finds them."""
+    from .platform.advise import advise as find, recommend, text
+    loaded = scene if isinstance(scene, Scene) else load_scene(scene)
+    candidates, info = find(loaded, tolerance, probe, effort_tolerance, workers)
+    return Advice(candidates, recommend(candidates, tolerance, effort_tolerance),
+                  text(loaded, tolerance, candidates, info))
