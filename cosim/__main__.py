@@ -81,7 +81,15 @@ def _main(argv: list[str] | None = None) -> int:
                        "0: no Dask, in this process)")
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
-    copy = commands.add_parser("copy", help="copy a shipped scene or sweep file here to edit (no name: list them)")
+    design = commands.add_parser("design", help="which platform carries a motion: a configuration design study "
+                                 "(studies/, Halder et al. Section V)")
+    design.add_argument("study", help="a study file (TOML) or a shipped study's name, e.g. halder_section5")
+    design.add_argument("--workers", type=int, default=0, help="Dask worker processes for the map (default 0: in "
+                        "this process)")
+    design.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    design.add_argument("--out", type=Path, default=Path("out"), help="folder for the figures, the map and the summary")
+    copy = commands.add_parser("copy", help="copy a shipped scene, sweep file or study here to edit (no name: "
+                               "list them)")
     copy.add_argument("name", nargs="?", help="a shipped scene's or sweep file's name, e.g. meng_eq35")
     copy.add_argument("--to", type=Path, default=Path("."), help="the folder to copy into (default: this one)")
     args = parser.parse_args(argv)
@@ -93,6 +101,8 @@ def _main(argv: list[str] | None = None) -> int:
         return 2
     if args.command == "sweep":
         return run_sweep_file(args.sweep, args.out, args.workers, args.scheduler)
+    if args.command == "design":
+        return run_design(args.study, args.out, args.workers, args.scheduler)
     if args.command == "advise":
         from .platform.advise import advise as run_advice, text, write_csv
         try:
@@ -184,20 +194,38 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
     return 0
 
 
+def run_design(study: str, out: Path, workers: int, scheduler: str | None) -> int:
+    from .platform.design import StudyError, load_study, parallel_map, summary, write
+    from .platform.scene import shipped
+    if workers < 0:
+        print(f"error: --workers {workers}: must be 0 (in this process) or more", file=sys.stderr)
+        return 2
+    try:
+        loaded = load_study(shipped(study, "studies") or study if not Path(study).exists() else study)
+    except StudyError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    design = parallel_map(loaded, workers=workers, scheduler=scheduler)
+    print("\n".join(summary(design)))
+    files = write(design, out)
+    print("written: " + ", ".join(str(f) for f in files))
+    return 0
+
+
 def copy_shipped(name: str | None, to: Path) -> int:
     """Copies a shipped scene or sweep file into `to` (never over a file), or lists them."""
     import difflib
     import shutil
     from .platform.scene import shipped, shipped_scenes
-    kinds = {"scenes": shipped_scenes("scenes"), "sweeps": shipped_scenes("sweeps")}
+    kinds = {folder: shipped_scenes(folder) for folder in ("scenes", "sweeps", "studies")}
     if name is None:
         for folder, names in kinds.items():
             print(f"{folder}: {', '.join(names)}")
         return 0
-    source = shipped(name, "scenes") or shipped(name, "sweeps")
+    source = next((found for folder in kinds if (found := shipped(name, folder))), None)
     if source is None:
         near = difflib.get_close_matches(name, [n for names in kinds.values() for n in names], 1)
-        print(f"error: {name!r} is not a shipped scene or sweep file" + (f" (did you mean {near[0]!r}?)" if near
+        print(f"error: {name!r} is not a shipped scene, sweep file or study" + (f" (did you mean {near[0]!r}?)" if near
                                                                          else " (`cosim copy` lists them)"),
               file=sys.stderr)
         return 2
@@ -210,8 +238,8 @@ def copy_shipped(name: str | None, to: Path) -> int:
         return 2
     to.mkdir(parents=True, exist_ok=True)
     shutil.copy(source, target)
-    print(f"copied: {target} (from {source}); run it with `cosim {'sweep' if source.parent.name == 'sweeps' else 'run'} "
-          f"{target}`")
+    command = {"sweeps": "sweep", "studies": "design"}.get(source.parent.name, "run")
+    print(f"copied: {target} (from {source}); run it with `cosim {command} {target}`")
     return 0
 
 

@@ -66,6 +66,9 @@ def load() -> ctypes.CDLL:
     dll.platform_inverse_dynamics.restype = ctypes.c_int
     dll.platform_state_from_pose.argtypes = [P(D), P(D), P(D)]
     dll.platform_leg_plants.argtypes = [P(Platform), P(D), P(D), P(D)]
+    dll.platform_pose_kinematics.argtypes = [P(Platform), ctypes.c_int, P(D), P(D), P(D), P(D), P(D)]
+    dll.platform_inverse_dynamics_many.argtypes = [P(Platform), ctypes.c_int, P(D), P(D), P(D), P(D), P(D)]
+    dll.platform_inverse_dynamics_many.restype = ctypes.c_int
     dll.platform_leg_plants.restype = ctypes.c_int
     return dll
 
@@ -206,6 +209,36 @@ class Core:
                                               arr(wrench), out) != 0:
             raise SingularPose(f"the leg Jacobian is singular at the pose {np.round(np.asarray(pose, float), 6).tolist()}")
         return np.array(out[:])
+
+    def pose_kinematics(self, poses: np.ndarray, jacobian: bool = False) -> dict[str, np.ndarray]:
+        """At each pose (n x 6): per leg its length [m] and its tilt from the neutral direction at
+        the lower and the upper joint [rad] (n x 6 each), and with `jacobian` the leg Jacobian
+        (n x 6 x 6): the dynamics core's platform_pose_kinematics, one call for all poses."""
+        poses = np.ascontiguousarray(poses, dtype=float).reshape(-1, 6)
+        n = len(poses)
+        out = {name: np.empty((n, LEGS)) for name in ("length", "lower_angle", "upper_angle")}
+        jac = np.empty((n, 6, 6)) if jacobian else None
+
+        def ptr(a):
+            return a.ctypes.data_as(ctypes.POINTER(D)) if a is not None else None
+        self.dll.platform_pose_kinematics(ctypes.byref(self.p), n, ptr(poses), ptr(out["length"]),
+                                          ptr(out["lower_angle"]), ptr(out["upper_angle"]), ptr(jac))
+        if jacobian:
+            out["jacobian"] = jac
+        return out
+
+    def inverse_dynamics_many(self, poses: np.ndarray, rates: np.ndarray, accelerations: np.ndarray,
+                              wrench=np.zeros(6)) -> np.ndarray:
+        """inverse_dynamics at each of n poses with their rates and accelerations (n x 6 each):
+        n x 6 torques (forces where force_torque is 1), NaN where the legs are singular."""
+        arrays = [np.ascontiguousarray(a, dtype=float).reshape(-1, 6) for a in (poses, rates, accelerations)]
+        out = np.empty_like(arrays[0])
+
+        def ptr(a):
+            return a.ctypes.data_as(ctypes.POINTER(D))
+        self.dll.platform_inverse_dynamics_many(ctypes.byref(self.p), len(out), *(ptr(a) for a in arrays),
+                                                arr(wrench), ptr(out))
+        return out
 
 
 def neutral_pose(values: Mapping[str, object]) -> np.ndarray:

@@ -87,15 +87,13 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
 }
 
 /* Largest tilt of leg i from its neutral direction, at the lower joint (base frame) and at the upper
- * joint (platform frame). */
+ * joint (platform frame): platform_joint_angles. */
 static double joint_angle(const double *x, const LegGeometry *leg, const double n0[3]) {
-    double R[9], q[4], norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6]);
+    double R[9], q[4], lower, upper, norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6]);
     for (int k = 0; k < 4; k++) q[k] = x[3 + k] / norm;
     platform_rotation_from_quaternion(q, R);
-    const double *n = leg->axis;
-    double lower = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2], upper = 0.0;
-    for (int k = 0; k < 3; k++) upper += (R[k] * n[0] + R[3 + k] * n[1] + R[6 + k] * n[2]) * n0[k]; /* (R'n).n0 */
-    return acos(fmin(1.0, fmin(lower, upper)));
+    platform_joint_angles(R, leg->axis, n0, &lower, &upper);
+    return fmax(lower, upper);
 }
 
 /* Stroke, joint limits and singularity of the platform `in` at state x and time t. Returns

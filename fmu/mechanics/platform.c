@@ -505,3 +505,52 @@ int platform_leg_plants(const Platform *p, const double *x, double inertia[PLATF
     for (int k = 0; k < 6; k++) Q[k] = -rhs0[k]; /* at rest: J' F = -(gravity and bias terms) */
     return lu_solve(6, JT, Q, static_force) != 0 ? -1 : 0;
 }
+
+/* ---- design studies ------------------------------------------------------------------------ */
+
+void platform_joint_angles(const double R[9], const double axis[3], const double n0[3], double *lower,
+                           double *upper) {
+    double along = 0.0, across = 0.0;
+    for (int k = 0; k < 3; k++) {
+        along += axis[k] * n0[k];
+        across += (R[k] * axis[0] + R[3 + k] * axis[1] + R[6 + k] * axis[2]) * n0[k]; /* (R'n).n0 */
+    }
+    *lower = acos(fmax(-1.0, fmin(1.0, along)));
+    *upper = acos(fmax(-1.0, fmin(1.0, across)));
+}
+
+void platform_pose_kinematics(const Platform *p, int n, const double *poses, double *length,
+                              double *lower_angle, double *upper_angle, double *jacobian) {
+    const double at_rest[6] = {0, 0, 0, 0, 0, 0};
+    double x[PLATFORM_STATES], R[9];
+    LegGeometry neutral[PLATFORM_LEGS], legs[PLATFORM_LEGS];
+    platform_state_from_pose(p->neutral_pose, at_rest, x);
+    platform_legs(p, x, neutral);
+    for (int k = 0; k < n; k++) {
+        const double *pose = poses + 6 * k;
+        platform_state_from_pose(pose, at_rest, x);
+        platform_legs(p, x, legs);
+        platform_rotation_from_euler(pose[3], pose[4], pose[5], R);
+        for (int i = 0; i < PLATFORM_LEGS; i++) {
+            double lower, upper;
+            platform_joint_angles(R, legs[i].axis, neutral[i].axis, &lower, &upper);
+            if (length) length[6 * k + i] = legs[i].length;
+            if (lower_angle) lower_angle[6 * k + i] = lower;
+            if (upper_angle) upper_angle[6 * k + i] = upper;
+        }
+        if (jacobian) platform_leg_jacobian(legs, jacobian + 36 * k);
+    }
+}
+
+int platform_inverse_dynamics_many(const Platform *p, int n, const double *pose, const double *pose_rate,
+                                   const double *pose_acceleration, const double wrench[6], double *torque) {
+    int singular = 0;
+    for (int k = 0; k < n; k++) {
+        if (platform_inverse_dynamics(p, pose + 6 * k, pose_rate + 6 * k, pose_acceleration + 6 * k, wrench,
+                                      torque + 6 * k) != 0) {
+            for (int i = 0; i < PLATFORM_LEGS; i++) torque[6 * k + i] = NAN;
+            singular++;
+        }
+    }
+    return singular;
+}

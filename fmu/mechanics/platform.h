@@ -141,4 +141,23 @@ int platform_inverse_dynamics(const Platform *p, const double pose[6], const dou
 /* State x from a pose and its rate (Euler angle rates). */
 void platform_state_from_pose(const double pose[6], const double pose_rate[6], double *x);
 
+/* A leg's tilt from its neutral direction n0 (base frame, at the neutral pose, whose orientation
+ * is the identity) at the lower joint, acos(n.n0), and at the upper joint in the platform frame,
+ * acos((R'n).n0), with R the platform's orientation [rad] (Halder et al., Eq 9: the angles
+ * between the leg and its bottom and top stubs, which are collinear with it at the neutral). */
+void platform_joint_angles(const double R[9], const double axis[3], const double n0[3], double *lower,
+                           double *upper);
+
+/* For design studies, at each of n poses (x, y, z, roll, pitch, yaw; row major): each leg's length,
+ * its joint angles (platform_joint_angles) and the leg Jacobian (36 entries, row major). Any
+ * output may be NULL. */
+void platform_pose_kinematics(const Platform *p, int n, const double *poses, double *length,
+                              double *lower_angle, double *upper_angle, double *jacobian);
+
+/* platform_inverse_dynamics at each of n poses with their rates and accelerations (row major, 6
+ * each) under one external wrench; the torques of a singular pose are NaN. Returns the number of
+ * singular poses. */
+int platform_inverse_dynamics_many(const Platform *p, int n, const double *pose, const double *pose_rate,
+                                   const double *pose_acceleration, const double wrench[6], double *torque);
+
 #endif

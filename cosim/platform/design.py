@@ -1,0 +1,649 @@
+"""Configuration design of a Stewart platform: Halder et al., Section V.
+
+Which platform carries a motion specification? A study (studies/*.toml) sweeps design variables of
+a platform family's geometry (Halder's 6-SBU layout, Eqs 1-4: the base radius r_b and the disc's
+neutral height z_p0, in 0.01 m steps) and asks, at every grid point and for each basic motion
+(each DOF alone from one end of its range to the other in the shortest time its velocity and
+acceleration limits allow):
+
+- kinematic admissibility (Eqs 17-21): the largest and smallest actuated length and the largest top
+  and bottom joint angles over the motion, against each actuator's running lengths (its minimum
+  running length and that plus its stroke, less the two stubs) and the joint-angle limit;
+- dynamic admissibility (Fig 4): the peak leg force of the paper's inverse model (payload only: the
+  legs' weight, inertia and friction neglected, Eq 16) against the actuator's continuous force
+  less the margins, and the same from the full inverse dynamics (legs, friction) beside it;
+- conditioning: the leg Jacobian's smallest singular value and condition number over the motion.
+
+Every pose goes through the mechanics FMU's own dynamics core (fmu/mechanics/platform.c:
+platform_pose_kinematics and platform_inverse_dynamics_many, one call per grid point for all its
+poses), on the platform the FMU builds from the study's geometry (parameter_sets.halder_mechanics),
+so the design map and the co-simulation share one model.
+
+Where the paper is loose (params/halder2013.toml says each choice): the disc's size "0.5mm" is read
+as a 0.5 m radius, the design height as the disc's (z_q0, which gives the paper's neutral running
+length 1647 mm at z = 1.4 m), Eq 1's even legs as (i - 2) pi/3, Section V's 100 kg payload with
+Section VII's inertia scaled by mass (the study file says so), and the margins as the force the
+demand may reach: continuous force / ((1 + friction margin)(1 + other margin)).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..engine.tomlfile import line_of
+from .parameter_sets import halder_mechanics, load
+from .platform_core import Core
+from .ports import POSE
+
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+ROTATIONS = ("roll", "pitch", "yaw")
+
+
+class StudyError(ValueError):
+    """A study file that cannot run: one line naming the file, the line and the reason."""
+
+
+@dataclass(frozen=True)
+class Actuator:
+    name: str
+    stroke: float              # [m]
+    running_length_min: float  # L_min [m]: the leg system, stubs included, at the shortest stroke
+    continuous_force: float    # [N], 100 % duty cycle
+
+    @property
+    def running_length_max(self) -> float:
+        return self.running_length_min + self.stroke
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Per DOF the half range (m, rad); the limits of speed and acceleration (m/s, m/s^2 for the
+    translations, rad/s, rad/s^2 for the rotations)."""
+    ranges: dict[str, float]
+    velocity: float
+    acceleration: float
+    angular_velocity: float
+    angular_acceleration: float
+
+
+@dataclass
+class Study:
+    path: Path
+    name: str
+    parameter_set: str
+    axes: dict[str, np.ndarray]      # geometry key -> values (two axes: the map's rows and columns)
+    motion: Motion
+    actuators: list[Actuator]
+    joint_angle_limit: float         # [rad]
+    payload_mass: float
+    payload_inertia: tuple[float, float, float]
+    force_margins: tuple[float, float] = (0.07, 0.20)
+    samples: int = 121               # poses per basic motion along its path
+    phase_samples: int = 11          # poses per phase (accelerate, cruise, decelerate) of a timed motion
+    fixed: dict[str, float] = field(default_factory=dict)  # geometry values over the parameter set's
+
+    def allowed_force(self, actuator: Actuator) -> float:
+        friction, other = self.force_margins
+        return actuator.continuous_force / ((1 + friction) * (1 + other))
+
+
+def shortest_time(distance: float, v_max: float, a_max: float, samples: int = 41) -> tuple[np.ndarray, ...]:
+    """The shortest-time rest-to-rest move over `distance` under |v| <= v_max, |a| <= a_max:
+    accelerate at a_max, cruise at v_max (if reached), decelerate. Returns times, displacements,
+    velocities and accelerations sampled in each phase with the phase's own (constant)
+    acceleration at both its ends, so the extremes of anything the acceleration drives are seen."""
+    t_ramp = min(v_max / a_max, math.sqrt(distance / a_max))
+    v_top = a_max * t_ramp
+    t_cruise = max(0.0, (distance - a_max * t_ramp ** 2) / v_top) if v_top > 0 else 0.0
+    times, s, v, a = [], [], [], []
+    for phase, (start, length, accel) in enumerate([(0.0, t_ramp, a_max), (t_ramp, t_cruise, 0.0),
+                                                    (t_ramp + t_cruise, t_ramp, -a_max)]):
+        if length <= 0.0:
+            continue
+        tau = np.linspace(0.0, length, samples)
+        if phase == 0:
+            s0, v0 = 0.0, 0.0
+        elif phase == 1:
+            s0, v0 = 0.5 * a_max * t_ramp ** 2, v_top
+        else:
+            s0, v0 = 0.5 * a_max * t_ramp ** 2 + v_top * t_cruise, v_top
+        times.append(start + tau)
+        s.append(s0 + v0 * tau + 0.5 * accel * tau ** 2)
+        v.append(v0 + accel * tau)
+        a.append(np.full_like(tau, accel))
+    return tuple(np.concatenate(x) for x in (times, s, v, a))
+
+
+def basic_motions(study: Study, neutral: np.ndarray, timed: bool = False) -> dict[str, tuple[np.ndarray, ...]]:
+    """Each DOF from -range to +range about the neutral pose: poses (n x 6) and, with `timed`, the
+    shortest-time profile's rates and accelerations (n x 6 each); otherwise `samples` poses evenly
+    along the path (what the kinematic limits need)."""
+    return {dof: (neutral + offsets, rates, accelerations)
+            for dof, (offsets, rates, accelerations) in _displacements(study, timed).items()}
+
+
+_PROFILES: dict[tuple, dict] = {}
+
+
+def _displacements(study: Study, timed: bool) -> dict[str, tuple[np.ndarray, ...]]:
+    """basic_motions about a zero pose (the same at every design point: computed once)."""
+    key = (tuple(sorted(study.motion.ranges.items())), study.motion.velocity, study.motion.acceleration,
+           study.motion.angular_velocity, study.motion.angular_acceleration, study.samples, study.phase_samples, timed)
+    if key in _PROFILES:
+        return _PROFILES[key]
+    out = {}
+    for k, dof in enumerate(DOFS):
+        half = study.motion.ranges.get(dof, 0.0)
+        if half <= 0.0:
+            continue
+        rotation = dof in ROTATIONS
+        if timed:
+            m = study.motion
+            _, s, v, a = shortest_time(2 * half, m.angular_velocity if rotation else m.velocity,
+                                       m.angular_acceleration if rotation else m.acceleration, study.phase_samples)
+            displacement = s - half
+        else:
+            displacement = np.linspace(-half, half, study.samples)
+            v = a = np.zeros_like(displacement)
+        offsets = np.zeros((len(displacement), 6))
+        offsets[:, k] = displacement
+        rates, accelerations = np.zeros_like(offsets), np.zeros_like(offsets)
+        rates[:, k], accelerations[:, k] = v, a
+        out[dof] = (offsets, rates, accelerations)
+    _PROFILES[key] = out
+    return out
+
+
+def platform_values(study: Study, point: dict[str, float], effects: bool = False) -> dict[str, Any]:
+    """The mechanics start values of the study's platform at a design point (geometry keys of the
+    parameter set's [geometry] table); the payload is the study's. effects: the legs' inertia and
+    friction as the parameter set gives them (the full model), or off (the paper's inverse model)."""
+    config = copy.deepcopy(_parameter_set(study.parameter_set))
+    config["geometry"].update(study.fixed)
+    config["geometry"].update(point)
+    config["payload"]["mass"] = study.payload_mass
+    config["payload"]["inertia_diag"] = list(study.payload_inertia)
+    values = halder_mechanics(config)
+    values.update({"effects.actuator_inertia": effects, "effects.motor_inertia": effects, "effects.friction": effects})
+    return values
+
+
+_SETS: dict[str, dict] = {}
+
+
+def _parameter_set(name: str) -> dict:
+    """The parameter set, read once per process (a map reads it at every grid point)."""
+    if name not in _SETS:
+        _SETS[name] = load(name)
+    return _SETS[name]
+
+
+def stubs(study: Study) -> float:
+    g = {**load(study.parameter_set)["geometry"], **study.fixed}
+    return g["top_stub"] + g["bottom_stub"]
+
+
+@dataclass
+class DesignMap:
+    """Per grid point (rows: the first axis, columns: the second) and basic motion, the limits
+    over the motion; `seconds` the time the map took."""
+    study: Study
+    motions: list[str]
+    length_max: np.ndarray    # [rows, columns, motions]: the largest actuated length [m]
+    length_min: np.ndarray
+    neutral_length: np.ndarray  # [rows, columns]: the longest actuated length at the neutral
+    top_angle: np.ndarray     # the largest top (universal) joint angle [rad]
+    bottom_angle: np.ndarray  # the largest bottom (spherical) joint angle [rad]
+    smallest_singular: np.ndarray  # the leg Jacobian's smallest singular value over the motion
+    condition: np.ndarray     # its largest condition number
+    seconds: float = 0.0
+    force_paper: np.ndarray | None = None  # [rows, columns, motions] peak |leg force|, payload only [N]
+    force_full: np.ndarray | None = None   # the same with the legs' inertia and friction
+
+    @property
+    def points(self) -> int:
+        return self.length_max.shape[0] * self.length_max.shape[1]
+
+    def kinematic_admissible(self, actuator: Actuator) -> dict[str, np.ndarray]:
+        """Per constraint, [rows, columns, motions] booleans (Eq 21): max stroke, min stroke, joint angle."""
+        s = stubs(self.study)
+        return {"max stroke": s + self.length_max < actuator.running_length_max,
+                "min stroke": s + self.length_min > actuator.running_length_min,
+                "joint angle": np.maximum(self.top_angle, self.bottom_angle) < self.study.joint_angle_limit}
+
+    def admissible(self, actuator: Actuator, dynamic: bool = False) -> np.ndarray:
+        """[rows, columns]: every constraint of every basic motion holds (and the force, with dynamic)."""
+        ok = np.all([c.all(axis=2) for c in self.kinematic_admissible(actuator).values()], axis=0)
+        if dynamic and self.force_paper is not None:
+            ok &= self.force_paper.max(axis=2) <= self.study.allowed_force(actuator)
+        return ok
+
+
+def design_map(study: Study, dynamic: bool = True) -> DesignMap:
+    """The kinematic (and dynamic) map of the study's grid: one call of the dynamics core per grid
+    point for all its poses."""
+    start = time.perf_counter()
+    (row_key, rows), (column_key, columns) = list(study.axes.items())
+    shape = (len(rows), len(columns))
+    core, full = Core(actuators=False, motors=False, friction=False), Core()
+    out: dict[str, np.ndarray] = {}
+    motions: list[str] = []
+    for r, row in enumerate(rows):
+        for c, column in enumerate(columns):
+            point = {row_key: float(row), column_key: float(column)}
+            core.use_start_values(platform_values(study, point))
+            neutral = core.neutral_pose
+            paths = basic_motions(study, neutral)
+            motions = list(paths)
+            poses = np.concatenate([p for p, _, _ in paths.values()])
+            k = core.pose_kinematics(poses, jacobian=True)
+            split = np.cumsum([len(p) for p, _, _ in paths.values()])[:-1]
+            # the Jacobian's singular values at every tenth pose of each path (and its ends): the
+            # conditioning varies slowly along a path, and the SVDs would cost more than the rest
+            every = np.r_[0:len(poses):10, len(poses) - 1]
+            singular = np.full((len(poses), 6), np.nan)
+            singular[every] = np.linalg.svd(k["jacobian"][every], compute_uv=False)
+            for name, values, reduce in (("length_max", k["length"], np.max), ("length_min", k["length"], np.min),
+                                         ("top_angle", k["upper_angle"], np.max),
+                                         ("bottom_angle", k["lower_angle"], np.max),
+                                         ("smallest_singular", singular[:, -1:], np.nanmin),
+                                         ("condition", singular[:, :1] / singular[:, -1:], np.nanmax)):
+                out.setdefault(name, np.empty((*shape, len(motions))))[r, c] = \
+                    [reduce(part) for part in np.split(values, split)]
+            out.setdefault("neutral_length", np.empty(shape))[r, c] = core.leg_lengths(neutral).max()
+            if dynamic:
+                timed = basic_motions(study, neutral, timed=True)
+                arrays = [np.concatenate([m[i] for m in timed.values()]) for i in range(3)]
+                split = np.cumsum([len(m[0]) for m in timed.values()])[:-1]
+                core.p.force_torque = 1.0  # forces, not torques
+                paper = np.abs(core.inverse_dynamics_many(*arrays))
+                full.use_start_values(platform_values(study, point, effects=True))
+                full.p.force_torque = 1.0
+                every = np.abs(full.inverse_dynamics_many(*arrays))
+                out.setdefault("force_paper", np.empty((*shape, len(motions))))[r, c] = \
+                    [part.max() for part in np.split(paper, split)]
+                out.setdefault("force_full", np.empty((*shape, len(motions))))[r, c] = \
+                    [part.max() for part in np.split(every, split)]
+    return DesignMap(study, motions, seconds=time.perf_counter() - start, **out)
+
+
+def limit_along(design: DesignMap, actuator: Actuator, constraint: str, motion: str, row: float) -> float | None:
+    """Halder's points a, b, c: at the grid row nearest `row` (r_b), scanning the column variable
+    (z) upward, the last admissible value before the constraint fails (max stroke: the largest
+    admissible z) or the first admissible one (min stroke, joint angle: the smallest)."""
+    (_, rows), (_, columns) = list(design.study.axes.items())
+    r = int(np.argmin(np.abs(rows - row)))
+    ok = design.kinematic_admissible(actuator)[constraint][r, :, design.motions.index(motion)]
+    if not ok.any():
+        return None
+    return float(columns[ok][-1] if constraint == "max stroke" else columns[ok][0])
+
+
+# -- the study file ---------------------------------------------------------------------------------
+
+SCHEMA = {"": {"study", "axes", "motion", "actuator"},
+          "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
+                    "force_margins", "samples", "fixed"},
+          "motion": {*[d for d in DOFS if d not in ROTATIONS], *[f"{d}_deg" for d in ROTATIONS], "velocity",
+                     "acceleration", "angular_velocity_deg", "angular_acceleration_deg"},
+          "actuator": {"name", "stroke", "running_length_min", "continuous_force"}}
+
+
+def load_study(path: str | Path) -> Study:
+    """Reads and checks a study file (studies/*.toml); every mistake is a StudyError naming the
+    file and line."""
+    path = Path(path)
+    if not path.is_file():
+        raise StudyError(f"{path}: no such study file")
+    text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise StudyError(f"{path}: not valid TOML: {error}") from None
+
+    def fail(table: str, key: str, problem: str) -> StudyError:
+        return StudyError(f"{path}:{line_of(text, table, key)}: '{table + '.' if table else ''}{key}' {problem}")
+
+    def number(table: str, values: dict, key: str, default: float | None = None, positive: bool = True) -> float:
+        if key not in values:
+            if default is None:
+                raise StudyError(f"{path}: '{table}.{key}' is missing")
+            return default
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                or (positive and not value > 0) or value < 0:
+            raise fail(table, key, f"= {value!r} must be a {'positive' if positive else 'non-negative'} number")
+        return float(value)
+
+    for table, allowed in SCHEMA.items():
+        values = data if table == "" else data.get(table, {})
+        for entry in (values if isinstance(values, list) else [values]):
+            if not isinstance(entry, dict):
+                raise fail("", table, "must be a table" + (" list ([[actuator]])" if table == "actuator" else ""))
+            if table == "":
+                unknown = [k for k in entry if k not in allowed]
+            else:
+                unknown = [k for k in entry if k not in allowed]
+            if unknown:
+                raise fail(table, unknown[0], f"is not a known key (known here: {', '.join(sorted(allowed))})")
+    study = data.get("study", {})
+    parameter_set = study.get("parameter_set", "halder2013")
+    if parameter_set != "halder2013":
+        raise fail("study", "parameter_set", f"= {parameter_set!r}: the design family here is Halder's 6-SBU layout "
+                   "('halder2013')")
+    geometry = load(parameter_set)["geometry"]
+    fixed = study.get("fixed", {})
+    if not isinstance(fixed, dict):
+        raise fail("study", "fixed", "must be a table of geometry values")
+    for key, value in fixed.items():
+        if key not in geometry:
+            raise fail("study", "fixed", f"names {key!r}, not a geometry value of {parameter_set} "
+                       f"({', '.join(sorted(geometry))})")
+        number("study.fixed", fixed, key, positive=False)
+    axes = {}
+    raw_axes = data.get("axes", {})
+    if not isinstance(raw_axes, dict) or len(raw_axes) != 2:
+        raise fail("", "axes", "must name two geometry values, each {from, to, step} (e.g. base_radius, disc_height)")
+    for key, spec in raw_axes.items():
+        if key not in geometry or not isinstance(geometry[key], (int, float)):
+            raise fail("axes", key, f"is not a geometry value of {parameter_set} ({', '.join(sorted(geometry))})")
+        if not isinstance(spec, dict) or set(spec) != {"from", "to", "step"}:
+            raise fail("axes", key, "must be {from = ..., to = ..., step = ...}")
+        low, high, step = (number("axes", spec, k, positive=k == "step") for k in ("from", "to", "step"))
+        if not high >= low:
+            raise fail("axes", key, f"runs from {low} to {high}: 'to' must not be below 'from'")
+        count = int(round((high - low) / step)) + 1
+        if count > 2000:
+            raise fail("axes", key, f"has {count} values; at most 2000 per axis")
+        axes[key] = np.round(low + step * np.arange(count), 10)
+    motion = data.get("motion", {})
+    ranges = {d: number("motion", motion, d, 0.0, positive=False) for d in DOFS if d not in ROTATIONS}
+    ranges.update({d: math.radians(number("motion", motion, f"{d}_deg", 0.0, positive=False)) for d in ROTATIONS})
+    if not any(ranges.values()):
+        raise fail("", "motion", "gives no range: name at least one of surge, sway, heave, roll_deg, pitch_deg, yaw_deg")
+    spec = Motion(ranges, number("motion", motion, "velocity"), number("motion", motion, "acceleration"),
+                  math.radians(number("motion", motion, "angular_velocity_deg")),
+                  math.radians(number("motion", motion, "angular_acceleration_deg")))
+    actuators = []
+    raw = data.get("actuator", [])
+    if not isinstance(raw, list) or not raw:
+        raise fail("", "actuator", "must be one or more [[actuator]] tables")
+    for entry in raw:
+        name = entry.get("name")
+        if not isinstance(name, str) or not name:
+            raise fail("actuator", "name", "must be a name")
+        actuators.append(Actuator(name, number("actuator", entry, "stroke"),
+                                  number("actuator", entry, "running_length_min"),
+                                  number("actuator", entry, "continuous_force")))
+    inertia = study.get("payload_inertia", load(parameter_set)["payload"]["inertia_diag"])
+    if not (isinstance(inertia, list) and len(inertia) == 3 and all(isinstance(v, (int, float)) and v > 0
+                                                                    for v in inertia)):
+        raise fail("study", "payload_inertia", "must be three positive numbers [kg m^2]")
+    margins = study.get("force_margins", [0.07, 0.20])
+    if not (isinstance(margins, list) and len(margins) == 2 and all(isinstance(v, (int, float)) and 0 <= v < 1
+                                                                   for v in margins)):
+        raise fail("study", "force_margins", "must be two fractions [friction, other], each in [0, 1)")
+    samples = study.get("samples", 121)
+    if not isinstance(samples, int) or isinstance(samples, bool) or not 3 <= samples <= 10001:
+        raise fail("study", "samples", "must be a whole number of poses per motion, 3 to 10001")
+    return Study(path, str(study.get("name", path.stem)), parameter_set, axes, spec, actuators,
+                 math.radians(number("study", study, "joint_angle_limit_deg", 20.0)),
+                 number("study", study, "payload_mass", float(load(parameter_set)["payload"]["mass"])),
+                 tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
+                 fixed={k: float(v) for k, v in fixed.items()})
+
+
+# -- on every core --------------------------------------------------------------------------------
+
+def _rows(study: Study, rows: list[int], dynamic: bool) -> DesignMap:
+    """The map of some rows of the study's grid (a task of a parallel map)."""
+    (row_key, values), (column_key, columns) = list(study.axes.items())
+    part = copy.copy(study)
+    part.axes = {row_key: values[rows], column_key: columns}
+    return design_map(part, dynamic)
+
+
+def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
+                 scheduler: str | None = None) -> DesignMap:
+    """design_map with its rows on Dask (a LocalCluster of `workers` processes, default one per
+    core, or a running scheduler); workers = 0: in this process. Bit for bit the in-process map."""
+    if workers == 0 and scheduler is None:
+        return design_map(study, dynamic)
+    import logging
+    import os
+    from distributed import Client, LocalCluster
+    start = time.perf_counter()
+    cluster = None if scheduler else LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                                  processes=True, dashboard_address=None,
+                                                  silence_logs=logging.ERROR)
+    try:
+        with Client(cluster or scheduler, timeout="30s") as client:
+            n = max(len(client.scheduler_info()["workers"]), 1)
+            rows = np.array_split(np.arange(len(next(iter(study.axes.values())))), 4 * n)
+            parts = client.gather(client.map(_rows, [study] * len(rows), [list(r) for r in rows if len(r)],
+                                             [dynamic] * len(rows), pure=False))
+    finally:
+        if cluster is not None:
+            cluster.close()
+    merged = {name: np.concatenate([getattr(p, name) for p in parts]) for name in
+              ("length_max", "length_min", "neutral_length", "top_angle", "bottom_angle", "smallest_singular",
+               "condition", *(("force_paper", "force_full") if dynamic else ()))}
+    return DesignMap(study, parts[0].motions, seconds=time.perf_counter() - start, **merged)
+
+
+# -- what the paper shows ---------------------------------------------------------------------------
+
+LINES = {"max stroke": "-", "min stroke": "--", "joint angle": "-.", "force": "-", "force, full model": ":"}
+COLOURS = {"surge": "tab:blue", "sway": "tab:orange", "heave": "tab:green", "roll": "tab:red", "pitch": "tab:purple",
+           "yaw": "tab:brown"}
+
+
+def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[str, tuple[float, float]]) -> Path:
+    """Halder's Figs 2 and 3: per basic motion and constraint, the limiting curve (solid: max stroke,
+    dashed: min stroke, dash-dot: joint angle) in the base radius - disc height plane, the zone
+    where every constraint of every motion holds shaded, and the named points marked."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    fig, ax = plt.subplots(figsize=(8, 6))
+    ok = design.admissible(actuator)
+    if ok.any():
+        ax.contourf(rows, columns, ok.T.astype(float), levels=[0.5, 1.5], colors=["0.85"])
+    for constraint, admissible in design.kinematic_admissible(actuator).items():
+        for m, motion in enumerate(design.motions):
+            grid = admissible[:, :, m].T.astype(float)
+            if 0 < grid.mean() < 1:
+                ax.contour(rows, columns, grid, levels=[0.5], colors=[COLOURS[motion]], linestyles=LINES[constraint])
+    for label, (x, y) in marks.items():
+        ax.plot(x, y, "k.", markersize=7)
+        ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 3))
+    handles = [plt.Line2D([], [], color=COLOURS[m], label=m) for m in design.motions] + \
+        [plt.Line2D([], [], color="k", linestyle=LINES[c], label=c) for c in ("max stroke", "min stroke", "joint angle")]
+    ax.legend(handles=handles, fontsize=8, ncol=3, loc="upper right")
+    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
+    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
+    ax.set_title(f"{actuator.name}: running length {actuator.running_length_min:g}-{actuator.running_length_max:g} m, "
+                 f"joint angle < {math.degrees(design.study.joint_angle_limit):g} deg (admissible: shaded)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[str, tuple[float, float]]) -> Path:
+    """Halder's Fig 4: the peak force limit (the paper's payload-only model, solid; our full model,
+    dotted) and the heave motion's stroke limits, the zone where all of them and every other
+    kinematic constraint hold shaded."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    fig, ax = plt.subplots(figsize=(8, 6))
+    ok = design.admissible(actuator, dynamic=True)
+    if ok.any():
+        ax.contourf(rows, columns, ok.T.astype(float), levels=[0.5, 1.5], colors=["0.85"])
+    allowed = design.study.allowed_force(actuator)
+    for label, force in (("force", design.force_paper), ("force, full model", design.force_full)):
+        grid = (force.max(axis=2) <= allowed).T.astype(float)
+        if 0 < grid.mean() < 1:
+            ax.contour(rows, columns, grid, levels=[0.5], colors=["k"], linestyles=LINES[label])
+    if "heave" in design.motions:
+        kinematic = design.kinematic_admissible(actuator)
+        for constraint, style in (("min stroke", "--"), ("max stroke", "-.")):
+            grid = kinematic[constraint][:, :, design.motions.index("heave")].T.astype(float)
+            if 0 < grid.mean() < 1:
+                ax.contour(rows, columns, grid, levels=[0.5], colors=[COLOURS["heave"]], linestyles=style)
+    for label, (x, y) in marks.items():
+        ax.plot(x, y, "k.", markersize=7)
+        ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 3))
+    handles = [plt.Line2D([], [], color="k", linestyle="-", label=f"peak force = {allowed:.0f} N (payload only)"),
+               plt.Line2D([], [], color="k", linestyle=":", label="the same, legs' inertia and friction included"),
+               plt.Line2D([], [], color=COLOURS["heave"], linestyle="--", label="heave: min stroke"),
+               plt.Line2D([], [], color=COLOURS["heave"], linestyle="-.", label="heave: max stroke")]
+    ax.legend(handles=handles, fontsize=8, loc="upper right")
+    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
+    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
+    friction, other = design.study.force_margins
+    ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
+                 "margins (admissible: shaded)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+# -- the paper's numbers beside ours ----------------------------------------------------------------
+
+PAPER = {"a": 1.19, "b": 1.06, "c": 0.62, "chosen": (1.10, 1.40), "lengths": (1.286, 1.647, 1.886),
+         "zone_450": (1.25, 0.95), "zone_600": (1.10, 1.40)}
+
+
+def nearest(study: Study, point: tuple[float, float]) -> tuple[int, int]:
+    (_, rows), (_, columns) = list(study.axes.items())
+    return int(np.argmin(np.abs(rows - point[0]))), int(np.argmin(np.abs(columns - point[1])))
+
+
+def paper_rows(design: DesignMap) -> list:
+    """Section V's stated numbers beside ours (validation rows), and what the paper's
+    simplification of the dynamics costs, for a study over base_radius and disc_height."""
+    from .validation.rows import Row
+    study = design.study
+    (_, rows), (_, columns) = list(study.axes.items())
+    s = stubs(study)
+    short, long_ = min(study.actuators, key=lambda a: a.stroke), max(study.actuators, key=lambda a: a.stroke)
+    out = []
+    if "sway" in design.motions and rows[0] <= 1.03 <= rows[-1]:
+        for label, constraint in (("a", "max stroke"), ("b", "min stroke"), ("c", "joint angle")):
+            found = limit_along(design, short, constraint, "sway", 1.03)
+            out.append(Row(f"point {label}: sway at r_b = 1.03 m, {constraint} limit ({short.name})",
+                           f"{PAPER[label]:.2f}", "none" if found is None else found, "m of z_p0",
+                           "" if found is not None and abs(found - PAPER[label]) < 1e-9 else "one grid step (0.01 m)"))
+    for actuator, key in ((short, "zone_450"), (long_, "zone_600")):
+        ok = design.admissible(actuator)
+        r, c = np.nonzero(ok)
+        out.append(Row(f"kinematically admissible zone, {actuator.name}", f"around ({PAPER[key][0]:.2f}, {PAPER[key][1]:.2f})",
+                       f"centroid ({rows[r].mean():.2f}, {columns[c].mean():.2f}), {ok.sum()} points" if ok.any() else "none",
+                       "m (r_b, z_p0)", "a band along the heave stroke limits, as the paper's figure"))
+    r, c = nearest(study, PAPER["chosen"])
+    admissible = design.kinematic_admissible(long_)
+    failing = [f"{name} in {', '.join(m for k, m in enumerate(design.motions) if not v[r, c, k])}"
+               for name, v in admissible.items() if not v[r, c].all()]
+    highest = limit_along(design, long_, "max stroke", "heave", PAPER["chosen"][0])
+    out.append(Row(f"r_b = 1.10 m, z_p0 = 1.40 m with {long_.name}", "admissible",
+                   "admissible" if not failing else "outside: " + "; ".join(failing), "",
+                   "" if not failing else f"+0.3 m heave needs the running length below; the highest admissible z_p0 at "
+                   f"r_b = 1.10 m is {highest} m"))
+    needed = (design.length_min[r, c].min() + s, design.neutral_length[r, c] + s, design.length_max[r, c].max() + s)
+    out.append(Row("running lengths there, min / neutral / max", " / ".join(f"{1e3 * v:.0f}" for v in PAPER["lengths"]),
+                   " / ".join(f"{1e3 * v:.0f}" for v in needed), "mm",
+                   "the paper quotes the actuator's limits, we what the six motions need; the neutral matches by "
+                   "construction (params/halder2013.toml)"))
+    if design.force_paper is not None:
+        allowed = study.allowed_force(long_)
+        out.append(Row("peak leg force there, payload only (Eq 16)", f"below {allowed:.0f}", float(design.force_paper[r, c].max()),
+                       "N", f"{long_.continuous_force:g} N / (1 + {study.force_margins[0]:g}) / (1 + {study.force_margins[1]:g}); "
+                       "the margins read as factors on the demand"))
+        out.append(Row("the same with the legs' weight, inertia and friction", "", float(design.force_full[r, c].max()), "N",
+                       "what the paper's simplification leaves out"))
+        full_ok = design.admissible(long_) & (design.force_full.max(axis=2) <= allowed)
+        out.append(Row("admissible points with the force limit", "", f"{design.admissible(long_, True).sum()} / "
+                       f"{full_ok.sum()} of {design.admissible(long_).sum()}", "points",
+                       "payload only / full model, of the kinematically admissible"))
+    share = float(np.mean(design.bottom_angle > design.top_angle + 1e-9))
+    out.append(Row("bottom joint angle above the top one", "never", f"{share:.1%} of points and motions", "", ""))
+    out.append(Row("leg Jacobian at r_b = 1.10 m, z_p0 = 1.40 m over the motions", "",
+                   f"smallest singular value {design.smallest_singular[r, c].min():.3f}, condition number "
+                   f"{design.condition[r, c].max():.1f}", "", "far from a singular pose"))
+    return out
+
+
+def summary(design: DesignMap) -> list[str]:
+    """Markdown lines: the grid, the rows beside the paper's numbers, the map's speed."""
+    from .validation.rows import table
+    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    return [f"Grid: {row_key} {rows[0]:g}-{rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
+            f"{design.points} points, {len(design.motions)} basic motions ({', '.join(design.motions)}).", "",
+            table(paper_rows(design)), "",
+            f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
+            "every basic motion)."]
+
+
+def write(design: DesignMap, out: Path) -> list[Path]:
+    """The figures (Halder's Figs 2 and 3 per actuator, Fig 4 for the longest stroke), the summary
+    and the map as a table (one row per grid point and basic motion) into `out`."""
+    import pyarrow as pa
+    import pyarrow.csv
+    import pyarrow.parquet as pq
+    out.mkdir(parents=True, exist_ok=True)
+    stem = design.study.path.stem
+    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    written = []
+    short = min(design.study.actuators, key=lambda a: a.stroke)
+    marks = {}
+    if "sway" in design.motions and rows[0] <= 1.03 <= rows[-1]:
+        for label, constraint in (("a", "max stroke"), ("b", "min stroke"), ("c", "joint angle")):
+            found = limit_along(design, short, constraint, "sway", 1.03)
+            if found is not None:
+                marks[label] = (1.03, found)
+    for k, actuator in enumerate(design.study.actuators):
+        own = marks if actuator is short else {"chosen": PAPER["chosen"]}
+        written.append(plot_kinematic(design, actuator, out / f"{stem}_kinematic_{k + 1}.png", own))
+    long_ = max(design.study.actuators, key=lambda a: a.stroke)
+    if design.force_paper is not None:
+        written.append(plot_dynamic(design, long_, out / f"{stem}_dynamic.png", {"chosen": PAPER["chosen"]}))
+    r, c, m = np.meshgrid(np.arange(len(rows)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
+    table = {row_key: rows[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
+             "length_min": design.length_min.ravel(), "length_max": design.length_max.ravel(),
+             "top_angle": design.top_angle.ravel(), "bottom_angle": design.bottom_angle.ravel(),
+             "smallest_singular": design.smallest_singular.ravel(), "condition": design.condition.ravel()}
+    if design.force_paper is not None:
+        table.update(force_paper=design.force_paper.ravel(), force_full=design.force_full.ravel())
+    arrow = pa.table(table)
+    pq.write_table(arrow, out / f"{stem}.parquet")
+    pa.csv.write_csv(arrow, out / f"{stem}.csv")
+    (out / f"{stem}.md").write_text("\n".join([f"# {design.study.name}", "", *summary(design), ""]))
+    return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", out / f"{stem}.md"]
+
+
+def validation(figures: Path) -> tuple[list, DesignMap]:
+    """The validation report's Section V study: the shipped study's map, its rows and Figs 2-4
+    (figures/halder_fig2.png, fig3, fig4)."""
+    from ..engine.artifacts import data_dir
+    study = load_study(data_dir("studies") / "halder_section5.toml")
+    design = design_map(study)
+    short, long_ = min(study.actuators, key=lambda a: a.stroke), max(study.actuators, key=lambda a: a.stroke)
+    marks = {label: (1.03, found) for label, constraint in (("a", "max stroke"), ("b", "min stroke"), ("c", "joint angle"))
+             if (found := limit_along(design, short, constraint, "sway", 1.03)) is not None}
+    plot_kinematic(design, short, figures / "halder_fig2.png", marks)
+    plot_kinematic(design, long_, figures / "halder_fig3.png", {"chosen": PAPER["chosen"]})
+    plot_dynamic(design, long_, figures / "halder_fig4.png", {"chosen": PAPER["chosen"]})
+    return paper_rows(design), design
