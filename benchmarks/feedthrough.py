@@ -65,7 +65,7 @@ def main() -> None:
     for kind, order in SCHEMES:
         plain, resolved = oscillator_error(kind, order, False), oscillator_error(kind, order, True)
         lines.append(f"| {kind} {order} | {plain:.2e} | {resolved:.2e} |")
-    reference = meng({"scene.step": 6.25e-5, "coupling.startup_time": 0.0})
+    reference = meng({"scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0})
     lines += ["", "Meng scene, first second at 0.25 ms with the finer start: largest pose difference [m, rad] and "
               "largest torque difference [% of the peak] against the scene at 62.5 us (Gauss-Seidel, order 1; nan: "
               "diverged):", "",

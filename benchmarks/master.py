@@ -79,7 +79,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--duration", type=float, default=10.0)
     args = parser.parse_args()
-    fine = {"scene.duration": args.duration, "coupling.startup_time": 0.0}
+    fine = {"scene.duration": args.duration, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}
     reference, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 3.125e-5}), plots=False)
     coarser, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 6.25e-5}), plots=False)
     peak = max(np.abs(reference[n]).max() for n in TORQUES)

@@ -107,7 +107,7 @@ def start_reference():
     peak. Its difference to the run at an eighth, 0.48 % of the peak torque and 1e-6 in pose,
     bounds its own error (Gauss-Seidel order 1 converges at first order)."""
     reference, _ = run_scene(paper_scene("meng_eq35",
-                                        {**START, "scene.step": 6.25e-5, "coupling.startup_time": 0.0}), plots=False)
+                                        {**START, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
     return reference, max(np.abs(reference[n]).max() for n in TORQUES)
 
 
@@ -118,7 +118,7 @@ def test_a_finer_start_resolves_the_drives_start_up_shock(start_reference):
     of their peak and the pose within 2e-6, for 7 % more macro steps over the 10 s scene."""
     from cosim.platform.accuracy import difference
     reference, peak = start_reference
-    plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0}),
+    plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}),
                          plots=False)
     error, when = difference(plain, reference, TORQUES, with_time=True)
     assert error / peak > 0.15 and when < 5e-3
@@ -181,7 +181,7 @@ def impact_reference():
     """The Meng scene's first 0.45 s with Eq 36's impact moved to 0.3 s, at a sixteenth of the
     step throughout, and its torque peak after the start (the start is another test's)."""
     reference, _ = run_scene(paper_scene("meng_eq35",
-                                        {**IMPACT, "scene.step": 6.25e-5, "coupling.startup_time": 0.0}), plots=False)
+                                        {**IMPACT, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
     late = reference["time"] > 0.1
     return reference, max(np.abs(reference[n][late]).max() for n in TORQUES)
 

@@ -63,8 +63,7 @@ def test_the_swapped_drives_come_sized_for_their_legs():
 def test_a_swapped_scene_tracks_at_the_default_step(name, runs):
     result, report = runs[name]
     scene = load_scene(ROOT / "scenes" / f"{name}.toml")
-    fine = round(scene.startup_time / scene.startup_step) if scene.startup_time else 0  # the finer start
-    assert report.failure is None and report.macro_steps == fine + round((report.simulated - scene.startup_time) / 1e-3)
+    assert report.failure is None and report.simulated == pytest.approx(scene.duration)
     bounds = {"meng_eq35_linear": [0.5e-3] * 6,    # the linear motors' PID with feedforward: < 0.5 mm, mrad
               "sumnu_case_1_pmsm": [8e-3] * 3 + [2e-3] * 3}[name]  # the PMSM's P position loop lags by mm
     assert np.all(report.largest_error < bounds), report.largest_error
@@ -102,7 +101,7 @@ def test_the_fast_numerics_on_linear_motors_need_a_longer_finer_start():
     path, forces = ROOT / "scenes" / "meng_eq35_linear.toml", [f"force[{i}]" for i in range(1, 7)]
     poses = [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 3.0, "scene.step": 6.25e-5,
-                                               "coupling.startup_time": 0.0}), plots=False)
+                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
     peak = max(np.abs(reference[n]).max() for n in forces)
     shipped, _ = run_scene(load_scene(path, {"scene.duration": 3.0}), plots=False)
     fast = {"scene.duration": 3.0, "scene.step": 2e-3, "coupling.interface_jacobian": True, "coupling.edge_time": 0.02,
@@ -124,7 +123,7 @@ def test_meng_on_linear_motors_converges_at_second_order():
     from cosim.platform.accuracy import difference
     path, poses = ROOT / "scenes" / "meng_eq35_linear.toml", [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": 6.25e-5,
-                                               "coupling.startup_time": 0.0}), plots=False)
+                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
     errors = {}
     for step in (1e-3, 5e-4):
         result, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": step}), plots=False)
