@@ -89,6 +89,8 @@ class Study:
     samples: int = 121               # poses per basic motion along its path
     phase_samples: int = 11          # poses per phase (accelerate, cruise, decelerate) of a timed motion
     fixed: dict[str, float] = field(default_factory=dict)  # geometry values over the parameter set's
+    # [workspace]: the design whose workspace is mapped, the actuator, the grid spacings
+    workspace: dict[str, Any] | None = None
 
     def allowed_force(self, actuator: Actuator) -> float:
         friction, other = self.force_margins
@@ -289,7 +291,8 @@ def limit_along(design: DesignMap, actuator: Actuator, constraint: str, motion: 
 
 # -- the study file ---------------------------------------------------------------------------------
 
-SCHEMA = {"": {"study", "axes", "motion", "actuator"},
+SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace"},
+          "workspace": {"point", "actuator", "spacing", "angle_step_deg"},
           "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
                     "force_margins", "samples", "fixed"},
           "motion": {*[d for d in DOFS if d not in ROTATIONS], *[f"{d}_deg" for d in ROTATIONS], "velocity",
@@ -394,11 +397,25 @@ def load_study(path: str | Path) -> Study:
     samples = study.get("samples", 121)
     if not isinstance(samples, int) or isinstance(samples, bool) or not 3 <= samples <= 10001:
         raise fail("study", "samples", "must be a whole number of poses per motion, 3 to 10001")
+    space = data.get("workspace")
+    if space is not None:
+        point = space.get("point")
+        if not isinstance(point, dict) or set(point) != set(axes):
+            raise fail("workspace", "point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
+        for key in point:
+            number("workspace.point", point, key)
+        names = [a.name for a in actuators]
+        if space.get("actuator") not in names:
+            raise fail("workspace", "actuator", f"= {space.get('actuator')!r} is not one of the study's actuators "
+                       f"({', '.join(names)})")
+        space = {"point": {k: float(v) for k, v in point.items()}, "actuator": space["actuator"],
+                 "spacing": number("workspace", space, "spacing", 0.02),
+                 "angle_step": math.radians(number("workspace", space, "angle_step_deg", 1.0))}
     return Study(path, str(study.get("name", path.stem)), parameter_set, axes, spec, actuators,
                  math.radians(number("study", study, "joint_angle_limit_deg", 20.0)),
                  number("study", study, "payload_mass", float(load(parameter_set)["payload"]["mass"])),
                  tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
-                 fixed={k: float(v) for k, v in fixed.items()})
+                 fixed={k: float(v) for k, v in fixed.items()}, workspace=space)
 
 
 # -- on every core --------------------------------------------------------------------------------
@@ -592,7 +609,8 @@ def summary(design: DesignMap) -> list[str]:
     (row_key, rows), (column_key, columns) = list(design.study.axes.items())
     return [f"Grid: {row_key} {rows[0]:g}-{rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
             f"{design.points} points, {len(design.motions)} basic motions ({', '.join(design.motions)}).", "",
-            table(paper_rows(design)), "",
+            table(paper_rows(design) + (workspace_rows(design.study, space) if (space := study_workspace(design.study))
+                                        else [])), "",
             f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
             "every basic motion)."]
 
@@ -646,4 +664,143 @@ def validation(figures: Path) -> tuple[list, DesignMap]:
     plot_kinematic(design, short, figures / "halder_fig2.png", marks)
     plot_kinematic(design, long_, figures / "halder_fig3.png", {"chosen": PAPER["chosen"]})
     plot_dynamic(design, long_, figures / "halder_fig4.png", {"chosen": PAPER["chosen"]})
-    return paper_rows(design), design
+    space = study_workspace(study)
+    return paper_rows(design) + (workspace_rows(study, space) if space else []), design
+
+
+# -- workspace and singularity ----------------------------------------------------------------------
+
+@dataclass
+class Workspace:
+    """A design's reachable workspace under an actuator's running lengths and the joint limit: the
+    positions reachable at the neutral orientation (a grid of `spacing`), the orientations
+    reachable at the neutral position (a grid of `angle_step`), the leg Jacobian's conditioning
+    over the reachable positions, and along each DOF from the neutral the distance to the nearest
+    singular pose (inf where none lies within `reach`)."""
+    positions: np.ndarray        # reachable positions (n x 3) [m]
+    spacing: float
+    orientations: np.ndarray     # reachable (roll, pitch, yaw) (n x 3) [rad]
+    angle_step: float
+    smallest_singular: float     # over the reachable positions
+    condition: float
+    singular_distance: dict[str, float]  # per DOF [m or rad]
+
+    @property
+    def volume(self) -> float:
+        """[m^3] the reachable positions' cells."""
+        return len(self.positions) * self.spacing ** 3
+
+    def reach(self) -> dict[str, tuple[float, float]]:
+        """Per DOF the smallest and largest reachable displacement on its own axis (m, rad)."""
+        out = {}
+        for k, dof in enumerate(DOFS):
+            points = self.positions if k < 3 else self.orientations
+            others = np.delete(np.arange(3), k % 3)
+            on_axis = points[np.all(np.abs(points[:, others]) < 1e-12, axis=1), k % 3]
+            out[dof] = (float(on_axis.min()), float(on_axis.max())) if len(on_axis) else (0.0, 0.0)
+        return out
+
+
+def reachable(core: Core, poses: np.ndarray, actuator: Actuator, joint_limit: float, stub_length: float) -> np.ndarray:
+    """Which poses keep every leg's running length within the actuator's and both joint angles
+    within the limit (Eq 21 at one pose)."""
+    k = core.pose_kinematics(poses)
+    running = k["length"] + stub_length
+    return (np.all(running <= actuator.running_length_max, axis=1) & np.all(running >= actuator.running_length_min, axis=1)
+            & np.all(np.maximum(k["upper_angle"], k["lower_angle"]) <= joint_limit, axis=1))
+
+
+def singular_distance(core: Core, reach: float = 1.0, angular_reach: float = math.pi, samples: int = 2001) -> dict:
+    """Along each DOF alone from the neutral pose, the smallest displacement (either sign) at which
+    the leg Jacobian turns singular: where its determinant changes sign between two samples,
+    refined by bisection; inf if it does not within +-reach (m) or +-angular_reach (rad)."""
+    neutral = core.neutral_pose
+    out = {}
+
+    def det(poses: np.ndarray) -> np.ndarray:
+        return np.linalg.det(core.pose_kinematics(poses, jacobian=True)["jacobian"])
+
+    for k, dof in enumerate(DOFS):
+        limit = angular_reach if dof in ROTATIONS else reach
+        best = math.inf
+        for sign in (1.0, -1.0):
+            steps = sign * np.linspace(0.0, limit, samples)
+            poses = np.tile(neutral, (samples, 1))
+            poses[:, k] += steps
+            d = det(poses)
+            change = np.nonzero(np.sign(d[1:]) != np.sign(d[:-1]))[0]
+            if not len(change):
+                continue
+            low, high = steps[change[0]], steps[change[0] + 1]
+            for _ in range(60):  # bisection on the sign of det J
+                middle = 0.5 * (low + high)
+                pose = neutral.copy()
+                pose[k] += middle
+                if np.sign(det(pose[None])[0]) == np.sign(d[change[0]]):
+                    low = middle
+                else:
+                    high = middle
+            best = min(best, abs(0.5 * (low + high)))
+        out[dof] = best
+    return out
+
+
+def workspace(study: Study, point: dict[str, float], actuator: Actuator, spacing: float = 0.02,
+              angle_step: float = math.radians(1.0), extent: float = 0.8, angular_extent: float = math.radians(45.0)) -> Workspace:
+    """The workspace of the design at `point` (see Workspace): positions within +-extent of the
+    neutral on each axis, orientations within +-angular_extent."""
+    core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
+    neutral = core.neutral_pose
+    s = stubs(study)
+    axis = np.arange(-extent, extent + spacing / 2, spacing)
+    x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
+    poses = np.tile(neutral, (x.size, 1))
+    poses[:, 0] += x.ravel()
+    poses[:, 1] += y.ravel()
+    poses[:, 2] += z.ravel()
+    ok = reachable(core, poses, actuator, study.joint_angle_limit, s)
+    positions = poses[ok, :3] - neutral[:3]
+    angles = np.arange(-angular_extent, angular_extent + angle_step / 2, angle_step)
+    r, p, w = np.meshgrid(angles, angles, angles, indexing="ij")
+    turned = np.tile(neutral, (r.size, 1))
+    turned[:, 3] += r.ravel()
+    turned[:, 4] += p.ravel()
+    turned[:, 5] += w.ravel()
+    orientations = turned[reachable(core, turned, actuator, study.joint_angle_limit, s), 3:] - neutral[3:]
+    sample = poses[ok][:: max(1, ok.sum() // 5000)]
+    singular = np.linalg.svd(core.pose_kinematics(sample, jacobian=True)["jacobian"], compute_uv=False) \
+        if len(sample) else np.full((1, 6), np.nan)
+    return Workspace(np.round(positions, 12), spacing, np.round(orientations, 12), angle_step,
+                     float(singular[:, -1].min()), float((singular[:, 0] / singular[:, -1]).max()),
+                     singular_distance(core))
+
+
+def study_workspace(study: Study) -> Workspace | None:
+    """The workspace of the study's [workspace] design, or None if it names none."""
+    if study.workspace is None:
+        return None
+    actuator = next(a for a in study.actuators if a.name == study.workspace["actuator"])
+    return workspace(study, study.workspace["point"], actuator, study.workspace["spacing"],
+                     study.workspace["angle_step"])
+
+
+def workspace_rows(study: Study, space: Workspace) -> list:
+    """The [workspace] design's reach, volume, conditioning and singular distances as rows."""
+    from .validation.rows import Row
+    where = ", ".join(f"{k} = {v:g} m" for k, v in study.workspace["point"].items())
+    reach = space.reach()
+    lines = [Row(f"reachable positions at the neutral orientation ({where}, {study.workspace['actuator']})", "",
+                 space.volume, "m^3", f"a {1e3 * space.spacing:g} mm grid; on the axes: " + ", ".join(
+                     f"{d} {reach[d][0]:+.2f}/{reach[d][1]:+.2f} m" for d in ("surge", "sway", "heave"))),
+             Row("reachable orientations at the neutral position, each alone", "",
+                 ", ".join(f"{d} {math.degrees(reach[d][0]):+.0f}/{math.degrees(reach[d][1]):+.0f}" for d in ROTATIONS),
+                 "deg", f"{len(space.orientations)} of the {math.degrees(space.angle_step):g} deg grid's orientations "
+                 "reachable"),
+             Row("leg Jacobian over the reachable positions", "",
+                 f"smallest singular value {space.smallest_singular:.3f}, condition number {space.condition:.1f}", "", ""),
+             Row("nearest singular pose along each DOF from the neutral", "(left open by the papers)",
+                 ", ".join(f"{d} {math.degrees(v):.1f} deg" if d in ROTATIONS else f"{d} {v:.3f} m"
+                           for d, v in space.singular_distance.items() if math.isfinite(v)) or "none",
+                 "", "translations: none within 1 m" if not any(math.isfinite(space.singular_distance[d])
+                                                                 for d in ("surge", "sway", "heave")) else "")]
+    return lines
