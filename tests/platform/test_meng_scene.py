@@ -133,23 +133,3 @@ def test_with_the_interface_jacobian_the_recorded_torque_is_the_one_the_legs_fee
         np.testing.assert_allclose(plain_result[f"leg[{i}].torque_applied"], plain_result[f"torque[{i}]"], rtol=1e-12,
                                    atol=1e-12)
 
-
-def test_the_main_jobs_drive_torques_through_the_impact_match_a_converged_run():
-    """The shipped scene at its own numerics (whatever they are), its first 3.5 s against the same
-    scene at 0.125 ms throughout: the pose within 1e-5 m/rad after the first 10 ms; the drive
-    torques (Fig 8's lower panel) within 2 % of their own change through Eq 36's impact and the
-    0.2 s after it, and within 1e-3 N m in steady tracking (issue 24's tolerances)."""
-    from cosim.platform.accuracy import window_errors, windows
-    from cosim.platform.ports import per_leg
-    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.5})
-    reference = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.5, "scene.step": 1.25e-4,
-                                                                  "coupling.startup_time": 0.0,
-                                                                  "coupling.edge_time": 0.0})
-    result, ref = run_scene(scene)[0], run_scene(reference)[0]
-    late = result["time"] >= 0.01
-    for a in POSE:
-        assert np.abs(result[f"pose.{a}"] - np.interp(result["time"], ref["time"], ref[f"pose.{a}"]))[late].max() < 1e-5, a
-    effort = "torque_applied" if scene.interface_jacobian else "torque"
-    errors = {e.window: e for e in window_errors(result, ref, per_leg(effort), windows(3.5, scene.pulses))}
-    assert errors["load pulse at 2.5 s"].relative < 0.02, errors
-    assert errors["steady tracking"].error < 1e-3, errors

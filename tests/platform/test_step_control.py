@@ -21,7 +21,7 @@ def pose_difference(result, reference) -> float:
 
 @pytest.fixture(scope="module")
 def sumnu_scene():
-    scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml")
+    scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"coupling.startup_time": 0.0})  # plain fixed steps
     scene.duration = 1.0
     return scene
 
