@@ -69,7 +69,8 @@ def _main(argv: list[str] | None = None) -> int:
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
     advise.add_argument("--effort-tolerance", type=float, default=0.01,
                         help="largest drive torque/force error as a fraction of its peak (default 0.01)")
-    advise.add_argument("--probe", type=float, default=2.0, help="probe duration [s] (default 2)")
+    advise.add_argument("--probe", type=float, help="probe duration [s] (default 2, and past the first load pulse and "
+                        "the 0.2 s after it)")
     advise.add_argument("--keep-gains", action="store_true",
                         help="run reduced models with the scene's drive gains (default: loops designed for each)")
     advise.add_argument("--workers", type=int, help="Dask worker processes for the probes (default: one per core; "
@@ -195,7 +196,7 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
 
 
 def run_design(study: str, out: Path, workers: int, scheduler: str | None) -> int:
-    from .platform.design import StudyError, load_study, parallel_map, summary, write
+    from .platform.design import StudyError, load_study, parallel_map, report_rows, summary, write
     from .platform.scene import shipped
     if workers < 0:
         print(f"error: --workers {workers}: must be 0 (in this process) or more", file=sys.stderr)
@@ -206,8 +207,9 @@ def run_design(study: str, out: Path, workers: int, scheduler: str | None) -> in
         print(f"error: {error}", file=sys.stderr)
         return 2
     design = parallel_map(loaded, workers=workers, scheduler=scheduler)
-    print("\n".join(summary(design)))
-    files = write(design, out)
+    rows = report_rows(design, workers, scheduler)
+    print("\n".join(summary(design, rows)))
+    files = write(design, out, rows)
     print("written: " + ", ".join(str(f) for f in files))
     return 0
 

@@ -158,11 +158,13 @@ def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None
                      retries=loaded.retries, progress=progress)
 
 
-def advise(scene: str | Path | Scene, tolerance: float, *, effort_tolerance: float = 0.01, probe: float = 2.0,
+def advise(scene: str | Path | Scene, tolerance: float, *, effort_tolerance: float = 0.01, probe: float | None = None,
            workers: int | None = None) -> Advice:
     """The cheapest effects, drive fidelity and macro step that keep a scene within `tolerance`
     (largest pose error [m, rad]) and `effort_tolerance` (drive torque or force, a fraction of its
-    peak) against a converged reference, as `cosim advise` finds them."""
+    peak and of its own change in each window: the start-up, each load pulse with the 0.2 s after
+    it, steady tracking) against a converged reference, as `cosim advise` finds them; probes of
+    `probe` seconds (default 2, and past the first load pulse)."""
     from .platform.advise import advise as find, recommend, text
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
     candidates, info = find(loaded, tolerance, probe, effort_tolerance, workers)

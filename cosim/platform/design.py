@@ -91,6 +91,8 @@ class Study:
     fixed: dict[str, float] = field(default_factory=dict)  # geometry values over the parameter set's
     # [workspace]: the design whose workspace is mapped, the actuator, the grid spacings
     workspace: dict[str, Any] | None = None
+    # [optimise]: the actuator the most robust design is sought for, the seed, the iterations
+    optimise: dict[str, Any] | None = None
 
     def allowed_force(self, actuator: Actuator) -> float:
         friction, other = self.force_margins
@@ -291,7 +293,8 @@ def limit_along(design: DesignMap, actuator: Actuator, constraint: str, motion: 
 
 # -- the study file ---------------------------------------------------------------------------------
 
-SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace"},
+SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise"},
+          "optimise": {"actuator", "seed", "iterations"},
           "workspace": {"point", "actuator", "spacing", "angle_step_deg"},
           "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
                     "force_margins", "samples", "fixed"},
@@ -411,11 +414,23 @@ def load_study(path: str | Path) -> Study:
         space = {"point": {k: float(v) for k, v in point.items()}, "actuator": space["actuator"],
                  "spacing": number("workspace", space, "spacing", 0.02),
                  "angle_step": math.radians(number("workspace", space, "angle_step_deg", 1.0))}
+    best = data.get("optimise")
+    if best is not None:
+        names = [a.name for a in actuators]
+        if best.get("actuator") not in names:
+            raise fail("optimise", "actuator", f"= {best.get('actuator')!r} is not one of the study's actuators "
+                       f"({', '.join(names)})")
+        for key, default in (("seed", 1), ("iterations", 60)):
+            value = best.get(key, default)
+            if not isinstance(value, int) or isinstance(value, bool) or value < (0 if key == "seed" else 1):
+                raise fail("optimise", key, f"= {value!r} must be a whole number" + (" of at least 1" if key ==
+                                                                                      "iterations" else ""))
+        best = {"actuator": best["actuator"], "seed": best.get("seed", 1), "iterations": best.get("iterations", 60)}
     return Study(path, str(study.get("name", path.stem)), parameter_set, axes, spec, actuators,
                  math.radians(number("study", study, "joint_angle_limit_deg", 20.0)),
                  number("study", study, "payload_mass", float(load(parameter_set)["payload"]["mass"])),
                  tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
-                 fixed={k: float(v) for k, v in fixed.items()}, workspace=space)
+                 fixed={k: float(v) for k, v in fixed.items()}, workspace=space, optimise=best)
 
 
 # -- on every core --------------------------------------------------------------------------------
@@ -603,19 +618,26 @@ def paper_rows(design: DesignMap) -> list:
     return out
 
 
-def summary(design: DesignMap) -> list[str]:
-    """Markdown lines: the grid, the rows beside the paper's numbers, the map's speed."""
+def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None) -> list:
+    """The map's rows beside the paper's numbers, then the [workspace] design's and the [optimise]
+    optimum's, where the study names them (the optimiser's designs on Dask as workers/scheduler say)."""
+    space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
+    return paper_rows(design) + (workspace_rows(design.study, space) if space else []) + \
+        (optimum_rows(design.study, best) if best else [])
+
+
+def summary(design: DesignMap, rows: list | None = None) -> list[str]:
+    """Markdown lines: the grid, the rows (report_rows unless given), the map's speed."""
     from .validation.rows import table
-    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
-    return [f"Grid: {row_key} {rows[0]:g}-{rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
+    (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
+    return [f"Grid: {row_key} {grid_rows[0]:g}-{grid_rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
             f"{design.points} points, {len(design.motions)} basic motions ({', '.join(design.motions)}).", "",
-            table(paper_rows(design) + (workspace_rows(design.study, space) if (space := study_workspace(design.study))
-                                        else [])), "",
+            table(rows if rows is not None else report_rows(design)), "",
             f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
             "every basic motion)."]
 
 
-def write(design: DesignMap, out: Path) -> list[Path]:
+def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
     """The figures (Halder's Figs 2 and 3 per actuator, Fig 4 for the longest stroke), the summary
     and the map as a table (one row per grid point and basic motion) into `out`."""
     import pyarrow as pa
@@ -623,11 +645,11 @@ def write(design: DesignMap, out: Path) -> list[Path]:
     import pyarrow.parquet as pq
     out.mkdir(parents=True, exist_ok=True)
     stem = design.study.path.stem
-    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    (row_key, radii), (column_key, columns) = list(design.study.axes.items())
     written = []
     short = min(design.study.actuators, key=lambda a: a.stroke)
     marks = {}
-    if "sway" in design.motions and rows[0] <= 1.03 <= rows[-1]:
+    if "sway" in design.motions and radii[0] <= 1.03 <= radii[-1]:
         for label, constraint in (("a", "max stroke"), ("b", "min stroke"), ("c", "joint angle")):
             found = limit_along(design, short, constraint, "sway", 1.03)
             if found is not None:
@@ -638,8 +660,8 @@ def write(design: DesignMap, out: Path) -> list[Path]:
     long_ = max(design.study.actuators, key=lambda a: a.stroke)
     if design.force_paper is not None:
         written.append(plot_dynamic(design, long_, out / f"{stem}_dynamic.png", {"chosen": PAPER["chosen"]}))
-    r, c, m = np.meshgrid(np.arange(len(rows)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
-    table = {row_key: rows[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
+    r, c, m = np.meshgrid(np.arange(len(radii)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
+    table = {row_key: radii[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
              "length_min": design.length_min.ravel(), "length_max": design.length_max.ravel(),
              "top_angle": design.top_angle.ravel(), "bottom_angle": design.bottom_angle.ravel(),
              "smallest_singular": design.smallest_singular.ravel(), "condition": design.condition.ravel()}
@@ -648,7 +670,7 @@ def write(design: DesignMap, out: Path) -> list[Path]:
     arrow = pa.table(table)
     pq.write_table(arrow, out / f"{stem}.parquet")
     pa.csv.write_csv(arrow, out / f"{stem}.csv")
-    (out / f"{stem}.md").write_text("\n".join([f"# {design.study.name}", "", *summary(design), ""]))
+    (out / f"{stem}.md").write_text("\n".join([f"# {design.study.name}", "", *summary(design, rows), ""]))
     return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", out / f"{stem}.md"]
 
 
@@ -664,8 +686,7 @@ def validation(figures: Path) -> tuple[list, DesignMap]:
     plot_kinematic(design, short, figures / "halder_fig2.png", marks)
     plot_kinematic(design, long_, figures / "halder_fig3.png", {"chosen": PAPER["chosen"]})
     plot_dynamic(design, long_, figures / "halder_fig4.png", {"chosen": PAPER["chosen"]})
-    space = study_workspace(study)
-    return paper_rows(design) + (workspace_rows(study, space) if space else []), design
+    return report_rows(design), design
 
 
 # -- workspace and singularity ----------------------------------------------------------------------
@@ -804,3 +825,86 @@ def workspace_rows(study: Study, space: Workspace) -> list:
                  "", "translations: none within 1 m" if not any(math.isfinite(space.singular_distance[d])
                                                                  for d in ("surge", "sway", "heave")) else "")]
     return lines
+
+
+# -- beyond one grid: the design with the largest worst-case margin -------------------------------
+
+def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[str, float]:
+    """A design's margins against each constraint over every basic motion, each as a fraction of
+    what it is measured against (negative: violated): the stroke at both ends (of the stroke), the
+    joint angle (of the limit) and the peak force of the paper's model (of the allowed force)."""
+    part = copy.copy(study)
+    part.axes = {key: np.array([value]) for key, value in point.items()}
+    design = design_map(part, dynamic=True)
+    s = stubs(study)
+    return {"max stroke": float((actuator.running_length_max - s - design.length_max.max()) / actuator.stroke),
+            "min stroke": float((design.length_min.min() + s - actuator.running_length_min) / actuator.stroke),
+            "joint angle": float(1 - max(design.top_angle.max(), design.bottom_angle.max()) / study.joint_angle_limit),
+            "force": float(1 - design.force_paper.max() / study.allowed_force(actuator))}
+
+
+def _negative_margin(x: np.ndarray, study: Study, keys: tuple[str, ...], actuator: Actuator) -> float:
+    return -min(margins(study, dict(zip(keys, map(float, x))), actuator).values())
+
+
+@dataclass
+class Optimum:
+    point: dict[str, float]
+    margins: dict[str, float]
+    evaluations: int
+    seconds: float
+
+
+def optimise(study: Study, actuator: Actuator, workers: int | None = 0, scheduler: str | None = None,
+             seed: int = 1, max_iterations: int = 60) -> Optimum:
+    """The design (within the study's axes' ranges) whose smallest margin over every constraint and
+    basic motion is largest: the most robust admissible design, found by scipy's differential
+    evolution (one objective: the worst margin; a Pareto front would need a second, which the
+    papers' specification does not give). Its evaluations run on Dask when workers/scheduler say
+    so (each a design of the map), in this process otherwise; the same seed gives the same design."""
+    from scipy.optimize import differential_evolution
+    keys = tuple(study.axes)
+    bounds = [(float(v[0]), float(v[-1])) for v in study.axes.values()]
+    start = time.perf_counter()
+    client = cluster = None
+    mapper = map
+    if workers != 0 or scheduler:
+        import logging
+        import os
+        from distributed import Client, LocalCluster
+        if scheduler is None:
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster or scheduler, timeout="30s")
+
+        def mapper(function, points):  # noqa: F811 (the map differential_evolution evaluates through)
+            return client.gather(client.map(function, list(points), pure=False))
+    try:
+        from functools import partial
+        result = differential_evolution(partial(_negative_margin, study=study, keys=keys, actuator=actuator), bounds,
+                                        seed=seed, maxiter=max_iterations, tol=1e-6, polish=False,
+                                        updating="deferred", workers=mapper)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    point = dict(zip(keys, map(float, result.x)))
+    return Optimum(point, margins(study, point, actuator), int(result.nfev), time.perf_counter() - start)
+
+
+def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None = None) -> Optimum | None:
+    """The most robust design for the study's [optimise] actuator, or None if it names none."""
+    if study.optimise is None:
+        return None
+    actuator = next(a for a in study.actuators if a.name == study.optimise["actuator"])
+    return optimise(study, actuator, workers, scheduler, study.optimise["seed"], study.optimise["iterations"])
+
+
+def optimum_rows(study: Study, best: Optimum) -> list:
+    from .validation.rows import Row
+    where = ", ".join(f"{k} = {v:.3f} m" for k, v in best.point.items())
+    worst = min(best.margins, key=best.margins.get)
+    return [Row(f"the most robust design for {study.optimise['actuator']} (largest worst-case margin)", "", where, "",
+                f"differential evolution, {best.evaluations} designs; margins: " + ", ".join(
+                    f"{k} {v:.1%}" for k, v in best.margins.items()) + f" (the least: {worst})")]

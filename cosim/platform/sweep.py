@@ -50,7 +50,21 @@ SCENE_REPORTS = {  # report name -> what it adds to a row
     "pose_error": "largest pose difference to the sweep's reference run [m, rad] (advise, trade)",
     "effort_error": "largest drive effort difference to the reference, relative to its peak (advise, trade); "
                     "effort_error_time: when [s]",
+    "window_error": "the drive efforts' largest difference to the reference in each window (start-up, each load "
+                    "pulse and the 0.2 s after it, steady tracking) relative to their own change there, the worst "
+                    "window's (advise); window_error_at: which window",
 }
+
+
+def efforts(run: np.ndarray, effort: str) -> np.ndarray:
+    """A run's time and per-leg drive efforts as the legs feel them: `<effort>_applied[i]` where the
+    interface Jacobian corrects them, `<effort>[i]` otherwise, under the names `<effort>[i]`."""
+    names = [f"{effort}_applied[{i}]" if f"{effort}_applied[{i}]" in run.dtype.names else f"{effort}[{i}]" for i in LEGS]
+    out = np.zeros(len(run), dtype=[("time", float), *[(n, float) for n in per_leg(effort)]])
+    out["time"] = run["time"]
+    for target, source in zip(per_leg(effort), names):
+        out[target] = run[source]
+    return out
 
 
 @dataclass(frozen=True)
@@ -71,6 +85,7 @@ class ScenePoint:
             names += {"tracking_error": [f"tracking_error.{a}" for a in POSE],
                       "peak_effort": per_leg("peak_effort"),
                       "effort_error": ["effort_error", "effort_error_time"],
+                      "window_error": ["window_error", "window_error_at"],
                       "steps": ["steps", "rejected"]}.get(report, [report])
         return names + [f"{s}.{c}" for c, stats in self.outputs for s in stats]
 
@@ -140,9 +155,19 @@ class ScenePoint:
                                                                             self.reference[n])))) for n in poses)
             elif name == "effort_error":
                 names = per_leg(effort)
-                peak = max(float(np.max(np.abs(self.reference[n]))) for n in names)
-                error, when = difference(result, self.reference, names, with_time=True)
+                mine, theirs = efforts(result, effort), efforts(self.reference, effort)
+                peak = max(float(np.max(np.abs(theirs[n]))) for n in names)
+                error, when = difference(mine, theirs, names, with_time=True)
                 row.update(effort_error=error / peak, effort_error_time=when)
+            elif name == "window_error":
+                from .accuracy import window_errors, windows
+                if not len(result) or result["time"][-1] < self.reference["time"][-1] - 1e-9:
+                    row.update(window_error=float("inf"), window_error_at="")
+                else:
+                    found = window_errors(efforts(result, effort), efforts(self.reference, effort), per_leg(effort),
+                                          windows(float(self.reference["time"][-1]), scene.pulses))
+                    worst = max(found, key=lambda e: e.relative)
+                    row.update(window_error=worst.relative, window_error_at=worst.window)
         row.update(statistics(result, dict(self.outputs)))
         return {**row, "status": status, "message": message}
 
@@ -161,7 +186,8 @@ SCENE = Target(SCENE_REPORTS, ("tracking_error", "energy_residual", "steps"), _s
                       **{f"tracking_error.{a}": "m" if a in "xyz" else "rad" for a in POSE}, "steps": "-",
                       "pose_error": "m, rad", "effort_error": "of the peak", "peak_effort": "N m or N",
                       "stepping_wall": "s"},
-               internal=("pose_error", "effort_error"), errors=(SceneError, ValueError), named=shipped)
+               internal=("pose_error", "effort_error", "window_error"), errors=(SceneError, ValueError),
+               named=shipped)
 TARGETS = {"scene": SCENE, "system": SYSTEM}
 
 

@@ -21,7 +21,9 @@ def test_advice_on_the_meng_scene():
     without it the shock's first milliseconds are resolved only at fine steps (the error falls
     about fourfold per halved step, 24 % of the peak at 1 ms, 5 % at 0.5 ms, at t of one or two
     steps), and at 1 % nothing is recommended. The interface-Jacobian candidates hold the full model
-    at 2 ms (where the scene's own coupling diverges), not at 4 ms."""
+    at 2 ms (where the scene's own coupling diverges), not at 4 ms; there the torques the legs feel
+    (the drives' corrected by their slopes) stay within the pose tolerance but not within 1 % of
+    their peak through the start-up (measured 2.3 %)."""
     scene = paper_scene("meng_eq35")
     candidates, info = advise(scene, 1e-4, probe=0.5)
     assert info["convergence"] < 1e-5
@@ -37,12 +39,13 @@ def test_advice_on_the_meng_scene():
     ran = [c for c in motorless if not c.diverged]
     assert ran and all(c.step == 5e-4 and 1e-3 < c.error < 1e-2 for c in ran), [(c.label, c.error) for c in ran]
     assert all(c.error > 1e-4 for c in candidates if c.effects_off == ("effects.actuator_inertia",) and not c.diverged)
-    # the interface-Jacobian coupling holds the full model at 2 ms within both tolerances, where
+    # the interface-Jacobian coupling holds the full model at 2 ms within the pose tolerance, where
     # the scene's own coupling diverges; at 4 ms it diverges too
     slopes = {c.step: c for c in candidates if c.interface_jacobian and c.fidelity == "averaged inverter"}
     plain_full = {c.step: c for c in candidates if not c.interface_jacobian and not c.effects_off
                   and c.fidelity == "averaged inverter"}
-    assert within(slopes[2e-3], 1e-4, 0.01) and plain_full[2e-3].diverged and slopes[4e-3].diverged
+    assert slopes[2e-3].diverged is None and slopes[2e-3].error <= 1e-4 and 0.01 < slopes[2e-3].effort_error < 0.05
+    assert plain_full[2e-3].diverged and slopes[4e-3].diverged
 
     plain = paper_scene("meng_eq35", {"coupling.startup_time": 0.0})
     kept, _ = advise(plain, 1e-4, probe=0.5, redesign=False)
@@ -56,17 +59,18 @@ def test_advice_on_the_meng_scene():
 
 def test_advise_cli(tmp_path, capsys):
     scene = (ROOT / "scenes" / "sumnu_case_1.toml").read_text().replace("duration = 5.0", "duration = 0.3")
+    scene = scene.replace("startup_time = 0.5", "startup_time = 0.0")  # the probes at plain fixed steps
     path = tmp_path / "short.toml"
     path.write_text(scene)
     assert main(["advise", str(path), "--tolerance", "1e-3", "--effort-tolerance", "0.5", "--probe", "0.3",
                  "--workers", "0", "--out", str(tmp_path / "out")]) == 0
     out = capsys.readouterr().out
-    criteria = "pose error 0.001 and drive effort error 50 % of its peak"
+    criteria = "pose error 0.001 and drive effort error 50 % of its peak and of its own change in each window"
     assert f"recommended for {criteria}:" in out and "ideal force source" in out, out
     assert f"within {criteria} (" in out and "cheapest first" in out
     import csv
     with open(tmp_path / "out" / "short_advice.csv") as f:
         rows = list(csv.DictReader(f))
     passed = [r for r in rows if not r["diverged"] and float(r["pose_error"]) <= 1e-3
-              and float(r["effort_error"]) <= 0.5]
+              and float(r["effort_error"]) <= 0.5 and float(r["window_error"]) <= 0.5]
     assert rows and f"within {criteria} ({len(passed)} of {len(rows)}," in out

@@ -221,3 +221,19 @@ def test_the_workspace_is_the_independent_admissibility_of_each_pose(study):
         nearer = neutral + np.outer(np.linspace(-0.99, 0.99, 199) * distance, np.eye(6)[k])
         assert np.all(np.sign(np.linalg.det(core.pose_kinematics(nearer, jacobian=True)["jacobian"])) ==
                       np.sign(np.linalg.det(core.pose_kinematics(neutral[None], jacobian=True)["jacobian"][0])))
+
+
+def test_the_optimum_has_the_largest_worst_case_margin_and_runs_on_dask(study):
+    """Differential evolution's design: its worst margin is at least the best of a 0.05 m grid over
+    the same ranges (brute force), the same seed gives the same design, and its evaluations on two
+    Dask workers give the design of one process bit for bit."""
+    from cosim.platform.design import margins, optimise
+    actuator = study.actuators[1]
+    part = copy.copy(study)
+    part.axes = {"base_radius": np.arange(1.2, 1.501, 0.05), "disc_height": np.arange(0.9, 1.301, 0.05)}
+    best = optimise(part, actuator, workers=0, max_iterations=15)
+    grid = max(min(margins(part, {"base_radius": r, "disc_height": z}, actuator).values())
+               for r in part.axes["base_radius"] for z in part.axes["disc_height"])
+    assert min(best.margins.values()) >= grid - 1e-9, (best, grid)
+    assert optimise(part, actuator, workers=0, max_iterations=15).point == best.point
+    assert optimise(part, actuator, workers=2, max_iterations=15).point == best.point
