@@ -237,3 +237,23 @@ def test_the_optimum_has_the_largest_worst_case_margin_and_runs_on_dask(study):
     assert min(best.margins.values()) >= grid - 1e-9, (best, grid)
     assert optimise(part, actuator, workers=0, max_iterations=15).point == best.point
     assert optimise(part, actuator, workers=2, max_iterations=15).point == best.point
+
+
+def test_a_scenes_motion_as_the_specification():
+    """Eq 35 on Meng's platform (cosim.platform.design.scene_fit): the legs' range over the
+    reference motion equals the core's per-pose inverse kinematics (platform_leg_lengths) on the
+    same poses; it needs more than Meng's 665 mm stroke at every l_0 tried (the main job's
+    out-of-stroke warnings), and a longer l_0 lifts the whole range."""
+    from cosim.platform.design import scene_fit
+    from cosim.platform.runner import scene_values
+    from cosim.platform.scene import load_scene
+    from cosim.platform.view3d import reference_motion
+    scene = load_scene("meng_eq35")
+    fit = scene_fit(scene, "geometry.middle_leg_length", np.array([1.80, 1.86]), samples=501)
+    _, poses, _ = reference_motion(scene, 501)
+    core = Core(actuators=False, motors=False, friction=False).use_start_values(scene_values(scene)[0])
+    lengths = np.array([core.leg_lengths(p) for p in poses])
+    assert fit.shortest[1] == pytest.approx(lengths.min(), abs=1e-12)
+    assert fit.longest[1] == pytest.approx(lengths.max(), abs=1e-12)
+    assert np.all(fit.needed_stroke > fit.stroke[1] - fit.stroke[0]) and not fit.carries.any()
+    assert fit.shortest[0] < fit.shortest[1] and fit.longest[0] < fit.longest[1]

@@ -238,3 +238,31 @@ def surge_rows(entries) -> dict[str, np.ndarray]:
     """The entries as arrays: paper and ours (n x 2) per (model, reading)."""
     keys = [k for k in entries[0] if isinstance(k, tuple)]  # (model, reading)
     return {"paper": np.array([e["paper"] for e in entries]), **{k: np.array([e[k] for e in entries]) for k in keys}}
+
+
+def stroke_study() -> tuple[list[Row], dict]:
+    """Which stroke, or which middle leg length l_0, carries Eq 35 (issue 23): the scene's reference
+    motion on Meng's platform with l_0 from 1.70 to 2.02 m in 10 mm steps (cosim.platform.design.
+    scene_fit), every leg's range and the largest joint angle against the stroke and joint limit."""
+    from ..design import scene_fit
+    scene = meng_scene()
+    fit = scene_fit(scene, "geometry.middle_leg_length", np.round(np.arange(1.70, 2.0201, 0.01), 10))
+    k = int(np.argmin(np.abs(fit.values - 1.86)))
+    centre = 0.5 * (fit.stroke[0] + fit.stroke[1])
+    middle = 0.5 * (fit.shortest + fit.longest)
+    centred = float(np.interp(centre, middle, fit.values))
+    best = int(np.argmin(fit.needed_stroke))
+    rows = [Row("Eq 35 on Meng's platform (l_0 = 1.86 m): leg lengths over the motion", "",
+                f"{1e3 * fit.shortest[k]:.0f} - {1e3 * fit.longest[k]:.0f}", "mm",
+                f"the stroke is {1e3 * fit.stroke[0]:.0f} - {1e3 * fit.stroke[1]:.0f} mm (Table 4): "
+                f"{1e3 * (fit.stroke[0] - fit.shortest[k]):.0f} mm short at the bottom, "
+                f"{1e3 * (fit.longest[k] - fit.stroke[1]):.0f} mm at the top"),
+            Row("the stroke Eq 35 needs", f"{1e3 * (fit.stroke[1] - fit.stroke[0]):.0f} mm given",
+                float(1e3 * fit.needed_stroke[k]), "mm",
+                f"the least over the l_0 tried: {1e3 * fit.needed_stroke[best]:.0f} mm at l_0 = {fit.values[best]:.2f} m; "
+                f"{'no' if not fit.carries.any() else int(fit.carries.sum())} l_0 of {len(fit.values)} carries it"),
+            Row("l_0 that centres Eq 35 in the stroke", "1.86 m given", centred, "m",
+                "the motion's middle leg length at the stroke's middle"),
+            Row("largest joint angle over Eq 35", "", float(np.degrees(fit.joint_angle[k])), "deg",
+                f"against the mechanics' default limit {np.degrees(fit.joint_limit):.0f} deg (Halder's; Meng gives none)")]
+    return rows, dict(fit=fit, centred=centred)
