@@ -5,7 +5,9 @@ The shipped study's whole grid (studies/halder_section5.toml: r_b 0.8-1.5 m x z_
 dynamic map (two inverse-dynamics models per design), in one process, then on a LocalCluster of
 one and of two worker processes. Reported: grid points per second, what one point costs against
 its arithmetic (poses through the dynamics core), and the parallel efficiency T(1 worker) /
-(2 T(2 workers)), with the cluster's start-up apart.
+(2 T(2 workers)), with the cluster's start-up apart; and the co-simulated confirmations of the
+study's [confirm] design (every basic motion through the co-simulation) per minute, in one process
+and on two Dask workers.
 
     python benchmarks/design.py
 """
@@ -19,7 +21,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
-from cosim.platform.design import basic_motions, design_map, load_study, parallel_map, platform_values  # noqa: E402
+from cosim.platform.design import (basic_motions, confirm, design_map, load_study, parallel_map,  # noqa: E402
+                                   platform_values)
 from cosim.platform.platform_core import Core  # noqa: E402
 
 
@@ -55,6 +58,17 @@ def main() -> None:
              f" us per pose all told ({poses} poses per design); the dynamics core's own kinematics and leg Jacobian take "
              f"{1e6 * per_pose:.2f} us of it; the rest is building each design's platform, the Jacobian's singular "
              "values (at every tenth pose) and the Python around them."]
+    actuator = next(a for a in study.actuators if a.name == study.confirm["actuator"])
+    confirmations = {}
+    for workers in (0, 2):
+        start = time.perf_counter()
+        runs = confirm(study, study.confirm["point"], actuator, workers=workers)
+        confirmations[workers] = (len(runs), time.perf_counter() - start)
+    simulated = sum(r["steps"] for r in runs) * 1e-3
+    lines += ["", f"Co-simulated confirmations ({confirmations[0][0]} basic motions, {simulated:.0f} s simulated in all): "
+              f"{60 * confirmations[0][0] / confirmations[0][1]:.0f} per minute in one process, "
+              f"{60 * confirmations[2][0] / confirmations[2][1]:.0f} per minute on 2 Dask workers (the cluster's "
+              "start-up included: with six short runs it outweighs the second core)."]
     print("\n".join(lines))
     publish("design", "python benchmarks/design.py", lines)
 

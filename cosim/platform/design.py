@@ -93,6 +93,8 @@ class Study:
     workspace: dict[str, Any] | None = None
     # [optimise]: the actuator the most robust design is sought for, the seed, the iterations
     optimise: dict[str, Any] | None = None
+    # [confirm]: the design run through the co-simulation, every basic motion, and its actuator
+    confirm: dict[str, Any] | None = None
 
     def allowed_force(self, actuator: Actuator) -> float:
         friction, other = self.force_margins
@@ -293,7 +295,8 @@ def limit_along(design: DesignMap, actuator: Actuator, constraint: str, motion: 
 
 # -- the study file ---------------------------------------------------------------------------------
 
-SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise"},
+SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise", "confirm"},
+          "confirm": {"point", "actuator"},
           "optimise": {"actuator", "seed", "iterations"},
           "workspace": {"point", "actuator", "spacing", "angle_step_deg"},
           "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
@@ -414,6 +417,16 @@ def load_study(path: str | Path) -> Study:
         space = {"point": {k: float(v) for k, v in point.items()}, "actuator": space["actuator"],
                  "spacing": number("workspace", space, "spacing", 0.02),
                  "angle_step": math.radians(number("workspace", space, "angle_step_deg", 1.0))}
+    confirmed = data.get("confirm")
+    if confirmed is not None:
+        point = confirmed.get("point")
+        if not isinstance(point, dict) or set(point) != set(axes):
+            raise fail("confirm", "point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
+        for key in point:
+            number("confirm.point", point, key)
+        if confirmed.get("actuator") not in [a.name for a in actuators]:
+            raise fail("confirm", "actuator", f"= {confirmed.get('actuator')!r} is not one of the study's actuators")
+        confirmed = {"point": {k: float(v) for k, v in point.items()}, "actuator": confirmed["actuator"]}
     best = data.get("optimise")
     if best is not None:
         names = [a.name for a in actuators]
@@ -430,7 +443,8 @@ def load_study(path: str | Path) -> Study:
                  math.radians(number("study", study, "joint_angle_limit_deg", 20.0)),
                  number("study", study, "payload_mass", float(load(parameter_set)["payload"]["mass"])),
                  tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
-                 fixed={k: float(v) for k, v in fixed.items()}, workspace=space, optimise=best)
+                 fixed={k: float(v) for k, v in fixed.items()}, workspace=space, optimise=best,
+                 confirm=confirmed)
 
 
 # -- on every core --------------------------------------------------------------------------------
@@ -622,8 +636,9 @@ def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | Non
     """The map's rows beside the paper's numbers, then the [workspace] design's and the [optimise]
     optimum's, where the study names them (the optimiser's designs on Dask as workers/scheduler say)."""
     space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
+    runs = study_confirmation(design.study, workers, scheduler)
     return paper_rows(design) + (workspace_rows(design.study, space) if space else []) + \
-        (optimum_rows(design.study, best) if best else [])
+        (optimum_rows(design.study, best) if best else []) + (confirmation_rows(design.study, runs) if runs else [])
 
 
 def summary(design: DesignMap, rows: list | None = None) -> list[str]:
@@ -960,3 +975,113 @@ def scene_fit(scene, parameter: str, values: np.ndarray, samples: int = 2001) ->
         angle.append(max(k["upper_angle"].max(), k["lower_angle"].max()))
     return SceneFit(parameter, np.asarray(values, float), np.array(shortest), np.array(longest), np.array(angle),
                     stroke, joint_limit)
+
+
+# -- a design confirmed by co-simulation ------------------------------------------------------------
+
+HOLD = 0.5  # [s] at the start pose before a basic motion, and after it
+
+
+def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, dof: str, step: float = 1e-3,
+                   folder: Path | None = None) -> dict[str, Any]:
+    """One basic motion of a design, closed loop through the co-simulation: the mechanics FMU with
+    the study's platform (legs, their weight, inertia and friction), six linear-motor FMUs as the
+    legs' actuators (ideal force sources, their position loops designed for each leg's plant: tuning
+    "auto", velocity feedforward from the reference's exact rate), the trajectory FMU playing the
+    shortest-time move from a table after HOLD s at its start. Returns the largest tracking error
+    (m, rad) after the first HOLD, the peak and rms leg force [N] against the actuator's continuous
+    force, and the full inverse dynamics' peak along the reference [N]."""
+    import tempfile
+    from ..engine import FixedStep
+    from .scene import Signal
+    from .signals import trajectory_parameters
+    from .system import columns, default_algorithm, platform_structure, run
+    from .tuning import check_limit, design, leg_plants
+    k = DOFS.index(dof)
+    half = study.motion.ranges[dof]
+    rotation = dof in ROTATIONS
+    m = study.motion
+    t, s, v, a = shortest_time(2 * half, m.angular_velocity if rotation else m.velocity,
+                               m.angular_acceleration if rotation else m.acceleration, 400)
+    keep = np.r_[True, np.diff(t) > 0]  # the phases' shared instants once
+    t, s, v, a = t[keep], s[keep], v[keep], a[keep]
+    values = platform_values(study, point, effects=True)
+    core = Core().use_start_values(values)
+    neutral = core.neutral_pose
+    start = neutral.copy()
+    start[k] -= half
+    values.update({f"initial.pose.{axis}": float(start[n]) for n, axis in enumerate(POSE)})
+    duration = HOLD + t[-1] + HOLD
+    folder = Path(folder or tempfile.mkdtemp(prefix="cosim-confirm-"))
+    folder.mkdir(parents=True, exist_ok=True)
+    table = folder / f"{dof}.csv"
+    times = np.r_[0.0, HOLD + t, duration]
+    displacement = np.r_[-half, s - half, half]
+    np.savetxt(table, np.column_stack([times, displacement]), delimiter=",", header=f"time,{POSE[k]}", comments="")
+    trajectory = trajectory_parameters({axis: Signal(offset=float(neutral[n])) for n, axis in enumerate(POSE)},
+                                       table=table, interpolation="cubic")
+    plants = leg_plants(values)
+    for leg, plant in enumerate(plants, start=1):
+        check_limit("linear", plant, actuator.continuous_force, f"{actuator.name}'s continuous force", leg)
+    drive = {"effects.electrical": False, "motor.continuous_force": actuator.continuous_force,
+             "limit.force": 1e6, "limit.current": 1e6}
+    legs = [design("linear", [plant], drive)[0] for plant in plants]
+    structure = platform_structure("linear", values, drive, trajectory, leg_values=legs)
+    outcome = run(structure, default_algorithm("linear"), FixedStep(step), duration,
+                  columns("linear", drive_outputs=("force",)))
+    result = outcome.result
+    late = result["time"] >= HOLD
+    tracking = max(float(np.abs(result[f"pose.{axis}"] - result[f"pose_ref.{axis}"])[late].max()) for axis in POSE)
+    forces = np.column_stack([result[f"force[{i}]"] for i in range(1, 7)])
+    poses = np.tile(neutral, (len(t), 1))
+    poses[:, k] += s - half
+    rates, accelerations = np.zeros_like(poses), np.zeros_like(poses)
+    rates[:, k], accelerations[:, k] = v, a
+    core.p.force_torque = 1.0
+    predicted = float(np.abs(core.inverse_dynamics_many(poses, rates, accelerations)).max())
+    moving = late & (result["time"] <= HOLD + t[-1])
+    return {"motion": dof, "tracking": tracking, "peak_force": float(np.abs(forces[moving]).max()),
+            "rms_force": float(np.sqrt(np.mean(forces[moving] ** 2))), "predicted_peak": predicted,
+            "continuous_force": actuator.continuous_force, "steps": len(result) - 1}
+
+
+def confirm(study: Study, point: dict[str, float], actuator: Actuator, workers: int | None = 0,
+            scheduler: str | None = None, motions: tuple[str, ...] | None = None) -> list[dict[str, Any]]:
+    """Every basic motion of a design through the co-simulation (confirm_motion), on Dask when
+    workers/scheduler say so (one motion per task), in this process otherwise."""
+    chosen = [d for d in (motions or DOFS) if study.motion.ranges.get(d, 0.0) > 0]
+    if workers == 0 and scheduler is None:
+        return [confirm_motion(study, point, actuator, dof) for dof in chosen]
+    import logging
+    import os
+    from distributed import Client, LocalCluster
+    cluster = None if scheduler else LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                                  processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+    try:
+        with Client(cluster or scheduler, timeout="30s") as client:
+            futures = [client.submit(confirm_motion, study, point, actuator, dof, pure=False) for dof in chosen]
+            return client.gather(futures)
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | None = None) -> list | None:
+    if study.confirm is None:
+        return None
+    actuator = next(a for a in study.actuators if a.name == study.confirm["actuator"])
+    return confirm(study, study.confirm["point"], actuator, workers, scheduler)
+
+
+def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list:
+    from .validation.rows import Row
+    where = ", ".join(f"{k} = {v:g} m" for k, v in study.confirm["point"].items())
+    out = []
+    for r in runs:
+        unit = "rad" if r["motion"] in ROTATIONS else "m"
+        out.append(Row(f"co-simulated {r['motion']} ({where}, {study.confirm['actuator']})", "",
+                       f"peak {r['peak_force']:.0f} N, rms {r['rms_force']:.0f} N", "N",
+                       f"the full inverse dynamics' peak {r['predicted_peak']:.0f} N "
+                       f"({100 * (r['peak_force'] / r['predicted_peak'] - 1):+.1f} %); tracking within "
+                       f"{r['tracking']:.1e} {unit}; continuous {r['continuous_force']:g} N"))
+    return out

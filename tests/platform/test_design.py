@@ -257,3 +257,19 @@ def test_a_scenes_motion_as_the_specification():
     assert fit.longest[1] == pytest.approx(lengths.max(), abs=1e-12)
     assert np.all(fit.needed_stroke > fit.stroke[1] - fit.stroke[0]) and not fit.carries.any()
     assert fit.shortest[0] < fit.shortest[1] and fit.longest[0] < fit.longest[1]
+
+
+def test_a_design_confirmed_by_co_simulation_agrees_with_its_inverse_dynamics(study):
+    """Heave and roll of an admissible design through the co-simulation (linear-motor FMUs as force
+    sources with loops designed for their legs, the mechanics with the legs' weight, inertia and
+    friction): the peak leg force within 1 % of the full inverse dynamics' along the reference (the
+    tracking error, under 0.1 mm and 1 mrad, moves it by less), the rms below the peak and within
+    the continuous force; on two Dask workers bit for bit as in one process."""
+    from cosim.platform.design import confirm
+    point, actuator = {"base_radius": 1.1, "disc_height": 1.37}, study.actuators[1]
+    here = confirm(study, point, actuator, workers=0, motions=("heave", "roll"))
+    for run in here:
+        assert run["peak_force"] == pytest.approx(run["predicted_peak"], rel=0.01), run
+        assert run["tracking"] < (1e-3 if run["motion"] == "roll" else 1e-4), run
+        assert run["rms_force"] < run["peak_force"] < actuator.continuous_force
+    assert confirm(study, point, actuator, workers=2, motions=("heave", "roll")) == here
