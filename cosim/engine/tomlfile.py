@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import tomllib
+from pathlib import Path
 
 
 def line_of(text: str, table: str, key: str) -> int:
@@ -22,3 +24,18 @@ def line_of(text: str, table: str, key: str) -> int:
                 return number
             found = found or number
     return found
+
+
+def read(path: Path, what: str, error: type[Exception]) -> tuple[str, dict]:
+    """A TOML file's text and document; `error` (one line naming the file) if it is missing, not
+    readable as text or not valid TOML. `what` names the kind of file ("sweep file")."""
+    if not path.is_file():
+        raise error(f"{path}: no such {what}")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as problem:
+        raise error(f"{path}: cannot be read: {problem}") from None
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as problem:
+        raise error(f"{path}: not valid TOML: {problem}") from None

@@ -31,14 +31,13 @@ from __future__ import annotations
 import copy
 import math
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..engine.tomlfile import line_of
+from ..engine.tomlfile import line_of, read
 from .parameter_sets import halder_mechanics, load
 from .platform_core import Core
 from .ports import POSE
@@ -310,13 +309,7 @@ def load_study(path: str | Path) -> Study:
     """Reads and checks a study file (studies/*.toml); every mistake is a StudyError naming the
     file and line."""
     path = Path(path)
-    if not path.is_file():
-        raise StudyError(f"{path}: no such study file")
-    text = path.read_text()
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise StudyError(f"{path}: not valid TOML: {error}") from None
+    text, data = read(path, "study file", StudyError)
 
     def fail(table: str, key: str, problem: str) -> StudyError:
         return StudyError(f"{path}:{line_of(text, table, key)}: '{table + '.' if table else ''}{key}' {problem}")
@@ -403,30 +396,27 @@ def load_study(path: str | Path) -> Study:
     samples = study.get("samples", 121)
     if not isinstance(samples, int) or isinstance(samples, bool) or not 3 <= samples <= 10001:
         raise fail("study", "samples", "must be a whole number of poses per motion, 3 to 10001")
-    space = data.get("workspace")
-    if space is not None:
-        point = space.get("point")
+    def design_point(table: str) -> dict | None:
+        """[workspace] or [confirm]: a design (a value for each axis) and one of the actuators."""
+        given = data.get(table)
+        if given is None:
+            return None
+        point = given.get("point")
         if not isinstance(point, dict) or set(point) != set(axes):
-            raise fail("workspace", "point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
+            raise fail(table, "point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
         for key in point:
-            number("workspace.point", point, key)
+            number(f"{table}.point", point, key)
         names = [a.name for a in actuators]
-        if space.get("actuator") not in names:
-            raise fail("workspace", "actuator", f"= {space.get('actuator')!r} is not one of the study's actuators "
+        if given.get("actuator") not in names:
+            raise fail(table, "actuator", f"= {given.get('actuator')!r} is not one of the study's actuators "
                        f"({', '.join(names)})")
-        space = {"point": {k: float(v) for k, v in point.items()}, "actuator": space["actuator"],
-                 "spacing": number("workspace", space, "spacing", 0.02),
-                 "angle_step": math.radians(number("workspace", space, "angle_step_deg", 1.0))}
-    confirmed = data.get("confirm")
-    if confirmed is not None:
-        point = confirmed.get("point")
-        if not isinstance(point, dict) or set(point) != set(axes):
-            raise fail("confirm", "point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
-        for key in point:
-            number("confirm.point", point, key)
-        if confirmed.get("actuator") not in [a.name for a in actuators]:
-            raise fail("confirm", "actuator", f"= {confirmed.get('actuator')!r} is not one of the study's actuators")
-        confirmed = {"point": {k: float(v) for k, v in point.items()}, "actuator": confirmed["actuator"]}
+        return {"point": {k: float(v) for k, v in point.items()}, "actuator": given["actuator"]}
+
+    space, confirmed = design_point("workspace"), design_point("confirm")
+    if space is not None:
+        given = data["workspace"]
+        space.update(spacing=number("workspace", given, "spacing", 0.02),
+                     angle_step=math.radians(number("workspace", given, "angle_step_deg", 1.0)))
     best = data.get("optimise")
     if best is not None:
         names = [a.name for a in actuators]
@@ -463,22 +453,13 @@ def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
     core, or a running scheduler); workers = 0: in this process. Bit for bit the in-process map."""
     if workers == 0 and scheduler is None:
         return design_map(study, dynamic)
-    import logging
-    import os
-    from distributed import Client, LocalCluster
+    from ..engine.sweep.dask_run import dask_client
     start = time.perf_counter()
-    cluster = None if scheduler else LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                                  processes=True, dashboard_address=None,
-                                                  silence_logs=logging.ERROR)
-    try:
-        with Client(cluster or scheduler, timeout="30s") as client:
-            n = max(len(client.scheduler_info()["workers"]), 1)
-            rows = np.array_split(np.arange(len(next(iter(study.axes.values())))), 4 * n)
-            parts = client.gather(client.map(_rows, [study] * len(rows), [list(r) for r in rows if len(r)],
-                                             [dynamic] * len(rows), pure=False))
-    finally:
-        if cluster is not None:
-            cluster.close()
+    with dask_client(workers, scheduler) as client:
+        n = max(len(client.scheduler_info()["workers"]), 1)
+        rows = np.array_split(np.arange(len(next(iter(study.axes.values())))), 4 * n)
+        parts = client.gather(client.map(_rows, [study] * len(rows), [list(r) for r in rows if len(r)],
+                                         [dynamic] * len(rows), pure=False))
     merged = {name: np.concatenate([getattr(p, name) for p in parts]) for name in
               ("length_max", "length_min", "neutral_length", "top_angle", "bottom_angle", "smallest_singular",
                "condition", *(("force_paper", "force_full") if dynamic else ()))}
@@ -486,6 +467,18 @@ def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
 
 
 # -- what the paper shows ---------------------------------------------------------------------------
+
+def _plane(design: DesignMap):
+    """A figure in the plane of the study's two axes (labelled), and the axes' names and values."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
+    fig, ax = plt.subplots(figsize=(8, 6))
+    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
+    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
+    return plt, fig, ax, (row_key, rows), (column_key, columns)
+
 
 LINES = {"max stroke": "-", "min stroke": "--", "joint angle": "-.", "force": "-", "force, full model": ":"}
 COLOURS = {"surge": "tab:blue", "sway": "tab:orange", "heave": "tab:green", "roll": "tab:red", "pitch": "tab:purple",
@@ -496,11 +489,7 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
     """Halder's Figs 2 and 3: per basic motion and constraint, the limiting curve (solid: max stroke,
     dashed: min stroke, dash-dot: joint angle) in the base radius - disc height plane, the zone
     where every constraint of every motion holds shaded, and the named points marked."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
-    fig, ax = plt.subplots(figsize=(8, 6))
+    plt, fig, ax, (row_key, rows), (column_key, columns) = _plane(design)
     ok = design.admissible(actuator)
     if ok.any():
         ax.contourf(rows, columns, ok.T.astype(float), levels=[0.5, 1.5], colors=["0.85"])
@@ -515,8 +504,6 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
     handles = [plt.Line2D([], [], color=COLOURS[m], label=m) for m in design.motions] + \
         [plt.Line2D([], [], color="k", linestyle=LINES[c], label=c) for c in ("max stroke", "min stroke", "joint angle")]
     ax.legend(handles=handles, fontsize=8, ncol=3, loc="upper right")
-    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
-    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
     ax.set_title(f"{actuator.name}: running length {actuator.running_length_min:g}-{actuator.running_length_max:g} m, "
                  f"joint angle < {math.degrees(design.study.joint_angle_limit):g} deg (admissible: shaded)", fontsize=9)
     fig.tight_layout()
@@ -529,11 +516,7 @@ def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[
     """Halder's Fig 4: the peak force limit (the paper's payload-only model, solid; our full model,
     dotted) and the heave motion's stroke limits, the zone where all of them and every other
     kinematic constraint hold shaded."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    (row_key, rows), (column_key, columns) = list(design.study.axes.items())
-    fig, ax = plt.subplots(figsize=(8, 6))
+    plt, fig, ax, (row_key, rows), (column_key, columns) = _plane(design)
     ok = design.admissible(actuator, dynamic=True)
     if ok.any():
         ax.contourf(rows, columns, ok.T.astype(float), levels=[0.5, 1.5], colors=["0.85"])
@@ -556,8 +539,6 @@ def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[
                plt.Line2D([], [], color=COLOURS["heave"], linestyle="--", label="heave: min stroke"),
                plt.Line2D([], [], color=COLOURS["heave"], linestyle="-.", label="heave: max stroke")]
     ax.legend(handles=handles, fontsize=8, loc="upper right")
-    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
-    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
     friction, other = design.study.force_margins
     ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
                  "margins (admissible: shaded)", fontsize=9)
@@ -788,20 +769,19 @@ def workspace(study: Study, point: dict[str, float], actuator: Actuator, spacing
     core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
     neutral = core.neutral_pose
     s = stubs(study)
-    axis = np.arange(-extent, extent + spacing / 2, spacing)
-    x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
-    poses = np.tile(neutral, (x.size, 1))
-    poses[:, 0] += x.ravel()
-    poses[:, 1] += y.ravel()
-    poses[:, 2] += z.ravel()
+
+    def cube(first: int, half: float, step: float) -> np.ndarray:
+        """Poses about the neutral on a grid over three coordinates from `first` on."""
+        axis = np.arange(-half, half + step / 2, step)
+        grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+        poses = np.tile(neutral, (len(grid), 1))
+        poses[:, first:first + 3] += grid
+        return poses
+
+    poses = cube(0, extent, spacing)
     ok = reachable(core, poses, actuator, study.joint_angle_limit, s)
     positions = poses[ok, :3] - neutral[:3]
-    angles = np.arange(-angular_extent, angular_extent + angle_step / 2, angle_step)
-    r, p, w = np.meshgrid(angles, angles, angles, indexing="ij")
-    turned = np.tile(neutral, (r.size, 1))
-    turned[:, 3] += r.ravel()
-    turned[:, 4] += p.ravel()
-    turned[:, 5] += w.ravel()
+    turned = cube(3, angular_extent, angle_step)
     orientations = turned[reachable(core, turned, actuator, study.joint_angle_limit, s), 3:] - neutral[3:]
     sample = poses[ok][:: max(1, ok.sum() // 5000)]
     singular = np.linalg.svd(core.pose_kinematics(sample, jacobian=True)["jacobian"], compute_uv=False) \
@@ -877,33 +857,20 @@ def optimise(study: Study, actuator: Actuator, workers: int | None = 0, schedule
     evolution (one objective: the worst margin; a Pareto front would need a second, which the
     papers' specification does not give). Its evaluations run on Dask when workers/scheduler say
     so (each a design of the map), in this process otherwise; the same seed gives the same design."""
+    from contextlib import nullcontext
+    from functools import partial
     from scipy.optimize import differential_evolution
+    from ..engine.sweep.dask_run import dask_client
     keys = tuple(study.axes)
     bounds = [(float(v[0]), float(v[-1])) for v in study.axes.values()]
     start = time.perf_counter()
-    client = cluster = None
-    mapper = map
-    if workers != 0 or scheduler:
-        import logging
-        import os
-        from distributed import Client, LocalCluster
-        if scheduler is None:
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
-        client = Client(cluster or scheduler, timeout="30s")
+    objective = partial(_negative_margin, study=study, keys=keys, actuator=actuator)
+    with (dask_client(workers, scheduler) if workers != 0 or scheduler else nullcontext()) as client:
 
-        def mapper(function, points):  # noqa: F811 (the map differential_evolution evaluates through)
-            return client.gather(client.map(function, list(points), pure=False))
-    try:
-        from functools import partial
-        result = differential_evolution(partial(_negative_margin, study=study, keys=keys, actuator=actuator), bounds,
-                                        seed=seed, maxiter=max_iterations, tol=1e-6, polish=False,
+        def mapper(function, points):  # what differential_evolution evaluates its population through
+            return client.gather(client.map(function, list(points), pure=False)) if client else list(map(function, points))
+        result = differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, tol=1e-6, polish=False,
                                         updating="deferred", workers=mapper)
-    finally:
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
     point = dict(zip(keys, map(float, result.x)))
     return Optimum(point, margins(study, point, actuator), int(result.nfev), time.perf_counter() - start)
 
@@ -1052,18 +1019,9 @@ def confirm(study: Study, point: dict[str, float], actuator: Actuator, workers: 
     chosen = [d for d in (motions or DOFS) if study.motion.ranges.get(d, 0.0) > 0]
     if workers == 0 and scheduler is None:
         return [confirm_motion(study, point, actuator, dof) for dof in chosen]
-    import logging
-    import os
-    from distributed import Client, LocalCluster
-    cluster = None if scheduler else LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                                  processes=True, dashboard_address=None, silence_logs=logging.ERROR)
-    try:
-        with Client(cluster or scheduler, timeout="30s") as client:
-            futures = [client.submit(confirm_motion, study, point, actuator, dof, pure=False) for dof in chosen]
-            return client.gather(futures)
-    finally:
-        if cluster is not None:
-            cluster.close()
+    from ..engine.sweep.dask_run import dask_client
+    with dask_client(workers, scheduler) as client:
+        return client.gather([client.submit(confirm_motion, study, point, actuator, dof, pure=False) for dof in chosen])
 
 
 def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | None = None) -> list | None:

@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..engine.tomlfile import line_of
+from ..engine.tomlfile import line_of, read
 from ..engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .drive_fmu import KIND_NAMES
 from .ports import DRIVES, POSE
@@ -230,14 +230,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         raise SceneError(f"{path}: no such scene file" + (f" (a shipped scene is named {near[0]!r})" if near else ""))
     if path.is_dir():
         raise SceneError(f"{path}: is a folder, not a scene file (the shipped scenes are scenes/*.toml)")
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as error:
-        raise SceneError(f"{path}: cannot be read: {error}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise SceneError(f"{path}: not valid TOML: {error}") from None
+    text, data = read(path, "scene file", SceneError)
     if overrides:
         data = with_overrides(data, overrides)
 

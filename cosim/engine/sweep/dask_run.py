@@ -162,6 +162,25 @@ def _run_on_dask(name, todo, evaluate, complete, workers, scheduler, points_per_
                 cluster.close()
 
 
+from contextlib import contextmanager
+
+
+@contextmanager
+def dask_client(workers: int | None = None, scheduler: str | None = None):
+    """A Dask client of a LocalCluster of `workers` processes (None: one per core), one thread each,
+    or of a running scheduler at `scheduler`; the local cluster is closed on leaving."""
+    import logging
+    from distributed import Client, LocalCluster
+    cluster = None if scheduler else LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                                  processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+    try:
+        with Client(cluster or scheduler, timeout="30s") as client:
+            yield client
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
 def _has_dashboard(client) -> bool:
     try:
         import bokeh  # noqa: F401  (Dask serves its dashboard only with bokeh)

@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import hashlib
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..tomlfile import line_of
+from ..tomlfile import line_of, read
 from .points import Axis, SweepError, column_name, grid, latin_hypercube, zipped
 from .table import STATISTICS
 
@@ -69,13 +68,7 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
     target "system" here, an application's own beside it); every mistake is a SweepError naming
     the file and line."""
     path = Path(path)
-    if not path.is_file():
-        raise SweepError(f"{path}: no such sweep file")
-    text = path.read_text()
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise SweepError(f"{path}: not valid TOML: {error}") from None
+    text, data = read(path, "sweep file", SweepError)
     axis_lines = [n for n, line in enumerate(text.splitlines(), 1) if line.split("#")[0].strip() == "[[axis]]"]
 
     def fail(table: str, key: str, problem: str, line: int | None = None) -> SweepError:
