@@ -51,6 +51,8 @@ def _main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=str, help="override the scene's duration [s]")
+    run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
+                     "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
     export = commands.add_parser("export", help="write a scene as an SSP 1.0 archive (FMUs, parameters, wiring)")
     export.add_argument("scene", type=Path)
     export.add_argument("--ssp", type=Path, help="the .ssp file to write")
@@ -158,7 +160,8 @@ def _main(argv: list[str] | None = None) -> int:
         return 2
     if duration is not None:
         scene.duration = duration
-    return report(lambda: run_scene(scene, args.out, plots=not args.no_plots)[1], (SceneError,), SceneFailed,
+    return report(lambda: run_scene(scene, args.out, plots=not args.no_plots, twin=args.twin)[1], (SceneError,),
+                  SceneFailed,
                   f"{args.out}/{scene.path.stem}.csv, .mat, .log" + ("" if args.no_plots else
                                                                     f", plots and the report {scene.path.stem}.html"),
                   args.out)

@@ -109,6 +109,9 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
     ]
     summary += [(f"largest tracking error {a} [{'m' if a in 'xyz' else 'rad'}]", f"{e:.3e}", repr(float(e)))
                 for a, e in zip(POSE, report.largest_error)]
+    summary += [(f"against the converged twin, {name}: pose [m, rad] / efforts / of their change",
+                 f"{pose:.1e} / {effort:.1e} / {100 * relative:.2f} %", repr(relative))
+                for name, pose, effort, relative in report.windows]
     bonds = [(f"bond {name} [J]", f"{value:.3e}", repr(value)) for name, value in bond_residuals.items()]
     warnings = [(m.time, instance, m.text) for instance, m in messages if m.status in ("warning", "error", "fatal")]
     figures = _figures(result, units(scene.drive))

@@ -20,8 +20,8 @@ from ..engine.outcome import Outcome, Report, RunStopped
 from ..engine.results import thin, write as write_results, write_log
 from ..engine.settings import output_settings, to_strings
 from .parameter_sets import drive_set, scene_mechanics
-from .ports import DRIVES, LEGS, POSE
-from .scene import Scene, SceneError, line_of, scene_settings
+from .ports import DRIVES, LEGS, POSE, per_leg
+from .scene import Scene, SceneError, line_of, load_scene, scene_settings
 from .signals import scene_trajectory
 from .platform_core import LayoutImpossible, SingularPose
 from .system import columns, platform_structure, run, units
@@ -36,6 +36,9 @@ class RunReport(Report):
     tuning: str | None = None  # the gains designed for the plant (tuning = "auto")
     html: Path | None = None  # the interactive report, when plots were drawn
     diverged: bool = False  # the failure is the divergence monitor's verdict
+    # against the run's converged twin (run_scene(twin=True)): per window (start-up, each load pulse
+    # with the 0.2 s after it, steady tracking) the pose's and the efforts' largest difference
+    windows: list = field(default_factory=list)  # (window, pose error, effort error, effort error / own change)
 
     @property
     def scene(self) -> str:
@@ -44,8 +47,13 @@ class RunReport(Report):
     def measured(self) -> list[str]:
         if not len(self.largest_error):
             return []
-        return ["largest tracking error after the first tenth: " + ", ".join(
+        lines = ["largest tracking error after the first tenth: " + ", ".join(
             f"{a} {e:.2e}" for a, e in zip(POSE, self.largest_error))]
+        if self.windows:
+            lines.append("against the converged twin (the scene at a 16th of its step throughout), per window: " +
+                         "; ".join(f"{name}: pose {pose:.1e}, efforts {effort:.1e} ({100 * relative:.2f} % of their "
+                                   "change)" for name, pose, effort, relative in self.windows))
+        return lines
 
     def notes(self) -> list[str]:
         return [*self.remarks, *([self.tuning] if self.tuning else [])]
@@ -226,12 +234,31 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     return None
 
 
+def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, float, float]]:
+    """The run against its converged twin, the same scene at a 16th of its step throughout (no
+    finer start, no edge windows): per window (cosim.platform.accuracy) the pose's largest
+    difference [m, rad] and the drive efforts' (as the legs feel them), absolute and against their
+    own change there."""
+    from .accuracy import window_errors, windows
+    from .sweep import efforts
+    twin = load_scene(scene.path, {**scene.overrides, "scene.duration": scene.duration, "scene.step": scene.step / 16,
+                                   "coupling.startup_time": 0.0, "coupling.edge_time": 0.0,
+                                   "coupling.step_control": "fixed"})
+    reference, _ = run_scene(twin, progress=False, advice=False)
+    effort = DRIVES[scene.drive].effort[0]
+    spans = windows(float(min(result["time"][-1], reference["time"][-1])), scene.pulses)
+    poses = {e.window: e.error for e in window_errors(result, reference, [f"pose.{a}" for a in POSE], spans)}
+    return [(e.window, poses.get(e.window, float("nan")), e.error, e.relative)
+            for e in window_errors(efforts(result, effort), efforts(reference, effort), per_leg(effort), spans)]
+
+
 def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progress: bool = True,
-              advice: bool = True) -> tuple[np.ndarray, RunReport]:
+              advice: bool = True, twin: bool = False) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat and
     plots to `out` if given. Raises SceneFailed (with the partial results, also written) when an
     FMU fails or the coupling diverges. progress: a bar on a terminal; advice: a diverged run
-    probes for a step that holds (both off for a sweep's points)."""
+    probes for a step that holds (both off for a sweep's points); twin: the report judges the run
+    against its converged twin, window by window (twin_windows)."""
     algorithm, control = scene_settings(scene)
     record = scene_record(scene)
     try:
@@ -249,6 +276,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     result = thin(outcome.result, scene.output_interval)
     report = scene_report(scene, result, outcome, tuning)
     report.remarks += drive_notes
+    if twin and outcome.failure is None and len(result) > 1:
+        report.windows = twin_windows(scene, result)
     if out is not None:
         write_results(result, out, scene.path.stem)
         report.log = out / f"{scene.path.stem}.log"
