@@ -3,7 +3,8 @@ of our master with its errors against a converged reference, and libcosim (libco
 Simulation Platform's engine) stepping the same eight FMUs with the same connections at the scene's
 step.
 
-Configurations: the paper's scene (Gauss-Seidel order 1 at 1 ms, the first 0.1 s at an eighth);
+Configurations: the paper's scene (Gauss-Seidel order 1 at 1 ms, the first 0.1 s and the 20 ms after each
+edge of the impact at a sixteenth);
 the same with the drives on two threads; with the drives on the L-stable ROS34PW2 at the macro
 step; and scenes/meng_eq35_fast.toml, the same scene with fast numerics: the interface-Jacobian
 coupling (each drive's d torque / d speed applied in the mechanics) at 2 ms, the start and the
