@@ -15,7 +15,7 @@ import traceback
 import sys
 from pathlib import Path
 
-from .engine.artifacts import ROOT
+from .engine.artifacts import INSTALLED, ROOT
 from .engine.ssp import ANNOTATION
 from .platform.runner import SceneFailed, run_scene
 from .platform.scene import SceneError, load_scene
@@ -64,8 +64,9 @@ def _main(argv: list[str] | None = None) -> int:
     view.add_argument("scene", type=Path)
     view.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_view.html")
     validate = commands.add_parser("validate", help="rebuild the validation report against the papers")
-    validate.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of validation.md and figures/ "
-                          "(default: this checkout's docs/)")
+    validate.add_argument("--out", type=Path, default=Path("out") if INSTALLED else ROOT / "docs",
+                          help="folder of validation.md and figures/ (default: a checkout's docs/; out/ for an "
+                          "installed wheel, whose files are not to be written)")
     advise = commands.add_parser("advise", help="recommend the cheapest effects, drive fidelity and step for a tolerance")
     advise.add_argument("scene", type=Path)
     advise.add_argument("--tolerance", type=float, required=True, help="largest pose error [m, rad]")
