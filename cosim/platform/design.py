@@ -979,23 +979,28 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
     start[k] -= half
     values.update({f"initial.pose.{axis}": float(start[n]) for n, axis in enumerate(POSE)})
     duration = HOLD + t[-1] + HOLD
-    folder = Path(folder or tempfile.mkdtemp(prefix="cosim-confirm-"))
-    folder.mkdir(parents=True, exist_ok=True)
-    table = folder / f"{dof}.csv"
-    times = np.r_[0.0, HOLD + t, duration]
-    displacement = np.r_[-half, s - half, half]
-    np.savetxt(table, np.column_stack([times, displacement]), delimiter=",", header=f"time,{POSE[k]}", comments="")
-    trajectory = trajectory_parameters({axis: Signal(offset=float(neutral[n])) for n, axis in enumerate(POSE)},
-                                       table=table, interpolation="cubic")
-    plants = leg_plants(values)
-    for leg, plant in enumerate(plants, start=1):
-        check_limit("linear", plant, actuator.continuous_force, f"{actuator.name}'s continuous force", leg)
-    drive = {"effects.electrical": False, "motor.continuous_force": actuator.continuous_force,
-             "limit.force": 1e6, "limit.current": 1e6}
-    legs = [design("linear", [plant], drive)[0] for plant in plants]
-    structure = platform_structure("linear", values, drive, trajectory, leg_values=legs)
-    outcome = run(structure, default_algorithm("linear"), FixedStep(step), duration,
-                  columns("linear", drive_outputs=("force",)))
+    scratch = tempfile.TemporaryDirectory(prefix="cosim-confirm-") if folder is None else None
+    folder = Path(folder or scratch.name)  # the table lives until the run has read it
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        table = folder / f"{dof}.csv"
+        times = np.r_[0.0, HOLD + t, duration]
+        displacement = np.r_[-half, s - half, half]
+        np.savetxt(table, np.column_stack([times, displacement]), delimiter=",", header=f"time,{POSE[k]}", comments="")
+        trajectory = trajectory_parameters({axis: Signal(offset=float(neutral[n])) for n, axis in enumerate(POSE)},
+                                           table=table, interpolation="cubic")
+        plants = leg_plants(values)
+        for leg, plant in enumerate(plants, start=1):
+            check_limit("linear", plant, actuator.continuous_force, f"{actuator.name}'s continuous force", leg)
+        drive = {"effects.electrical": False, "motor.continuous_force": actuator.continuous_force,
+                 "limit.force": 1e6, "limit.current": 1e6}
+        legs = [design("linear", [plant], drive)[0] for plant in plants]
+        structure = platform_structure("linear", values, drive, trajectory, leg_values=legs)
+        outcome = run(structure, default_algorithm("linear"), FixedStep(step), duration,
+                      columns("linear", drive_outputs=("force",)))
+    finally:
+        if scratch is not None:
+            scratch.cleanup()
     result = outcome.result
     late = result["time"] >= HOLD
     tracking = max(float(np.abs(result[f"pose.{axis}"] - result[f"pose_ref.{axis}"])[late].max()) for axis in POSE)

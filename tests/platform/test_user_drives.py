@@ -25,7 +25,7 @@ import pytest
 from cosim.__main__ import main
 from cosim.engine.command import run_ssp
 from cosim.engine.ssp import write_ssp
-from cosim.platform.ports import LEGS, per_leg
+from cosim.platform.ports import LEGS
 from cosim.platform.runner import run_scene, scene_structure, scene_values
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.tuning import leg_plants
@@ -191,7 +191,7 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     result, report = run_scene(scene, plots=False)
     assert report.failure is None and result["time"][-1] == pytest.approx(0.3)
     # one step size only: a finer start is refused, the plain fixed step runs
-    fixed = edited(fmus["linear_servo"], tmp_path, "fixed_step", lambda t: t.replace(
+    edited(fmus["linear_servo"], tmp_path, "fixed_step", lambda t: t.replace(
         'canHandleVariableCommunicationStepSize="true"', 'canHandleVariableCommunicationStepSize="false"'))
     one_step = linear.replace("linear_servo.fmu", "fixed_step.fmu")
     with pytest.raises(SceneError, match=r"'coupling.startup_time' is refused: fixed_step.fmu \(drive.fmu\) takes one "
