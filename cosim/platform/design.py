@@ -33,12 +33,12 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..engine.tomlfile import line_of, read
-from .parameter_sets import halder_mechanics, load
+from .parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
 from .platform_core import Core
 from .ports import POSE
 
@@ -56,6 +56,8 @@ class Actuator:
     stroke: float              # [m]
     running_length_min: float  # L_min [m]: the leg system, stubs included, at the shortest stroke
     continuous_force: float    # [N], 100 % duty cycle
+    peak_force: float | None = None  # [N], what it gives for a moment (checked against the full model)
+    speed: float | None = None       # [m/s], the largest extension rate
 
     @property
     def running_length_max(self) -> float:
@@ -73,13 +75,77 @@ class Motion:
     angular_acceleration: float
 
 
+@dataclass(frozen=True)
+class Family:
+    """A platform layout a study sweeps: its design values (name -> value, from its parameter set),
+    the mechanics start values at a design, the stubs between the actuated length and the
+    actuator's running length, the payload (mass, inertia diagonal), and the values a map must
+    not vary (one per study: [study] fixed)."""
+    describe: str
+    design_values: Callable[[dict], dict[str, float]]
+    mechanics: Callable[[dict, dict[str, float]], dict[str, float]]
+    stubs: Callable[[dict[str, float]], float]
+    payload: Callable[[dict], tuple[float, list[float]]]
+    fixed_only: tuple[str, ...] = ()
+
+
+def _scalars(table: dict) -> dict[str, float]:
+    return {k: float(v) for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+
+
+def _with_geometry(config: dict, geometry: dict[str, float]) -> dict:
+    return {**config, "geometry": {**config["geometry"], **geometry}}
+
+
+def _sumnu_values(config: dict) -> dict[str, float]:
+    return {"base_scale": 1.0, "platform_scale": 1.0, "home_height": float(config["geometry"]["home_pose"][2])}
+
+
+def _sumnu_mechanics(config: dict, design: dict[str, float]) -> dict[str, float]:
+    """Sumnu's joints (irregular, given point by point) scaled in the plane about each frame's
+    origin (base joints by base_scale, platform joints by platform_scale; their heights kept), the
+    home pose at home_height."""
+    g = config["geometry"]
+    scaled = {"base_joints": [[design["base_scale"] * x, design["base_scale"] * y, z] for x, y, z in g["base_joints"]],
+              "platform_joints": [[design["platform_scale"] * x, design["platform_scale"] * y, z]
+                                  for x, y, z in g["platform_joints"]],
+              "home_pose": [*g["home_pose"][:2], design["home_height"], *g["home_pose"][3:]]}
+    return sumnu_mechanics(_with_geometry(config, scaled))
+
+
+FAMILIES = {
+    "halder2013": Family("Halder's 6-SBU layout (Eqs 1-4): joint pairs on the base circle and the disc, stubs",
+                         lambda c: _scalars(c["geometry"]), lambda c, g: halder_mechanics(_with_geometry(c, g)),
+                         lambda g: g["top_stub"] + g["bottom_stub"],
+                         lambda c: (c["payload"]["mass"], c["payload"]["inertia_diag"]), ("top_stub", "bottom_stub")),
+    "meng2010": Family("Meng's layout (Table 1): joint pairs on two circles, the neutral height from the middle leg "
+                       "length", lambda c: _scalars(c["geometry"]), lambda c, g: meng_mechanics(_with_geometry(c, g)),
+                       lambda g: 0.0, lambda c: (c["platform"]["mass"], c["platform"]["inertia_diag"])),
+    "sumnu2015": Family("Sumnu's motion-simulator layout (Section 4.2): joints point by point, scaled in the plane",
+                        _sumnu_values, _sumnu_mechanics, lambda g: 0.0,
+                        lambda c: (c["mass_sets"]["heavy"]["platform_mass"],
+                                   c["mass_sets"]["heavy"]["platform_inertia_diag"])),
+}
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """A motion given as a time series (a scene's reference or a recorded table): displacements
+    from the design's neutral pose (n x 6, m and rad), their rates and accelerations."""
+    name: str
+    times: np.ndarray
+    displacement: np.ndarray
+    rates: np.ndarray
+    accelerations: np.ndarray
+
+
 @dataclass
 class Study:
     path: Path
     name: str
-    parameter_set: str
-    axes: dict[str, np.ndarray]      # geometry key -> values (two axes: the map's rows and columns)
-    motion: Motion
+    parameter_set: str               # the platform family (FAMILIES) and the parameter set it starts from
+    axes: dict[str, np.ndarray]      # design value -> values (two axes: the map's rows and columns)
+    motion: Motion | None            # the basic motions, or None where `recorded` is the motion
     actuators: list[Actuator]
     joint_angle_limit: float         # [rad]
     payload_mass: float
@@ -94,6 +160,11 @@ class Study:
     optimise: dict[str, Any] | None = None
     # [confirm]: the design run through the co-simulation, every basic motion, and its actuator
     confirm: dict[str, Any] | None = None
+    recorded: Recorded | None = None  # [motion] scene or table: one motion, the time series
+
+    @property
+    def family(self) -> Family:
+        return FAMILIES[self.parameter_set]
 
     def allowed_force(self, actuator: Actuator) -> float:
         friction, other = self.force_margins
@@ -139,7 +210,11 @@ _PROFILES: dict[tuple, dict] = {}
 
 
 def _displacements(study: Study, timed: bool) -> dict[str, tuple[np.ndarray, ...]]:
-    """basic_motions about a zero pose (the same at every design point: computed once)."""
+    """basic_motions about a zero pose (the same at every design point: computed once), or the
+    recorded motion (its every sample, rates and accelerations either way)."""
+    if study.recorded is not None:
+        r = study.recorded
+        return {r.name: (r.displacement, r.rates, r.accelerations)}
     key = (tuple(sorted(study.motion.ranges.items())), study.motion.velocity, study.motion.acceleration,
            study.motion.angular_velocity, study.motion.angular_acceleration, study.samples, study.phase_samples, timed)
     if key in _PROFILES:
@@ -171,12 +246,12 @@ def platform_values(study: Study, point: dict[str, float], effects: bool = False
     """The mechanics start values of the study's platform at a design point (geometry keys of the
     parameter set's [geometry] table); the payload is the study's. effects: the legs' inertia and
     friction as the parameter set gives them (the full model), or off (the paper's inverse model)."""
-    config = copy.deepcopy(_parameter_set(study.parameter_set))
-    config["geometry"].update(study.fixed)
-    config["geometry"].update(point)
-    config["payload"]["mass"] = study.payload_mass
-    config["payload"]["inertia_diag"] = list(study.payload_inertia)
-    values = halder_mechanics(config)
+    config = _parameter_set(study.parameter_set)
+    family = study.family
+    values = family.mechanics(config, {**family.design_values(config), **study.fixed, **point})
+    values["platform.mass"] = study.payload_mass
+    for axis, inertia in zip(("xx", "yy", "zz"), study.payload_inertia):
+        values[f"platform.inertia_{axis}"] = inertia
     values.update({"effects.actuator_inertia": effects, "effects.motor_inertia": effects, "effects.friction": effects})
     return values
 
@@ -187,13 +262,14 @@ _SETS: dict[str, dict] = {}
 def _parameter_set(name: str) -> dict:
     """The parameter set, read once per process (a map reads it at every grid point)."""
     if name not in _SETS:
-        _SETS[name] = load(name)
+        _SETS[name] = copy.deepcopy(load(name))
     return _SETS[name]
 
 
 def stubs(study: Study) -> float:
-    g = {**load(study.parameter_set)["geometry"], **study.fixed}
-    return g["top_stub"] + g["bottom_stub"]
+    """What the actuator's running length adds to the joint-to-joint (actuated) length [m]."""
+    config = _parameter_set(study.parameter_set)
+    return study.family.stubs({**study.family.design_values(config), **study.fixed})
 
 
 @dataclass
@@ -212,6 +288,7 @@ class DesignMap:
     seconds: float = 0.0
     force_paper: np.ndarray | None = None  # [rows, columns, motions] peak |leg force|, payload only [N]
     force_full: np.ndarray | None = None   # the same with the legs' inertia and friction
+    leg_speed: np.ndarray | None = None    # [rows, columns, motions] the largest |extension rate| [m/s]
 
     @property
     def points(self) -> int:
@@ -224,11 +301,26 @@ class DesignMap:
                 "min stroke": s + self.length_min > actuator.running_length_min,
                 "joint angle": np.maximum(self.top_angle, self.bottom_angle) < self.study.joint_angle_limit}
 
+    def dynamic_admissible(self, actuator: Actuator) -> dict[str, np.ndarray]:
+        """Per limit, [rows, columns, motions] booleans: the paper's peak force (payload only) within
+        the continuous force less the margins (Fig 4); where the actuator gives them, the full
+        model's peak force within its peak force and the legs' speed within its speed."""
+        if self.force_paper is None:
+            return {}
+        out = {"force": self.force_paper <= self.study.allowed_force(actuator)}
+        if actuator.peak_force is not None:
+            out["peak force"] = self.force_full <= actuator.peak_force
+        if actuator.speed is not None:
+            out["speed"] = self.leg_speed <= actuator.speed
+        return out
+
     def admissible(self, actuator: Actuator, dynamic: bool = False) -> np.ndarray:
-        """[rows, columns]: every constraint of every basic motion holds (and the force, with dynamic)."""
+        """[rows, columns]: every constraint of every basic motion holds (and the forces and
+        speed, with dynamic)."""
         ok = np.all([c.all(axis=2) for c in self.kinematic_admissible(actuator).values()], axis=0)
-        if dynamic and self.force_paper is not None:
-            ok &= self.force_paper.max(axis=2) <= self.study.allowed_force(actuator)
+        if dynamic:
+            for limit in self.dynamic_admissible(actuator).values():
+                ok &= limit.all(axis=2)
         return ok
 
 
@@ -273,6 +365,9 @@ def design_map(study: Study, dynamic: bool = True) -> DesignMap:
                 full.use_start_values(platform_values(study, point, effects=True))
                 full.p.force_torque = 1.0
                 every = np.abs(full.inverse_dynamics_many(*arrays))
+                speed = np.abs(core.leg_velocities_many(arrays[0], arrays[1]))
+                out.setdefault("leg_speed", np.empty((*shape, len(motions))))[r, c] = \
+                    [part.max() for part in np.split(speed, split)]
                 out.setdefault("force_paper", np.empty((*shape, len(motions))))[r, c] = \
                     [part.max() for part in np.split(paper, split)]
                 out.setdefault("force_full", np.empty((*shape, len(motions))))[r, c] = \
@@ -301,8 +396,9 @@ SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise", "
           "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
                     "force_margins", "samples", "fixed"},
           "motion": {*[d for d in DOFS if d not in ROTATIONS], *[f"{d}_deg" for d in ROTATIONS], "velocity",
-                     "acceleration", "angular_velocity_deg", "angular_acceleration_deg"},
-          "actuator": {"name", "stroke", "running_length_min", "continuous_force"}}
+                     "acceleration", "angular_velocity_deg", "angular_acceleration_deg", "scene", "table", "samples"},
+          "actuator": {"name", "stroke", "running_length_min", "continuous_force", "peak_force", "speed"}}
+RECORDED = {"scene", "table", "samples"}  # [motion] keys of a motion given as a time series
 
 
 def load_study(path: str | Path) -> Study:
@@ -338,25 +434,30 @@ def load_study(path: str | Path) -> Study:
                 raise fail(table, unknown[0], f"is not a known key (known here: {', '.join(sorted(allowed))})")
     study = data.get("study", {})
     parameter_set = study.get("parameter_set", "halder2013")
-    if parameter_set != "halder2013":
-        raise fail("study", "parameter_set", f"= {parameter_set!r}: the design family here is Halder's 6-SBU layout "
-                   "('halder2013')")
-    geometry = load(parameter_set)["geometry"]
+    if parameter_set not in FAMILIES:
+        raise fail("study", "parameter_set", f"= {parameter_set!r} is not a platform family here ("
+                   + "; ".join(f"{name!r}: {f.describe}" for name, f in FAMILIES.items()) + ")")
+    family = FAMILIES[parameter_set]
+    config = load(parameter_set)
+    geometry = family.design_values(config)
     fixed = study.get("fixed", {})
     if not isinstance(fixed, dict):
         raise fail("study", "fixed", "must be a table of geometry values")
     for key, value in fixed.items():
         if key not in geometry:
-            raise fail("study", "fixed", f"names {key!r}, not a geometry value of {parameter_set} "
+            raise fail("study", "fixed", f"names {key!r}, not a design value of {parameter_set} "
                        f"({', '.join(sorted(geometry))})")
         number("study.fixed", fixed, key, positive=False)
     axes = {}
     raw_axes = data.get("axes", {})
     if not isinstance(raw_axes, dict) or len(raw_axes) != 2:
-        raise fail("", "axes", "must name two geometry values, each {from, to, step} (e.g. base_radius, disc_height)")
+        raise fail("", "axes", f"must name two design values of {parameter_set}, each {{from, to, step}} "
+                   f"({', '.join(sorted(geometry))})")
     for key, spec in raw_axes.items():
-        if key not in geometry or not isinstance(geometry[key], (int, float)):
-            raise fail("axes", key, f"is not a geometry value of {parameter_set} ({', '.join(sorted(geometry))})")
+        if key not in geometry:
+            raise fail("axes", key, f"is not a design value of {parameter_set} ({', '.join(sorted(geometry))})")
+        if key in family.fixed_only:
+            raise fail("axes", key, "is one value per study: set it in [study] fixed")
         if not isinstance(spec, dict) or set(spec) != {"from", "to", "step"}:
             raise fail("axes", key, "must be {from = ..., to = ..., step = ...}")
         low, high, step = (number("axes", spec, k, positive=k == "step") for k in ("from", "to", "step"))
@@ -367,13 +468,32 @@ def load_study(path: str | Path) -> Study:
             raise fail("axes", key, f"has {count} values; at most 2000 per axis")
         axes[key] = np.round(low + step * np.arange(count), 10)
     motion = data.get("motion", {})
-    ranges = {d: number("motion", motion, d, 0.0, positive=False) for d in DOFS if d not in ROTATIONS}
-    ranges.update({d: math.radians(number("motion", motion, f"{d}_deg", 0.0, positive=False)) for d in ROTATIONS})
-    if not any(ranges.values()):
-        raise fail("", "motion", "gives no range: name at least one of surge, sway, heave, roll_deg, pitch_deg, yaw_deg")
-    spec = Motion(ranges, number("motion", motion, "velocity"), number("motion", motion, "acceleration"),
-                  math.radians(number("motion", motion, "angular_velocity_deg")),
-                  math.radians(number("motion", motion, "angular_acceleration_deg")))
+    spec, recorded = None, None
+    if RECORDED & set(motion):
+        sources = [k for k in ("scene", "table") if k in motion]
+        if len(sources) != 1:
+            raise fail("motion", "samples" if not sources else sources[1],
+                       "needs one of 'scene' (a scene's reference motion) or 'table' (a recorded motion), not "
+                       + ("neither" if not sources else "both"))
+        others = sorted(set(motion) - RECORDED)
+        if others:
+            raise fail("motion", others[0], f"belongs to the basic motions; the motion here is the {sources[0]}'s")
+        samples_in_time = motion.get("samples", 1001)
+        if not isinstance(samples_in_time, int) or isinstance(samples_in_time, bool) or not 4 <= samples_in_time <= 100001:
+            raise fail("motion", "samples", f"= {samples_in_time!r} must be a whole number of samples, 4 to 100001")
+        try:
+            recorded = recorded_motion(path, sources[0], motion[sources[0]], samples_in_time)
+        except StudyError as error:
+            raise fail("motion", sources[0], str(error)) from None
+    else:
+        ranges = {d: number("motion", motion, d, 0.0, positive=False) for d in DOFS if d not in ROTATIONS}
+        ranges.update({d: math.radians(number("motion", motion, f"{d}_deg", 0.0, positive=False)) for d in ROTATIONS})
+        if not any(ranges.values()):
+            raise fail("", "motion", "gives no range: name at least one of surge, sway, heave, roll_deg, pitch_deg, "
+                       "yaw_deg (or a scene or table)")
+        spec = Motion(ranges, number("motion", motion, "velocity"), number("motion", motion, "acceleration"),
+                      math.radians(number("motion", motion, "angular_velocity_deg")),
+                      math.radians(number("motion", motion, "angular_acceleration_deg")))
     actuators = []
     raw = data.get("actuator", [])
     if not isinstance(raw, list) or not raw:
@@ -384,8 +504,10 @@ def load_study(path: str | Path) -> Study:
             raise fail("actuator", "name", "must be a name")
         actuators.append(Actuator(name, number("actuator", entry, "stroke"),
                                   number("actuator", entry, "running_length_min"),
-                                  number("actuator", entry, "continuous_force")))
-    inertia = study.get("payload_inertia", load(parameter_set)["payload"]["inertia_diag"])
+                                  number("actuator", entry, "continuous_force"),
+                                  *(number("actuator", entry, k) if k in entry else None for k in ("peak_force", "speed"))))
+    payload_mass, payload_inertia = family.payload(config)
+    inertia = study.get("payload_inertia", payload_inertia)
     if not (isinstance(inertia, list) and len(inertia) == 3 and all(isinstance(v, (int, float)) and v > 0
                                                                     for v in inertia)):
         raise fail("study", "payload_inertia", "must be three positive numbers [kg m^2]")
@@ -431,10 +553,68 @@ def load_study(path: str | Path) -> Study:
         best = {"actuator": best["actuator"], "seed": best.get("seed", 1), "iterations": best.get("iterations", 60)}
     return Study(path, str(study.get("name", path.stem)), parameter_set, axes, spec, actuators,
                  math.radians(number("study", study, "joint_angle_limit_deg", 20.0)),
-                 number("study", study, "payload_mass", float(load(parameter_set)["payload"]["mass"])),
+                 number("study", study, "payload_mass", float(payload_mass)),
                  tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
                  fixed={k: float(v) for k, v in fixed.items()}, workspace=space, optimise=best,
-                 confirm=confirmed)
+                 confirm=confirmed, recorded=recorded)
+
+
+def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> Recorded:
+    """[motion] scene = "<name or path>": the scene's reference motion less its platform's neutral
+    pose; [motion] table = "<csv>": a recorded motion (columns time and any of x, y, z, roll, pitch,
+    yaw: displacements from the neutral pose, m and rad), played by the trajectory FMU (cubic
+    interpolation), the one reader of tables. Either sampled `samples` times evenly over its
+    duration (at least 4); the rates and accelerations are the samples' second-order differences.
+    Raises StudyError with the reason (the caller adds the file and line)."""
+    from .platform_core import neutral_pose
+    from .runner import scene_values
+    from .scene import SceneError, Signal, load_scene, shipped
+    from .signals import scene_trajectory, trajectory_parameters
+    from .view3d import play
+    if not isinstance(source, str) or not source:
+        raise StudyError(f"= {source!r} must name a {'scene' if kind == 'scene' else 'CSV file'}")
+    given = study_path.parent / source
+    if kind == "scene":
+        found = given if given.is_file() else shipped(source, "scenes")
+        if found is None:
+            raise StudyError(f"= {source!r}: no such scene (relative to the study's folder, or a shipped scene's name)")
+        try:
+            scene = load_scene(found)
+            neutral = neutral_pose(scene_values(scene)[0])
+            values, duration, name = scene_trajectory(scene), scene.duration, found.stem
+        except (SceneError, ValueError) as error:
+            raise StudyError(f"= {source!r}: {error}") from None
+    else:
+        if not given.is_file():
+            raise StudyError(f"= {source!r}: no such file (relative to the study's folder)")
+        lines = [line for line in given.read_text(errors="replace").splitlines() if line.strip()]
+        try:
+            duration = float(lines[-1].split(",")[0])
+        except (IndexError, ValueError):
+            raise StudyError(f"= {source!r}: its last line gives no time (a CSV with columns time and any of "
+                             f"{', '.join(POSE)})") from None
+        values = trajectory_parameters({axis: Signal(offset=0.0) for axis in POSE}, table=given, interpolation="cubic")
+        neutral, name = np.zeros(6), given.stem
+    if not duration > 0:
+        raise StudyError(f"= {source!r}: lasts {duration:g} s; a motion needs a positive duration")
+    step = duration / (samples - 1)
+    try:
+        times, poses, _ = play(values, duration, step)
+    except Exception as error:  # the trajectory FMU's refusal (a bad table: its file and line)
+        raise StudyError(f"= {source!r}: {error}") from None
+    displacement = poses - neutral
+    return Recorded(name, times, displacement, np.gradient(displacement, step, axis=0, edge_order=2),
+                    second_difference(displacement, step))
+
+
+def second_difference(x: np.ndarray, step: float) -> np.ndarray:
+    """The second derivative of evenly sampled rows, to second order: central differences inside,
+    the one-sided four-point formula (2, -5, 4, -1) at both ends."""
+    out = np.empty_like(x)
+    out[1:-1] = x[2:] - 2 * x[1:-1] + x[:-2]
+    out[0] = 2 * x[0] - 5 * x[1] + 4 * x[2] - x[3]
+    out[-1] = 2 * x[-1] - 5 * x[-2] + 4 * x[-3] - x[-4]
+    return out / step ** 2
 
 
 # -- on every core --------------------------------------------------------------------------------
@@ -462,7 +642,7 @@ def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
                                          [dynamic] * len(rows), pure=False))
     merged = {name: np.concatenate([getattr(p, name) for p in parts]) for name in
               ("length_max", "length_min", "neutral_length", "top_angle", "bottom_angle", "smallest_singular",
-               "condition", *(("force_paper", "force_full") if dynamic else ()))}
+               "condition", *(("force_paper", "force_full", "leg_speed") if dynamic else ()))}
     return DesignMap(study, parts[0].motions, seconds=time.perf_counter() - start, **merged)
 
 
@@ -497,11 +677,11 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
         for m, motion in enumerate(design.motions):
             grid = admissible[:, :, m].T.astype(float)
             if 0 < grid.mean() < 1:
-                ax.contour(rows, columns, grid, levels=[0.5], colors=[COLOURS[motion]], linestyles=LINES[constraint])
+                ax.contour(rows, columns, grid, levels=[0.5], colors=[COLOURS.get(motion, "tab:blue")], linestyles=LINES[constraint])
     for label, (x, y) in marks.items():
         ax.plot(x, y, "k.", markersize=7)
         ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 3))
-    handles = [plt.Line2D([], [], color=COLOURS[m], label=m) for m in design.motions] + \
+    handles = [plt.Line2D([], [], color=COLOURS.get(m, "tab:blue"), label=m) for m in design.motions] + \
         [plt.Line2D([], [], color="k", linestyle=LINES[c], label=c) for c in ("max stroke", "min stroke", "joint angle")]
     ax.legend(handles=handles, fontsize=8, ncol=3, loc="upper right")
     ax.set_title(f"{actuator.name}: running length {actuator.running_length_min:g}-{actuator.running_length_max:g} m, "
@@ -514,30 +694,36 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
 
 def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[str, tuple[float, float]]) -> Path:
     """Halder's Fig 4: the peak force limit (the paper's payload-only model, solid; our full model,
-    dotted) and the heave motion's stroke limits, the zone where all of them and every other
-    kinematic constraint hold shaded."""
+    dotted), where the actuator gives them its peak force (full model, dashed) and speed (grey), and
+    the stroke limits of the heave motion (or of the one recorded motion); the zone where all of
+    them and every other kinematic constraint hold shaded."""
     plt, fig, ax, (row_key, rows), (column_key, columns) = _plane(design)
     ok = design.admissible(actuator, dynamic=True)
     if ok.any():
         ax.contourf(rows, columns, ok.T.astype(float), levels=[0.5, 1.5], colors=["0.85"])
     allowed = design.study.allowed_force(actuator)
-    for label, force in (("force", design.force_paper), ("force, full model", design.force_full)):
-        grid = (force.max(axis=2) <= allowed).T.astype(float)
-        if 0 < grid.mean() < 1:
-            ax.contour(rows, columns, grid, levels=[0.5], colors=["k"], linestyles=LINES[label])
-    if "heave" in design.motions:
+    lines = [(design.force_paper <= allowed, "k", "-", f"peak force = {allowed:.0f} N (payload only)"),
+             (design.force_full <= allowed, "k", ":", "the same, legs' inertia and friction included")]
+    if actuator.peak_force is not None:
+        lines.append((design.force_full <= actuator.peak_force, "k", "--",
+                      f"peak force = {actuator.peak_force:.0f} N (the actuator's peak, full model)"))
+    if actuator.speed is not None:
+        lines.append((design.leg_speed <= actuator.speed, "0.5", "-", f"leg speed = {actuator.speed:g} m/s"))
+    motion = "heave" if "heave" in design.motions else design.motions[0] if len(design.motions) == 1 else None
+    if motion is not None:
         kinematic = design.kinematic_admissible(actuator)
         for constraint, style in (("min stroke", "--"), ("max stroke", "-.")):
-            grid = kinematic[constraint][:, :, design.motions.index("heave")].T.astype(float)
-            if 0 < grid.mean() < 1:
-                ax.contour(rows, columns, grid, levels=[0.5], colors=[COLOURS["heave"]], linestyles=style)
+            lines.append((kinematic[constraint][:, :, [design.motions.index(motion)]], COLOURS.get(motion, "tab:blue"),
+                          style, f"{motion}: {constraint}"))
+    handles = []
+    for holds, colour, style, label in lines:
+        grid = holds.all(axis=2).T.astype(float)
+        handles.append(plt.Line2D([], [], color=colour, linestyle=style, label=label))
+        if 0 < grid.mean() < 1:
+            ax.contour(rows, columns, grid, levels=[0.5], colors=[colour], linestyles=style)
     for label, (x, y) in marks.items():
         ax.plot(x, y, "k.", markersize=7)
         ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 3))
-    handles = [plt.Line2D([], [], color="k", linestyle="-", label=f"peak force = {allowed:.0f} N (payload only)"),
-               plt.Line2D([], [], color="k", linestyle=":", label="the same, legs' inertia and friction included"),
-               plt.Line2D([], [], color=COLOURS["heave"], linestyle="--", label="heave: min stroke"),
-               plt.Line2D([], [], color=COLOURS["heave"], linestyle="-.", label="heave: max stroke")]
     ax.legend(handles=handles, fontsize=8, loc="upper right")
     friction, other = design.study.force_margins
     ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
@@ -613,12 +799,51 @@ def paper_rows(design: DesignMap) -> list:
     return out
 
 
+def is_section5(study: Study) -> bool:
+    """A study of Halder's layout in the paper's plane (r_b, z_p0): its stated numbers apply."""
+    return study.parameter_set == "halder2013" and list(study.axes) == ["base_radius", "disc_height"]
+
+
+def map_rows(design: DesignMap) -> list:
+    """Any study's answer: per actuator the admissible designs (kinematic, then with its forces and
+    speed) and their extent along each axis; the smallest stroke that carries every motion within
+    the joint limit, where, and the running lengths it needs there."""
+    from .validation.rows import Row
+    study = design.study
+    (row_key, rows), (column_key, columns) = list(study.axes.items())
+    out = []
+    for actuator in study.actuators:
+        kinematic, both = design.admissible(actuator), design.admissible(actuator, dynamic=True)
+        failing = {name: float(np.mean(~holds.all(axis=2))) for name, holds in
+                   {**design.kinematic_admissible(actuator), **design.dynamic_admissible(actuator)}.items()}
+        r, c = np.nonzero(both)
+        extent = (f"{row_key} {rows[r].min():g}-{rows[r].max():g} m, {column_key} {columns[c].min():g}-"
+                  f"{columns[c].max():g} m" if both.any() else "none")
+        out.append(Row(f"admissible designs, {actuator.name}", "", f"{kinematic.sum()} / {both.sum()} of {design.points}",
+                       "points", f"kinematic / with forces and speed; {extent}; each limit fails at: " + ", ".join(
+                           f"{name} {share:.0%}" for name, share in failing.items())))
+    joints = np.maximum(design.top_angle, design.bottom_angle).max(axis=2) < study.joint_angle_limit
+    needed = np.where(joints, design.length_max.max(axis=2) - design.length_min.min(axis=2), np.inf)
+    if np.isfinite(needed).any():
+        r, c = np.unravel_index(np.argmin(needed), needed.shape)
+        s = stubs(study)
+        out.append(Row("the smallest stroke that carries every motion, over the grid (joint limit held)", "", float(needed[r, c]), "m",
+                       f"at {row_key} = {rows[r]:g} m, {column_key} = {columns[c]:g} m: running length "
+                       f"{design.length_min[r, c].min() + s:.3f} to {design.length_max[r, c].max() + s:.3f} m"))
+    else:
+        out.append(Row("the smallest stroke that carries every motion", "", "none", "",
+                       "the joint limit fails at every design of the grid"))
+    return out
+
+
 def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None) -> list:
-    """The map's rows beside the paper's numbers, then the [workspace] design's and the [optimise]
-    optimum's, where the study names them (the optimiser's designs on Dask as workers/scheduler say)."""
+    """The map's rows (beside the paper's numbers for Halder's Section V plane), then the
+    [workspace] design's and the [optimise] optimum's, where the study names them (the
+    optimiser's designs on Dask as workers/scheduler say)."""
     space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
     runs = study_confirmation(design.study, workers, scheduler)
-    return paper_rows(design) + (workspace_rows(design.study, space) if space else []) + \
+    return (paper_rows(design) if is_section5(design.study) else []) + map_rows(design) + \
+        (workspace_rows(design.study, space) if space else []) + \
         (optimum_rows(design.study, best) if best else []) + (confirmation_rows(design.study, runs) if runs else [])
 
 
@@ -627,10 +852,12 @@ def summary(design: DesignMap, rows: list | None = None) -> list[str]:
     from .validation.rows import table
     (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
     return [f"Grid: {row_key} {grid_rows[0]:g}-{grid_rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
-            f"{design.points} points, {len(design.motions)} basic motions ({', '.join(design.motions)}).", "",
+            f"{design.points} points, " + (f"the motion of {design.study.recorded.name} "
+                                             f"({len(design.study.recorded.times)} samples)." if design.study.recorded else
+                                             f"{len(design.motions)} basic motions ({', '.join(design.motions)})."), "",
             table(rows if rows is not None else report_rows(design)), "",
             f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
-            "every basic motion)."]
+            + ("over the motion)." if design.study.recorded else "over every basic motion).")]
 
 
 def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
@@ -644,25 +871,26 @@ def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
     (row_key, radii), (column_key, columns) = list(design.study.axes.items())
     written = []
     short = min(design.study.actuators, key=lambda a: a.stroke)
-    marks = {}
-    if "sway" in design.motions and radii[0] <= 1.03 <= radii[-1]:
+    marks, chosen = {}, {"chosen": PAPER["chosen"]} if is_section5(design.study) else {}
+    if is_section5(design.study) and "sway" in design.motions and radii[0] <= 1.03 <= radii[-1]:
         for label, constraint in (("a", "max stroke"), ("b", "min stroke"), ("c", "joint angle")):
             found = limit_along(design, short, constraint, "sway", 1.03)
             if found is not None:
                 marks[label] = (1.03, found)
     for k, actuator in enumerate(design.study.actuators):
-        own = marks if actuator is short else {"chosen": PAPER["chosen"]}
+        own = marks if actuator is short else chosen
         written.append(plot_kinematic(design, actuator, out / f"{stem}_kinematic_{k + 1}.png", own))
     long_ = max(design.study.actuators, key=lambda a: a.stroke)
     if design.force_paper is not None:
-        written.append(plot_dynamic(design, long_, out / f"{stem}_dynamic.png", {"chosen": PAPER["chosen"]}))
+        written.append(plot_dynamic(design, long_, out / f"{stem}_dynamic.png", chosen))
     r, c, m = np.meshgrid(np.arange(len(radii)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
     table = {row_key: radii[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
              "length_min": design.length_min.ravel(), "length_max": design.length_max.ravel(),
              "top_angle": design.top_angle.ravel(), "bottom_angle": design.bottom_angle.ravel(),
              "smallest_singular": design.smallest_singular.ravel(), "condition": design.condition.ravel()}
     if design.force_paper is not None:
-        table.update(force_paper=design.force_paper.ravel(), force_full=design.force_full.ravel())
+        table.update(force_paper=design.force_paper.ravel(), force_full=design.force_full.ravel(),
+                     leg_speed=design.leg_speed.ravel())
     arrow = pa.table(table)
     pq.write_table(arrow, out / f"{stem}.parquet")
     pa.csv.write_csv(arrow, out / f"{stem}.csv")
@@ -949,6 +1177,24 @@ def scene_fit(scene, parameter: str, values: np.ndarray, samples: int = 2001) ->
 HOLD = 0.5  # [s] at the start pose before a basic motion, and after it
 
 
+def motion_profile(study: Study, motion: str) -> tuple[np.ndarray, ...]:
+    """A motion of the study as the co-simulation plays it: times from 0, displacements from the
+    neutral (n x 6), rates and accelerations; a basic motion's shortest-time move finely sampled
+    (400 per phase), or the recorded motion."""
+    if study.recorded is not None:
+        r = study.recorded
+        return r.times - r.times[0], r.displacement, r.rates, r.accelerations
+    k, half, m = DOFS.index(motion), study.motion.ranges[motion], study.motion
+    rotation = motion in ROTATIONS
+    t, s, v, a = shortest_time(2 * half, m.angular_velocity if rotation else m.velocity,
+                               m.angular_acceleration if rotation else m.acceleration, 400)
+    keep = np.r_[True, np.diff(t) > 0]  # the phases' shared instants once
+    out = [np.zeros((keep.sum(), 6)) for _ in range(3)]
+    for array, column in zip(out, (s - half, v, a)):
+        array[:, k] = column[keep]
+    return (t[keep], *out)
+
+
 def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, dof: str, step: float = 1e-3,
                    folder: Path | None = None) -> dict[str, Any]:
     """One basic motion of a design, closed loop through the co-simulation: the mechanics FMU with
@@ -964,19 +1210,11 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
     from .signals import trajectory_parameters
     from .system import columns, default_algorithm, platform_structure, run
     from .tuning import check_limit, design, leg_plants
-    k = DOFS.index(dof)
-    half = study.motion.ranges[dof]
-    rotation = dof in ROTATIONS
-    m = study.motion
-    t, s, v, a = shortest_time(2 * half, m.angular_velocity if rotation else m.velocity,
-                               m.angular_acceleration if rotation else m.acceleration, 400)
-    keep = np.r_[True, np.diff(t) > 0]  # the phases' shared instants once
-    t, s, v, a = t[keep], s[keep], v[keep], a[keep]
+    t, displacement, rates, accelerations = motion_profile(study, dof)
     values = platform_values(study, point, effects=True)
     core = Core().use_start_values(values)
     neutral = core.neutral_pose
-    start = neutral.copy()
-    start[k] -= half
+    start = neutral + displacement[0]
     values.update({f"initial.pose.{axis}": float(start[n]) for n, axis in enumerate(POSE)})
     duration = HOLD + t[-1] + HOLD
     scratch = tempfile.TemporaryDirectory(prefix="cosim-confirm-") if folder is None else None
@@ -985,8 +1223,9 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
         folder.mkdir(parents=True, exist_ok=True)
         table = folder / f"{dof}.csv"
         times = np.r_[0.0, HOLD + t, duration]
-        displacement = np.r_[-half, s - half, half]
-        np.savetxt(table, np.column_stack([times, displacement]), delimiter=",", header=f"time,{POSE[k]}", comments="")
+        played = np.vstack([displacement[:1], displacement, displacement[-1:]])
+        np.savetxt(table, np.column_stack([times, played]), delimiter=",", header=",".join(["time", *POSE]),
+                   comments="")
         trajectory = trajectory_parameters({axis: Signal(offset=float(neutral[n])) for n, axis in enumerate(POSE)},
                                            table=table, interpolation="cubic")
         plants = leg_plants(values)
@@ -1005,10 +1244,7 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
     late = result["time"] >= HOLD
     tracking = max(float(np.abs(result[f"pose.{axis}"] - result[f"pose_ref.{axis}"])[late].max()) for axis in POSE)
     forces = np.column_stack([result[f"force[{i}]"] for i in range(1, 7)])
-    poses = np.tile(neutral, (len(t), 1))
-    poses[:, k] += s - half
-    rates, accelerations = np.zeros_like(poses), np.zeros_like(poses)
-    rates[:, k], accelerations[:, k] = v, a
+    poses = neutral + displacement
     core.p.force_torque = 1.0
     predicted = float(np.abs(core.inverse_dynamics_many(poses, rates, accelerations)).max())
     moving = late & (result["time"] <= HOLD + t[-1])
@@ -1021,7 +1257,7 @@ def confirm(study: Study, point: dict[str, float], actuator: Actuator, workers: 
             scheduler: str | None = None, motions: tuple[str, ...] | None = None) -> list[dict[str, Any]]:
     """Every basic motion of a design through the co-simulation (confirm_motion), on Dask when
     workers/scheduler say so (one motion per task), in this process otherwise."""
-    chosen = [d for d in (motions or DOFS) if study.motion.ranges.get(d, 0.0) > 0]
+    chosen = [m for m in _displacements(study, False) if motions is None or m in motions]
     if workers == 0 and scheduler is None:
         return [confirm_motion(study, point, actuator, dof) for dof in chosen]
     from ..engine.sweep.dask_run import dask_client
@@ -1041,7 +1277,7 @@ def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list:
     where = ", ".join(f"{k} = {v:g} m" for k, v in study.confirm["point"].items())
     out = []
     for r in runs:
-        unit = "rad" if r["motion"] in ROTATIONS else "m"
+        unit = "rad" if r["motion"] in ROTATIONS else "m" if r["motion"] in DOFS else "m, rad"
         out.append(Row(f"co-simulated {r['motion']} ({where}, {study.confirm['actuator']})", "",
                        f"peak {r['peak_force']:.0f} N, rms {r['rms_force']:.0f} N", "N",
                        f"the full inverse dynamics' peak {r['predicted_peak']:.0f} N "

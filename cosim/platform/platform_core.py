@@ -67,6 +67,7 @@ def load() -> ctypes.CDLL:
     dll.platform_state_from_pose.argtypes = [P(D), P(D), P(D)]
     dll.platform_leg_plants.argtypes = [P(Platform), P(D), P(D), P(D)]
     dll.platform_pose_kinematics.argtypes = [P(Platform), ctypes.c_int, P(D), P(D), P(D), P(D), P(D)]
+    dll.platform_leg_velocities_many.argtypes = [P(Platform), ctypes.c_int, P(D), P(D), P(D)]
     dll.platform_inverse_dynamics_many.argtypes = [P(Platform), ctypes.c_int, P(D), P(D), P(D), P(D), P(D)]
     dll.platform_inverse_dynamics_many.restype = ctypes.c_int
     dll.platform_leg_plants.restype = ctypes.c_int
@@ -225,6 +226,15 @@ class Core:
                                           ptr(out["lower_angle"]), ptr(out["upper_angle"]), ptr(jac))
         if jacobian:
             out["jacobian"] = jac
+        return out
+
+    def leg_velocities_many(self, poses: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        """Each leg's extension rate [m/s] at each of n poses moving at their rates (n x 6 each):
+        the dynamics core's platform_leg_velocities_many, one call for all poses."""
+        arrays = [np.ascontiguousarray(a, dtype=float).reshape(-1, 6) for a in (poses, rates)]
+        out = np.empty_like(arrays[0])
+        self.dll.platform_leg_velocities_many(ctypes.byref(self.p), len(out),
+                                              *(a.ctypes.data_as(ctypes.POINTER(D)) for a in (*arrays, out)))
         return out
 
     def inverse_dynamics_many(self, poses: np.ndarray, rates: np.ndarray, accelerations: np.ndarray,

@@ -254,15 +254,21 @@ def reference_motion(scene, frames_most: int = MAX_FRAMES) -> tuple[np.ndarray, 
     """The scene's reference pose and base-frame load force over its duration, from its trajectory
     FMU run alone through the engine (the one evaluation of the scene's signals, tables included):
     times, poses (n x 6), forces (n x 3)."""
-    from ..engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
-    from ..engine.outcome import execute
     from .signals import scene_trajectory
     frames_most = max(2, min(frames_most, int(scene.duration / 0.02) + 1))
-    step = scene.duration / (frames_most - 1)
-    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), scene_trajectory(scene))], [],
-                            experiment=Experiment(0.0, scene.duration, step))
+    return play(scene_trajectory(scene), scene.duration, scene.duration / (frames_most - 1))
+
+
+def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The trajectory FMU with these start values run alone for `duration` at `step`: times,
+    reference poses (n x 6), base-frame load forces (n x 3). Raises what the FMU refuses (a bad
+    table: its file and line) as the engine's error."""
+    from ..engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
+    from ..engine.outcome import execute
+    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), trajectory_values)], [],
+                            experiment=Experiment(0.0, duration, step))
     names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
-    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), scene.duration, [("trajectory", n) for n in names])
+    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("trajectory", n) for n in names])
     if outcome.failure is not None:
         raise outcome.failure
     result = outcome.result

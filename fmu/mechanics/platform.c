@@ -542,6 +542,17 @@ void platform_pose_kinematics(const Platform *p, int n, const double *poses, dou
     }
 }
 
+void platform_leg_velocities_many(const Platform *p, int n, const double *pose, const double *pose_rate,
+                                  double *velocity) {
+    double x[PLATFORM_STATES];
+    LegGeometry legs[PLATFORM_LEGS];
+    for (int k = 0; k < n; k++) {
+        platform_state_from_pose(pose + 6 * k, pose_rate + 6 * k, x);
+        platform_legs(p, x, legs);
+        for (int i = 0; i < PLATFORM_LEGS; i++) velocity[6 * k + i] = legs[i].velocity;
+    }
+}
+
 int platform_inverse_dynamics_many(const Platform *p, int n, const double *pose, const double *pose_rate,
                                    const double *pose_acceleration, const double wrench[6], double *torque) {
     int singular = 0;

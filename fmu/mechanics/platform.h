@@ -154,6 +154,11 @@ void platform_joint_angles(const double R[9], const double axis[3], const double
 void platform_pose_kinematics(const Platform *p, int n, const double *poses, double *length,
                               double *lower_angle, double *upper_angle, double *jacobian);
 
+/* At each of n poses with their rates (row major, 6 each): each leg's extension rate [m/s]
+ * (Eq 3's velocity of the upper joint along the leg). */
+void platform_leg_velocities_many(const Platform *p, int n, const double *pose, const double *pose_rate,
+                                  double *velocity);
+
 /* platform_inverse_dynamics at each of n poses with their rates and accelerations (row major, 6
  * each) under one external wrench; the torques of a singular pose are NaN. Returns the number of
  * singular poses. */

@@ -153,10 +153,17 @@ def test_a_map_on_two_dask_workers_is_the_map_of_one_process(study):
 
 BAD = {
     '[study]\nname = "x"\n[axes]\nbase_radius = {from = 1.0, to = 1.1, step = 0.01}\n':
-        "'axes' must name two geometry values",
+        "'axes' must name two design values of halder2013",
     "[study]\ncolour = 1\n": "'study.colour' is not a known key",
     "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = 0.01}\nwidth = {from = 1, to = 2, step = 1}\n":
-        "'axes.width' is not a geometry value of halder2013",
+        "'axes.width' is not a design value of halder2013",
+    "[axes]\ntop_stub = {from = 0.1, to = 0.2, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
+        "'axes.top_stub' is one value per study: set it in [study] fixed",
+    '[study]\nparameter_set = "stewart"\n': "'study.parameter_set' = 'stewart' is not a platform family here",
+    "[motion]\nscene = \"meng_eq35\"\ntable = \"x.csv\"\n": "needs one of 'scene'",
+    "[motion]\nscene = \"meng_eq35\"\nsurge = 0.3\n": "'motion.surge' belongs to the basic motions",
+    "[motion]\nscene = \"no_such_scene\"\n": "'motion.scene' = 'no_such_scene': no such scene",
+    "[motion]\ntable = \"motion.csv\"\n": "motion.csv:3",
     "[axes]\nbase_radius = {from = 1.2, to = 1.1, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
         "'to' must not be below 'from'",
     "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = -0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
@@ -168,8 +175,13 @@ BAD = {
 def test_a_bad_study_file_is_one_line(text, tmp_path, capsys):
     path = tmp_path / "study.toml"
     body = STUDY.read_text()
+    (tmp_path / "motion.csv").write_text("time,x\n0,0\n1,zero\n")  # its line 3 is not a number
     if text.startswith("[axes]"):
         body = body[:body.index("[axes]")] + text + body[body.index("[motion]"):]
+    elif text.startswith("[motion]"):
+        body = body[:body.index("[motion]")] + text + body[body.index("[[actuator]]"):]
+    elif text.startswith("[study]\nparameter_set"):
+        body = body.replace('parameter_set = "halder2013"', 'parameter_set = "stewart"', 1)
     elif text.startswith("[study]\ncolour"):
         body = body.replace("[study]\n", text, 1)
     else:

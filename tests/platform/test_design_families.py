@@ -1,0 +1,158 @@
+"""Design studies beyond Halder's plane (cosim.platform.design): Meng's and Sumnu's layouts as
+families, a scene's or a recorded table's motion as the specification, the actuator's peak force
+and speed as limits. Each against an independent fact: Meng's defining property of l_0, the
+parameter set's own mechanics at the unscaled design, Eq 35's sines differentiated by hand, the
+leg speed against differences of the leg lengths."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from cosim.engine.artifacts import ROOT
+from cosim.platform.design import (FAMILIES, basic_motions, design_map, load_study, map_rows, platform_values,
+                                   shortest_time)
+from cosim.platform.parameter_sets import load, sumnu_mechanics
+from cosim.platform.platform_core import Core
+from cosim.platform.scene import load_scene
+from cosim.platform.signals import sine_motion
+
+MENG = ROOT / "studies" / "meng_eq35.toml"
+
+
+@pytest.fixture(scope="module")
+def meng():
+    return load_study(MENG)
+
+
+def grid(study, rows, columns):
+    part = copy.copy(study)
+    (row_key, _), (column_key, _) = list(study.axes.items())
+    part.axes = {row_key: np.asarray(rows, float), column_key: np.asarray(columns, float)}
+    return part
+
+
+def test_meng_family_every_leg_is_l0_long_at_the_neutral(meng):
+    """Meng's Table 1 defines the neutral height by the middle leg length l_0: at each design's
+    neutral pose every leg is l_0 long, whatever r_b."""
+    part = grid(meng, [0.8, 1.1, 1.3], [1.7, 1.86, 2.1])
+    for r_b in part.axes["lower_joint_radius"]:
+        for l_0 in part.axes["middle_leg_length"]:
+            core = Core().use_start_values(platform_values(part, {"lower_joint_radius": r_b, "middle_leg_length": l_0}))
+            assert np.allclose(core.leg_lengths(core.neutral_pose), l_0, atol=1e-9)
+    design = design_map(part, dynamic=False)
+    assert np.allclose(design.neutral_length, np.broadcast_to(part.axes["middle_leg_length"], (3, 3)), atol=1e-9)
+
+
+def test_sumnu_family_unscaled_is_the_thesis_platform(tmp_path):
+    """Sumnu's family at base_scale = platform_scale = 1 and the thesis' home height is the
+    parameter set's own platform (its joints and neutral); a base scaled by 1.2 moves every base
+    joint 1.2 times as far from the base frame's z axis."""
+    study = tmp_path / "sumnu.toml"
+    study.write_text('[study]\nparameter_set = "sumnu2015"\n[axes]\nbase_scale = {from = 0.9, to = 1.2, step = 0.1}\n'
+                     'home_height = {from = 0.9, to = 1.1, step = 0.1}\n[motion]\nheave = 0.1\nvelocity = 0.1\n'
+                     'acceleration = 1.0\nangular_velocity_deg = 10\nangular_acceleration_deg = 100\n'
+                     '[[actuator]]\nname = "any"\nstroke = 1.0\nrunning_length_min = 0.5\ncontinuous_force = 1e4\n')
+    loaded = load_study(study)
+    values = platform_values(loaded, {"base_scale": 1.0, "home_height": 1.0})
+    own = sumnu_mechanics(load("sumnu2015"))
+    for key, value in own.items():
+        if key.startswith("geometry."):
+            assert values[key] == pytest.approx(value, abs=1e-12), key
+    scaled = platform_values(loaded, {"base_scale": 1.2, "home_height": 1.0})
+    for i in range(1, 7):
+        radius = [math.hypot(v[f"geometry.base_joint[{i}].x"], v[f"geometry.base_joint[{i}].y"]) for v in (values, scaled)]
+        assert radius[1] == pytest.approx(1.2 * radius[0], rel=1e-12)
+    design = design_map(loaded)
+    assert design.length_max.shape == (4, 3, 1) and np.all(design.length_max > design.length_min)
+
+
+def test_a_scenes_motion_is_its_reference_about_the_neutral_with_exact_rates(meng):
+    """[motion] scene = "meng_eq35": the displacements are Eq 35's sines about the neutral, and the
+    rates and accelerations from the samples' differences are the sines' derivatives to the
+    differences' second-order error ((w h)^2 / 6 of each amplitude's scale, w = 2 pi 0.2 Hz, h = 10 ms;
+    the ends' one-sided differences 4x that)."""
+    recorded = meng.recorded
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
+    pose, rate, acceleration = sine_motion(scene.trajectory, recorded.times)
+    neutral = Core().use_start_values(platform_values(meng, {})).neutral_pose
+    assert np.allclose(recorded.displacement, pose - np.r_[0, 0, neutral[2], 0, 0, 0], atol=1e-12)
+    h = recorded.times[1] - recorded.times[0]
+    w = np.array([2 * math.pi * max((s.frequency for s in scene.trajectory[dof].sines), default=0.0)
+                  for dof in ("x", "y", "z", "roll", "pitch", "yaw")])
+    amplitude = np.array([sum(abs(s.amplitude) for s in scene.trajectory[dof].sines)
+                          for dof in ("x", "y", "z", "roll", "pitch", "yaw")])
+    for got, exact, order in ((recorded.rates, rate, 1), (recorded.accelerations, acceleration, 2)):
+        bound = 4 * order * (w * h) ** 2 / 6 * w ** order * amplitude + 1e-12
+        assert np.all(np.abs(got - exact) <= bound), np.abs(got - exact).max(axis=0) / bound
+
+
+def test_a_recorded_table_gives_the_limits_of_the_same_basic_motion(meng, tmp_path):
+    """A table holding Halder's surge move (shortest-time, 0.6 m) gives the map the same leg-length
+    extremes as the basic motion itself (the cubic table between 400 samples per phase: 1e-9 m)."""
+    halder = load_study(ROOT / "studies" / "halder_section5.toml")
+    t, s, _, _ = shortest_time(0.6, 0.05, 0.05, 400)
+    keep = np.r_[True, np.diff(t) > 0]
+    (tmp_path / "surge.csv").write_text("time,x\n" + "\n".join(f"{float(a)!r},{float(b) - 0.3!r}" for a, b in zip(t[keep], s[keep])))
+    text = (ROOT / "studies" / "halder_section5.toml").read_text()
+    motion = text[text.index("[motion]"):text.index("[[actuator]]")]
+    study = tmp_path / "table.toml"
+    study.write_text(text.replace(motion, '[motion]\ntable = "surge.csv"\nsamples = 2001\n\n'))
+    table = grid(load_study(study), [1.0, 1.1], [1.2, 1.4])
+    basic = grid(dataclasses.replace(halder, motion=dataclasses.replace(halder.motion, ranges={"surge": 0.3})),
+                 [1.0, 1.1], [1.2, 1.4])
+    a, b = design_map(table, dynamic=False), design_map(basic, dynamic=False)
+    assert a.motions == ["surge"] and b.motions == ["surge"]
+    assert np.allclose(a.length_max, b.length_max, atol=1e-9) and np.allclose(a.length_min, b.length_min, atol=1e-9)
+
+
+def test_the_leg_speed_is_the_rate_of_the_leg_lengths(meng):
+    """The map's leg speed (the core's platform_leg_velocities_many) against central differences of
+    the leg lengths along the motion's rates (1e-7 m/s)."""
+    core = Core().use_start_values(platform_values(meng, {}))
+    rng = np.random.default_rng(3)
+    poses = core.neutral_pose + rng.normal(0, [0.1, 0.1, 0.1, 0.1, 0.1, 0.1], (50, 6))
+    rates = rng.normal(0, 0.5, (50, 6))
+    h = 1e-6
+    differences = np.array([(core.leg_lengths(p + h * r) - core.leg_lengths(p - h * r)) / (2 * h)
+                            for p, r in zip(poses, rates)])
+    assert np.allclose(core.leg_velocities_many(poses, rates), differences, atol=1e-7)
+    part = grid(meng, [1.1], [1.86])
+    design = design_map(part)
+    neutral = core.neutral_pose
+    r = meng.recorded
+    expected = np.abs(core.leg_velocities_many(neutral + r.displacement, r.rates)).max()
+    assert design.leg_speed[0, 0, 0] == pytest.approx(expected, rel=1e-12)
+
+
+def test_the_actuators_peak_force_and_speed_limit_the_designs(meng):
+    """An actuator whose speed (peak force) is just below (above) what the map asks turns every
+    design out (keeps the kinematically admissible ones)."""
+    part = grid(meng, [0.8, 0.85, 0.9], [1.93, 1.95])
+    design = design_map(part)
+    wide = dataclasses.replace(meng.actuators[1], peak_force=None, speed=None, continuous_force=1e9)
+    assert design.admissible(wide).any()
+    for field, demand in (("speed", design.leg_speed), ("peak_force", design.force_full)):
+        below = dataclasses.replace(wide, **{field: 0.999 * float(demand.min())})
+        above = dataclasses.replace(wide, **{field: 1.001 * float(demand.max())})
+        assert not design.admissible(below, dynamic=True).any()
+        assert np.array_equal(design.admissible(above, dynamic=True), design.admissible(wide))
+
+
+def test_meng_eq35_needs_more_than_mengs_stroke_at_any_geometry(meng):
+    """The shipped study's answer on a coarse grid: no design of Meng's layout carries Eq 35 within
+    Table 4's 665 mm stroke (the main job leaves the stroke), the 0.85 m leg carries it at some, and
+    the smallest stroke the rows report is the smallest needed over the grid's designs."""
+    part = grid(meng, np.arange(0.6, 1.51, 0.1), np.sort(np.r_[np.arange(1.5, 2.41, 0.1), 1.95]))
+    design = design_map(part)
+    assert not design.admissible(meng.actuators[0]).any() and design.admissible(meng.actuators[1]).any()
+    needed = design.length_max.max(axis=2) - design.length_min.min(axis=2)
+    joints = np.maximum(design.top_angle, design.bottom_angle).max(axis=2) < meng.joint_angle_limit
+    row = next(r for r in map_rows(design) if r.quantity.startswith("the smallest stroke"))
+    assert row.ours == pytest.approx(needed[joints].min(), abs=0) and row.ours > 0.665
+    assert set(FAMILIES) == {"halder2013", "meng2010", "sumnu2015"}
+    assert basic_motions(meng, np.zeros(6)).keys() == {"meng_eq35"}
