@@ -65,14 +65,14 @@ def leg_plants(values: Mapping[str, object]) -> list[LegPlant]:
                      core.p.force_torque) for i in range(6)]
 
 
-def _defaults(drive: str) -> dict[str, float]:
+def drive_defaults(drive: str) -> dict[str, float]:
     return {name: float(v.start) for name, v in variables(fmu_path(DRIVES[drive].fmu)).items()
             if v.start is not None and v.type in ("Real", "Integer")}
 
 
 def design(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object]) -> list[dict[str, float]]:
     """Per leg, the drive parameters its rules give for its plant (explicit drive_values win)."""
-    given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    given = {**drive_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     designed = []
     for plant in plants:
         if drive == "pmsm":
@@ -92,14 +92,14 @@ def design(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object
 
 def hold_currents(plants: list[LegPlant], drive_values: Mapping[str, object]) -> list[float]:
     """Per leg, the PMSM's q current that holds the start pose: i_q = F / (K_FT K_m)."""
-    given = {**_defaults("pmsm"), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    given = {**drive_defaults("pmsm"), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     return [plant.static_force / plant.force_torque / given["motor.torque_constant"] for plant in plants]
 
 
 def check_sizing(drive: str, plants: list[LegPlant], drive_values: Mapping[str, object], leg: int = 1) -> None:
     """Raises SizingError for the first leg (numbered from `leg`) our drive cannot hold: the PMSM
     up to K_m times its current limit, the linear motor up to its continuous force."""
-    given = {**_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
+    given = {**drive_defaults(drive), **{k: float(v) for k, v in drive_values.items() if isinstance(v, (int, float))}}
     for i, plant in enumerate(plants, start=leg):
         if drive == "pmsm":
             check_limit(drive, plant, given["motor.torque_constant"] * given["limit.current"],

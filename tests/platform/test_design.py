@@ -164,6 +164,7 @@ BAD = {
     "[motion]\nscene = \"meng_eq35\"\nsurge = 0.3\n": "'motion.surge' belongs to the basic motions",
     "[motion]\nscene = \"no_such_scene\"\n": "'motion.scene' = 'no_such_scene': no such scene",
     "[motion]\ntable = \"motion.csv\"\n": "motion.csv:3",
+    '[confirm]\ndrive = "hydraulic"\n': "'confirm.drive' = 'hydraulic' is not one of 'force'",
     "[axes]\nbase_radius = {from = 1.2, to = 1.1, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
         "'to' must not be below 'from'",
     "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = -0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
@@ -180,6 +181,8 @@ def test_a_bad_study_file_is_one_line(text, tmp_path, capsys):
         body = body[:body.index("[axes]")] + text + body[body.index("[motion]"):]
     elif text.startswith("[motion]"):
         body = body[:body.index("[motion]")] + text + body[body.index("[[actuator]]"):]
+    elif text.startswith("[confirm]"):
+        body = body.replace("[confirm]", text.rstrip("\n"), 1)
     elif text.startswith("[study]\nparameter_set"):
         body = body.replace('parameter_set = "halder2013"', 'parameter_set = "stewart"', 1)
     elif text.startswith("[study]\ncolour"):

@@ -156,3 +156,26 @@ def test_meng_eq35_needs_more_than_mengs_stroke_at_any_geometry(meng):
     assert row.ours == pytest.approx(needed[joints].min(), abs=0) and row.ours > 0.665
     assert set(FAMILIES) == {"halder2013", "meng2010", "sumnu2015"}
     assert basic_motions(meng, np.zeros(6)).keys() == {"meng_eq35"}
+
+
+@pytest.mark.parametrize("drive", ["pmsm", "linear"])
+def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
+    """Eq 35 at Meng's design through our drive FMUs (auto tuned, the platform's drive set): the
+    legs' peak force within 1 % of the full inverse dynamics' along the reference (the tracking
+    error's effect: millimetres on metres of leg), and the currents the drive's own torque or
+    force constant away from those forces (the current loop's error and the motor's friction:
+    1 %)."""
+    from cosim.platform.design import confirm_motion, confirmation_rows, drive_parameters
+    from cosim.platform.tuning import drive_defaults
+    point = {"lower_joint_radius": 1.1, "middle_leg_length": 1.86}
+    run = confirm_motion(meng, point, meng.actuators[1], "meng_eq35", drive=drive)
+    assert run["peak_force"] == pytest.approx(run["predicted_peak"], rel=0.01)
+    values, on_legs, _ = drive_parameters(meng, drive)
+    given = {**drive_defaults(drive), **values}
+    per_ampere = given["motor.torque_constant"] * 250.0 if drive == "pmsm" else given["motor.force_constant"]
+    assert run["peak_current"] * per_ampere == pytest.approx(run["peak_force"], rel=0.01)
+    assert run["rms_current"] * per_ampere == pytest.approx(run["rms_force"], rel=0.01)
+    assert run["continuous_current"] * per_ampere == pytest.approx(meng.actuators[1].continuous_force, rel=1e-12)
+    confirmed = dataclasses.replace(meng, confirm={"point": point, "actuator": meng.actuators[1].name, "drive": drive})
+    (row,) = confirmation_rows(confirmed, [run])
+    assert f"current peak {run['peak_current']:.1f} A" in row.note
