@@ -89,6 +89,22 @@ class Family:
     fixed_only: tuple[str, ...] = ()
 
 
+def unit(key: str) -> str:
+    """A design value's unit as the parameter sets name them: *_deg in degrees, *_scale a factor,
+    the rest lengths."""
+    return "deg" if key.endswith("_deg") else "" if key.endswith("_scale") else "m"
+
+
+def value(key: str, number: float, digits: str = "g") -> str:
+    """`key = number unit`, e.g. 'base_radius = 1.1 m'."""
+    return f"{key} = {number:{digits}}" + (f" {unit(key)}" if unit(key) else "")
+
+
+def span(key: str, values: np.ndarray) -> str:
+    """`key low-high unit`, e.g. 'base_radius 0.8-1.5 m'."""
+    return f"{key} {np.min(values):g}-{np.max(values):g}" + (f" {unit(key)}" if unit(key) else "")
+
+
 def _scalars(table: dict) -> dict[str, float]:
     return {k: float(v) for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
 
@@ -660,8 +676,8 @@ def _plane(design: DesignMap):
     import matplotlib.pyplot as plt
     (row_key, rows), (column_key, columns) = list(design.study.axes.items())
     fig, ax = plt.subplots(figsize=(8, 6))
-    ax.set_xlabel(f"{row_key.replace('_', ' ')} [m]")
-    ax.set_ylabel(f"{column_key.replace('_', ' ')} [m]")
+    ax.set_xlabel(row_key.replace("_", " ") + (f" [{unit(row_key)}]" if unit(row_key) else ""))
+    ax.set_ylabel(column_key.replace("_", " ") + (f" [{unit(column_key)}]" if unit(column_key) else ""))
     return plt, fig, ax, (row_key, rows), (column_key, columns)
 
 
@@ -822,8 +838,7 @@ def map_rows(design: DesignMap) -> list:
         failing = {name: float(np.mean(~holds.all(axis=2))) for name, holds in
                    {**design.kinematic_admissible(actuator), **design.dynamic_admissible(actuator)}.items()}
         r, c = np.nonzero(both)
-        extent = (f"{row_key} {rows[r].min():g}-{rows[r].max():g} m, {column_key} {columns[c].min():g}-"
-                  f"{columns[c].max():g} m" if both.any() else "none")
+        extent = f"{span(row_key, rows[r])}, {span(column_key, columns[c])}" if both.any() else "none"
         out.append(Row(f"admissible designs, {actuator.name}", "", f"{kinematic.sum()} / {both.sum()} of {design.points}",
                        "points", f"kinematic / with forces and speed; {extent}; each limit fails at: " + ", ".join(
                            f"{name} {share:.0%}" for name, share in failing.items())))
@@ -833,8 +848,10 @@ def map_rows(design: DesignMap) -> list:
         r, c = np.unravel_index(np.argmin(needed), needed.shape)
         s = stubs(study)
         out.append(Row("the smallest stroke that carries every motion, over the grid (joint limit held)", "", float(needed[r, c]), "m",
-                       f"at {row_key} = {rows[r]:g} m, {column_key} = {columns[c]:g} m: running length "
-                       f"{design.length_min[r, c].min() + s:.3f} to {design.length_max[r, c].max() + s:.3f} m"))
+                       f"at {value(row_key, rows[r])}, {value(column_key, columns[c])}: running length "
+                       f"{design.length_min[r, c].min() + s:.3f} to {design.length_max[r, c].max() + s:.3f} m"
+                       + ("; on the grid's edge: a wider grid may need less" if r in (0, len(rows) - 1)
+                          or c in (0, len(columns) - 1) else "")))
     else:
         out.append(Row("the smallest stroke that carries every motion", "", "none", "",
                        "the joint limit fails at every design of the grid"))
@@ -856,8 +873,7 @@ def summary(design: DesignMap, rows: list | None = None) -> list[str]:
     """Markdown lines: the grid, the rows (report_rows unless given), the map's speed."""
     from .validation.rows import table
     (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
-    return [f"Grid: {row_key} {grid_rows[0]:g}-{grid_rows[-1]:g} m x {column_key} {columns[0]:g}-{columns[-1]:g} m, "
-            f"{design.points} points, " + (f"the motion of {design.study.recorded.name} "
+    return [f"Grid: {span(row_key, grid_rows)} x {span(column_key, columns)}, {design.points} points, " + (f"the motion of {design.study.recorded.name} "
                                              f"({len(design.study.recorded.times)} samples)." if design.study.recorded else
                                              f"{len(design.motions)} basic motions ({', '.join(design.motions)})."), "",
             table(rows if rows is not None else report_rows(design)), "",
@@ -1036,7 +1052,7 @@ def study_workspace(study: Study) -> Workspace | None:
 def workspace_rows(study: Study, space: Workspace) -> list:
     """The [workspace] design's reach, volume, conditioning and singular distances as rows."""
     from .validation.rows import Row
-    where = ", ".join(f"{k} = {v:g} m" for k, v in study.workspace["point"].items())
+    where = ", ".join(value(k, v) for k, v in study.workspace["point"].items())
     reach = space.reach()
     lines = [Row(f"reachable positions at the neutral orientation ({where}, {study.workspace['actuator']})", "",
                  space.volume, "m^3", f"a {1e3 * space.spacing:g} mm grid; on the axes: " + ", ".join(
@@ -1118,7 +1134,7 @@ def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None =
 
 def optimum_rows(study: Study, best: Optimum) -> list:
     from .validation.rows import Row
-    where = ", ".join(f"{k} = {v:.3f} m" for k, v in best.point.items())
+    where = ", ".join(value(k, v, ".3f") for k, v in best.point.items())
     worst = min(best.margins, key=best.margins.get)
     return [Row(f"the most robust design for {study.optimise['actuator']} (largest worst-case margin)", "", where, "",
                 f"differential evolution, {best.evaluations} designs; margins: " + ", ".join(
@@ -1333,7 +1349,7 @@ def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | N
 
 def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list:
     from .validation.rows import Row
-    where = ", ".join(f"{k} = {v:g} m" for k, v in study.confirm["point"].items())
+    where = ", ".join(value(k, v) for k, v in study.confirm["point"].items())
     out = []
     for r in runs:
         quantity = f"co-simulated {r['motion']} ({where}, {study.confirm['actuator']}; {r['drive']})"

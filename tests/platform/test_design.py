@@ -147,7 +147,8 @@ def test_the_chosen_design_has_the_papers_neutral_running_length(study):
 def test_a_map_on_two_dask_workers_is_the_map_of_one_process(study):
     part = small(study, rows=(1.0, 1.05, 1.1, 1.15), columns=(1.2, 1.3))
     here, there = design_map(part), parallel_map(part, workers=2)
-    for name in ("length_max", "length_min", "top_angle", "bottom_angle", "condition", "force_paper", "force_full"):
+    for name in ("length_max", "length_min", "top_angle", "bottom_angle", "condition", "force_paper", "force_full",
+                 "leg_speed"):
         assert np.array_equal(getattr(here, name), getattr(there, name)), name
 
 
