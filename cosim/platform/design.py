@@ -163,7 +163,7 @@ class Study:
     axes: dict[str, np.ndarray]      # design value -> values (two axes: the map's rows and columns)
     motion: Motion | None            # the basic motions, or None where `recorded` is the motion
     actuators: list[Actuator]
-    joint_angle_limit: float         # [rad]
+    joint_angle_limit: float         # [rad], both joints unless one has its own below
     payload_mass: float
     payload_inertia: tuple[float, float, float]
     force_margins: tuple[float, float] = (0.07, 0.20)
@@ -177,6 +177,18 @@ class Study:
     # [confirm]: the design run through the co-simulation, every basic motion, and its actuator
     confirm: dict[str, Any] | None = None
     recorded: Recorded | None = None  # [motion] scene or table: one motion, the time series
+    top_joint_limit: float | None = None     # [rad] the top (universal) joint's own limit
+    bottom_joint_limit: float | None = None  # [rad] the bottom (spherical) joint's own limit
+
+    @property
+    def joint_limits(self) -> tuple[float, float]:
+        """(top, bottom) joint-angle limits [rad]."""
+        return (self.top_joint_limit or self.joint_angle_limit, self.bottom_joint_limit or self.joint_angle_limit)
+
+    def joints_within(self, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+        """Where the top and bottom joint angles are within their limits (Eq 21)."""
+        top_limit, bottom_limit = self.joint_limits
+        return (top < top_limit) & (bottom < bottom_limit)
 
     @property
     def family(self) -> Family:
@@ -315,7 +327,7 @@ class DesignMap:
         s = stubs(self.study)
         return {"max stroke": s + self.length_max < actuator.running_length_max,
                 "min stroke": s + self.length_min > actuator.running_length_min,
-                "joint angle": np.maximum(self.top_angle, self.bottom_angle) < self.study.joint_angle_limit}
+                "joint angle": self.study.joints_within(self.top_angle, self.bottom_angle)}
 
     def dynamic_admissible(self, actuator: Actuator) -> dict[str, np.ndarray]:
         """Per limit, [rows, columns, motions] booleans: the paper's peak force (payload only) within
@@ -410,6 +422,7 @@ SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise", "
           "optimise": {"actuator", "seed", "iterations"},
           "workspace": {"point", "actuator", "spacing", "angle_step_deg"},
           "study": {"name", "parameter_set", "payload_mass", "payload_inertia", "joint_angle_limit_deg",
+                    "top_joint_angle_limit_deg", "bottom_joint_angle_limit_deg",
                     "force_margins", "samples", "fixed"},
           "motion": {*[d for d in DOFS if d not in ROTATIONS], *[f"{d}_deg" for d in ROTATIONS], "velocity",
                      "acceleration", "angular_velocity_deg", "angular_acceleration_deg", "scene", "table", "samples"},
@@ -577,7 +590,11 @@ def load_study(path: str | Path) -> Study:
                  number("study", study, "payload_mass", float(payload_mass)),
                  tuple(float(v) for v in inertia), (float(margins[0]), float(margins[1])), samples,
                  fixed={k: float(v) for k, v in fixed.items()}, workspace=space, optimise=best,
-                 confirm=confirmed, recorded=recorded)
+                 confirm=confirmed, recorded=recorded,
+                 top_joint_limit=math.radians(number("study", study, "top_joint_angle_limit_deg"))
+                 if "top_joint_angle_limit_deg" in study else None,
+                 bottom_joint_limit=math.radians(number("study", study, "bottom_joint_angle_limit_deg"))
+                 if "bottom_joint_angle_limit_deg" in study else None)
 
 
 def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> Recorded:
@@ -706,7 +723,10 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
         [plt.Line2D([], [], color="k", linestyle=LINES[c], label=c) for c in ("max stroke", "min stroke", "joint angle")]
     ax.legend(handles=handles, fontsize=8, ncol=3, loc="upper right")
     ax.set_title(f"{actuator.name}: running length {actuator.running_length_min:g}-{actuator.running_length_max:g} m, "
-                 f"joint angle < {math.degrees(design.study.joint_angle_limit):g} deg (admissible: shaded)", fontsize=9)
+                 "joint angle < " + ("{:g}".format(*map(math.degrees, design.study.joint_limits))
+                                     if len(set(design.study.joint_limits)) == 1 else
+                                     "{:g} (top), {:g} (bottom)".format(*map(math.degrees, design.study.joint_limits)))
+                 + " deg (admissible: shaded)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -842,7 +862,7 @@ def map_rows(design: DesignMap) -> list:
         out.append(Row(f"admissible designs, {actuator.name}", "", f"{kinematic.sum()} / {both.sum()} of {design.points}",
                        "points", f"kinematic / with forces and speed; {extent}; each limit fails at: " + ", ".join(
                            f"{name} {share:.0%}" for name, share in failing.items())))
-    joints = np.maximum(design.top_angle, design.bottom_angle).max(axis=2) < study.joint_angle_limit
+    joints = study.joints_within(design.top_angle, design.bottom_angle).all(axis=2)
     needed = np.where(joints, design.length_max.max(axis=2) - design.length_min.min(axis=2), np.inf)
     if np.isfinite(needed).any():
         r, c = np.unravel_index(np.argmin(needed), needed.shape)
@@ -967,13 +987,15 @@ class Workspace:
         return out
 
 
-def reachable(core: Core, poses: np.ndarray, actuator: Actuator, joint_limit: float, stub_length: float) -> np.ndarray:
+def reachable(core: Core, poses: np.ndarray, actuator: Actuator, joint_limit: float | tuple[float, float],
+              stub_length: float) -> np.ndarray:
     """Which poses keep every leg's running length within the actuator's and both joint angles
-    within the limit (Eq 21 at one pose)."""
+    within the limit (Eq 21 at one pose); joint_limit: both joints', or (top, bottom)."""
+    top_limit, bottom_limit = joint_limit if isinstance(joint_limit, tuple) else (joint_limit, joint_limit)
     k = core.pose_kinematics(poses)
     running = k["length"] + stub_length
     return (np.all(running <= actuator.running_length_max, axis=1) & np.all(running >= actuator.running_length_min, axis=1)
-            & np.all(np.maximum(k["upper_angle"], k["lower_angle"]) <= joint_limit, axis=1))
+            & np.all(k["upper_angle"] <= top_limit, axis=1) & np.all(k["lower_angle"] <= bottom_limit, axis=1))
 
 
 def singular_distance(core: Core, reach: float = 1.0, angular_reach: float = math.pi, samples: int = 2001) -> dict:
@@ -1028,10 +1050,10 @@ def workspace(study: Study, point: dict[str, float], actuator: Actuator, spacing
         return poses
 
     poses = cube(0, extent, spacing)
-    ok = reachable(core, poses, actuator, study.joint_angle_limit, s)
+    ok = reachable(core, poses, actuator, study.joint_limits, s)
     positions = poses[ok, :3] - neutral[:3]
     turned = cube(3, angular_extent, angle_step)
-    orientations = turned[reachable(core, turned, actuator, study.joint_angle_limit, s), 3:] - neutral[3:]
+    orientations = turned[reachable(core, turned, actuator, study.joint_limits, s), 3:] - neutral[3:]
     sample = poses[ok][:: max(1, ok.sum() // 5000)]
     singular = np.linalg.svd(core.pose_kinematics(sample, jacobian=True)["jacobian"], compute_uv=False) \
         if len(sample) else np.full((1, 6), np.nan)
@@ -1083,7 +1105,8 @@ def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[s
     s = stubs(study)
     return {"max stroke": float((actuator.running_length_max - s - design.length_max.max()) / actuator.stroke),
             "min stroke": float((design.length_min.min() + s - actuator.running_length_min) / actuator.stroke),
-            "joint angle": float(1 - max(design.top_angle.max(), design.bottom_angle.max()) / study.joint_angle_limit),
+            "joint angle": float(1 - max(design.top_angle.max() / study.joint_limits[0],
+                                         design.bottom_angle.max() / study.joint_limits[1])),
             "force": float(1 - design.force_paper.max() / study.allowed_force(actuator))}
 
 

@@ -179,3 +179,23 @@ def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
     confirmed = dataclasses.replace(meng, confirm={"point": point, "actuator": meng.actuators[1].name, "drive": drive})
     (row,) = confirmation_rows(confirmed, [run])
     assert f"current peak {run['peak_current']:.1f} A" in row.note
+
+
+def test_each_joint_may_have_its_own_limit(meng, tmp_path):
+    """top_joint_angle_limit_deg / bottom_joint_angle_limit_deg: each joint's angle against its own
+    limit; the same value for both is the shared limit's map."""
+    text = MENG.read_text()
+    for top, bottom in ((20, 20), (15, 30)):
+        study = tmp_path / f"limits_{top}.toml"
+        study.write_text(text.replace("joint_angle_limit_deg = 20.0",
+                                      f"top_joint_angle_limit_deg = {top}\nbottom_joint_angle_limit_deg = {bottom}"))
+        loaded = grid(load_study(study), [0.7, 1.0, 1.3], [1.6, 1.9, 2.2])
+        design = design_map(loaded, dynamic=False)
+        got = design.kinematic_admissible(meng.actuators[1])["joint angle"]
+        expected = (design.top_angle < math.radians(top)) & (design.bottom_angle < math.radians(bottom))
+        assert np.array_equal(got, expected)
+        if top == bottom:
+            shared = design_map(grid(meng, [0.7, 1.0, 1.3], [1.6, 1.9, 2.2]), dynamic=False)
+            assert np.array_equal(got, shared.kinematic_admissible(meng.actuators[1])["joint angle"])
+        else:
+            assert not np.array_equal(got, np.maximum(design.top_angle, design.bottom_angle) < math.radians(20))
