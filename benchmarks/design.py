@@ -7,7 +7,8 @@ one and of two worker processes. Reported: grid points per second, what one poin
 its arithmetic (poses through the dynamics core), and the parallel efficiency T(1 worker) /
 (2 T(2 workers)), with the cluster's start-up apart; and the co-simulated confirmations of the
 study's [confirm] design (every basic motion through the co-simulation) per minute, in one process
-and on two Dask workers.
+and on two Dask workers; then studies/meng_eq35.toml (a scene's motion as the specification) and
+its confirmation through the PMSM drives.
 
     python benchmarks/design.py
 """
@@ -69,6 +70,16 @@ def main() -> None:
               f"{60 * confirmations[0][0] / confirmations[0][1]:.0f} per minute in one process, "
               f"{60 * confirmations[2][0] / confirmations[2][1]:.0f} per minute on 2 Dask workers (the cluster's "
               "start-up included: with six short runs it outweighs the second core)."]
+    meng = load_study(ROOT / "studies" / "meng_eq35.toml")
+    scene_map = design_map(meng)
+    start = time.perf_counter()
+    (driven,) = confirm(meng, meng.confirm["point"], next(a for a in meng.actuators if a.name == meng.confirm["actuator"]),
+                        drive=meng.confirm["drive"])
+    driven_wall = time.perf_counter() - start
+    lines += ["", f"A scene's motion as the specification ({meng.path.name}: {scene_map.points} designs of Meng's layout, "
+              f"Eq 35 at {len(meng.recorded.times)} poses each, kinematic and dynamic): {scene_map.seconds:.1f} s in one "
+              f"process ({scene_map.points / scene_map.seconds:.0f} designs per second). Its confirmation through six "
+              f"PMSM drives ({driven['steps']} macro steps): {driven_wall:.2f} s."]
     print("\n".join(lines))
     publish("design", "python benchmarks/design.py", lines)
 
