@@ -52,6 +52,16 @@ PAPER_NUMERICS = {"scene.step": 1e-3, "coupling.startup_time": 0.1, "coupling.st
                   "coupling.interface_jacobian": False, "coupling.edge_time": 0.0}
 
 
+# The interface-Jacobian coupling at a 2 ms macro step: each drive's d effort / d flow applied in
+# the mechanics, the start-up and the 20 ms after each edge of a load pulse at a sixteenth of the
+# step, the drives' RK4 at 0.2 ms and the mechanics' at the macro step (scene overrides; with
+# paper_scene, over PAPER_NUMERICS).
+INTERFACE_JACOBIAN_2MS = {
+    "scene.step": 2e-3, "coupling.interface_jacobian": True, "coupling.startup_time": 0.1,
+    "coupling.startup_step": 1.25e-4, "coupling.edge_time": 0.02, 'drive.parameters."solver.step"': 2e-4,
+    'mechanics.parameters."solver.step"': 2e-3}
+
+
 def paper_scene(name: str = "meng_eq35", overrides: dict | None = None):
     """A shipped scene at PAPER_NUMERICS (and `overrides` over them); a solver step the scene file
     sets goes back to its FMU's own unless the overrides set it. Everything goes through

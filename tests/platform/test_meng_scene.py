@@ -9,7 +9,7 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.runner import run_scene
-from conftest import paper_scene
+from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import load_scene
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -89,9 +89,9 @@ def test_the_readmes_main_job_numbers_are_what_the_main_job_prints():
     assert [float(q) for q in quoted.groups()] == printed, (quoted.groups(), printed)
 
 
-def test_the_fast_scene_keeps_the_pose_within_1e_5_and_the_torques_within_1_percent():
-    """scenes/meng_eq35_fast.toml (the interface-Jacobian coupling at 2 ms, the start and the
-    impact's edges at a sixteenth) over the first 3 s, start-up shock and impact included, against
+def test_the_interface_jacobian_at_2ms_keeps_the_pose_within_1e_5_and_the_torques_within_1_percent():
+    """The Meng scene with the interface-Jacobian coupling at 2 ms (tests/numerics.py: the start and
+    the impact's edges at a sixteenth) over the first 3 s, start-up shock and impact included, against
     the scene at 62.5 us throughout: the pose within 1e-5 m/rad (measured 1.8e-6) and the drive
     torques, at every one of its steps, within 1 % of their peak (measured 0.70 %, in the start-up
     shock's first millisecond, where the reference itself is converged to about 0.3 %; after the
@@ -101,7 +101,7 @@ def test_the_fast_scene_keeps_the_pose_within_1e_5_and_the_torques_within_1_perc
     torques, poses = [f"torque[{i}]" for i in range(1, 7)], [f"pose.{a}" for a in POSE]
     reference, _ = run_scene(paper_scene("meng_eq35", {
         "scene.duration": 3.0, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
-    fast, report = run_scene(load_scene(ROOT / "scenes" / "meng_eq35_fast.toml", {"scene.duration": 3.0}), plots=False)
+    fast, report = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0, **INTERFACE_JACOBIAN_2MS}), plots=False)
     _, shipped = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0}), plots=False)
     peak = max(np.abs(reference[n]).max() for n in torques)
     assert difference(fast, reference, poses) < 1e-5
@@ -117,16 +117,16 @@ def test_with_the_interface_jacobian_the_recorded_torque_is_the_one_the_legs_fee
     slopes the applied torque is the drive's own, to round-off (Gauss-Seidel hands the mechanics the
     drive's new sample)."""
     from cosim.platform.ports import per_leg
-    scene = load_scene(ROOT / "scenes" / "meng_eq35_fast.toml", {
-        "scene.duration": 0.3, "outputs.mechanics": ["power.drive", *(f"leg[{i}].speed" for i in range(1, 7))]})
+    scene = paper_scene("meng_eq35", {
+        **INTERFACE_JACOBIAN_2MS, "scene.duration": 0.3, "outputs.mechanics": ["power.drive", *(f"leg[{i}].speed" for i in range(1, 7))]})
     result, _ = run_scene(scene, plots=False, progress=False)
     applied = np.column_stack([result[c] for c in per_leg("torque_applied")])
     speed = np.column_stack([result[f"leg[{i}].speed"] for i in range(1, 7)])
     np.testing.assert_allclose(result["power.drive"], np.sum(applied * speed, axis=1), rtol=1e-12, atol=1e-9)
     drive = np.column_stack([result[c] for c in per_leg("torque")])
     assert np.max(np.abs(applied - drive)) > 1e-4  # the correction is there
-    plain = load_scene(ROOT / "scenes" / "meng_eq35_fast.toml", {
-        "scene.duration": 0.3, "scene.step": 1e-3, "coupling.interface_jacobian": False,
+    plain = paper_scene("meng_eq35", {
+        **INTERFACE_JACOBIAN_2MS, "scene.duration": 0.3, "scene.step": 1e-3, "coupling.interface_jacobian": False,
         "outputs.mechanics": [f"leg[{i}].torque_applied" for i in range(1, 7)]})
     plain_result, _ = run_scene(plain, plots=False, progress=False)
     for i in range(1, 7):  # the drive's new sample, interpolated to its own time: equal to round-off

@@ -8,7 +8,7 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.runner import run_scene, scene_record, scene_settings, scene_structure
-from conftest import paper_scene
+from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.system import POSE, run
 
@@ -217,7 +217,7 @@ def test_windows_at_the_finer_step_are_checked_and_travel_with_the_settings():
 
 
 def test_a_return_from_the_finer_step_leaves_no_kick():
-    """scenes/meng_eq35_fast.toml with a window at the finer step and no load change in it (a pulse of
+    """The Meng scene with the interface-Jacobian coupling at 2 ms (tests/numerics.py) and a window at the finer step and no load change in it (a pulse of
     0 N at 1.5-1.52 s): after the window, back at 2 ms, the drive torques stay within 0.05 N m of
     the same run without the window (measured 0.007 N m). With the trajectory's rate alone sent (its
     curvature held back under order-1 extrapolation), the references the drives follow carried an
@@ -225,8 +225,9 @@ def test_a_return_from_the_finer_step_leaves_no_kick():
     0.4 N m."""
     quiet = {"scene.duration": 1.7, "load.pulses": [{"component": "force.x", "value": 0.0, "start": 1.5, "end": 1.52,
                                                      "frame": "base"}]}
-    runs = {edge_time: run_scene(load_scene(ROOT / "scenes" / "meng_eq35_fast.toml",
-                                            {**quiet, "coupling.edge_time": edge_time}), plots=False)[0]
+    runs = {edge_time: run_scene(paper_scene("meng_eq35",
+                                            {**INTERFACE_JACOBIAN_2MS, **quiet, "coupling.edge_time": edge_time}),
+                                 plots=False)[0]
             for edge_time in (0.0, 0.02)}
     plain, window = runs[0.0], runs[0.02]
     after = window["time"] > 1.54

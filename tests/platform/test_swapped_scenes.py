@@ -89,8 +89,7 @@ def test_sumnu_parameters_stand_alone_without_mengs_motor_systems():
 
 
 def test_the_fast_numerics_on_linear_motors_need_a_longer_finer_start():
-    """The fast numerics of scenes/meng_eq35_fast.toml (the interface-Jacobian coupling at 2 ms, the
-    start and the impact's edges at the finer step) on Meng's platform with linear motors, through the
+    """The interface-Jacobian coupling at 2 ms (the start and the impact's edges at the finer step) on Meng's platform with linear motors, through the
     first 3 s, impact included, against the scene at 62.5 us: with the PMSM scene's 0.1 s finer start
     the pose and the forces are off by more than twice what the scene's 1 ms gives (measured 1.1e-5
     and 6.5 % of the force peak against 3.3e-6 and 1.9 %), both right after the finer start ends, where
