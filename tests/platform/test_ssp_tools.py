@@ -111,8 +111,12 @@ def fmpy_matches(meng_ssp) -> None:
         assert np.array_equal(theirs[name], reference[name][1:]), name
 
 
-def libcosim_matches(meng_ssp, folder, torque_rel: float = 1e-10) -> None:
-    """libcosim runs the SSP like our master: the pose to 1e-12, the torques to `torque_rel`."""
+def libcosim_matches(meng_ssp, folder, torque_rel: float = 1e-9) -> None:
+    """libcosim runs the SSP like our master: the pose to 1e-12, the torques to `torque_rel`.
+    libcosim's clock counts whole nanoseconds, so the times it hands the FMUs differ from ours in
+    their last bits; the drives' loops (about 600 N m per rad of angle error) make that a torque
+    difference of about 1e-10 of the torque (1.3e-10 measured at 0.3 s): 1e-9 is round-off with a
+    tenfold margin for the scene's numerics."""
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
