@@ -10,8 +10,18 @@ from typing import Sequence
 
 import numpy as np
 
+from .ports import LEGS, per_leg
+
 START_UP = 0.2  # [s] the drives' start-up shock and its settling
 AFTER = 0.2     # [s] judged with each load pulse after its end
+
+# The tolerances every shipped scene holds at its defaults (issue 24; tests/platform/
+# test_scene_accuracy.py), against the same scene at a 64th of its step:
+POSE_TOLERANCE = 1e-5    # [m, rad] the pose, after its first POSE_FROM
+POSE_FROM = 0.01         # [s]
+WINDOW_TOLERANCE = 0.02  # the drive efforts through the start-up and each load pulse, of their own change there
+STEADY_TOLERANCE = 1e-3  # in steady tracking: N m for a rotary drive, a fraction of the legs' largest static
+                         # force for a linear one (steady_bound)
 
 
 @dataclass(frozen=True)
@@ -42,6 +52,17 @@ def windows(duration: float, pulses: Sequence = ()) -> list[Window]:
     return out
 
 
+def efforts(run: np.ndarray, effort: str) -> np.ndarray:
+    """A run's time and per-leg drive efforts as the legs feel them: `<effort>_applied[i]` where the
+    interface Jacobian corrects them, `<effort>[i]` otherwise, under the names `<effort>[i]`."""
+    names = [f"{effort}_applied[{i}]" if f"{effort}_applied[{i}]" in run.dtype.names else f"{effort}[{i}]" for i in LEGS]
+    out = np.zeros(len(run), dtype=[("time", float), *[(n, float) for n in per_leg(effort)]])
+    out["time"] = run["time"]
+    for target, source in zip(per_leg(effort), names):
+        out[target] = run[source]
+    return out
+
+
 def difference(result: np.ndarray, reference: np.ndarray, names: Sequence[str], with_time: bool = False):
     """Largest |result - reference| over `names` at the result's own times, the (finer) reference
     interpolated there (and when, with_time); inf when the result stops before the reference does."""
@@ -62,6 +83,21 @@ class WindowError:
     @property
     def relative(self) -> float:
         return self.error / self.scale if self.scale > 0 else float("inf")
+
+
+def steady_bound(drive: str, static_forces: Sequence[float]) -> float:
+    """The steady-tracking tolerance of a drive's effort in its unit: STEADY_TOLERANCE N m for a
+    rotary drive, STEADY_TOLERANCE of the legs' largest static force [N] for a linear one."""
+    return STEADY_TOLERANCE if drive == "pmsm" else STEADY_TOLERANCE * max(abs(f) for f in static_forces)
+
+
+def tolerance_ratio(errors: Sequence[WindowError], steady: float) -> tuple[float, str]:
+    """The worst window's error as a fraction of its tolerance (at most 1: within the tolerances)
+    and its name: the start-up and each load pulse against WINDOW_TOLERANCE of their own change,
+    the steady tracking against `steady` (steady_bound) in the effort's unit."""
+    ratios = [(e.error / steady if e.window == "steady tracking" else e.relative / WINDOW_TOLERANCE, e.window)
+              for e in errors]
+    return max(ratios, default=(float("nan"), ""))
 
 
 def window_errors(result: np.ndarray, reference: np.ndarray, names: Sequence[str],

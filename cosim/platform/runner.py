@@ -240,7 +240,7 @@ def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, flo
     difference [m, rad] and the drive efforts' (as the legs feel them), absolute and against their
     own change there."""
     from .accuracy import window_errors, windows
-    from .sweep import efforts
+    from .accuracy import efforts
     twin = load_scene(scene.path, {**scene.overrides, "scene.duration": scene.duration, "scene.step": scene.step / 16,
                                    "coupling.startup_time": 0.0, "coupling.edge_time": 0.0,
                                    "coupling.step_control": "fixed"})

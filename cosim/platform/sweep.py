@@ -36,7 +36,7 @@ import numpy as np
 
 from ..engine.sweep import SYSTEM, Sweep, Target, statistics
 from ..engine.sweep import load_sweep as engine_load_sweep
-from .accuracy import difference
+from .accuracy import difference, efforts
 from .ports import DRIVES, LEGS, POSE, per_leg
 from .scene import SceneError, load_scene, shipped
 
@@ -53,18 +53,11 @@ SCENE_REPORTS = {  # report name -> what it adds to a row
     "window_error": "the drive efforts' largest difference to the reference in each window (start-up, each load "
                     "pulse and the 0.2 s after it, steady tracking) relative to their own change there, the worst "
                     "window's (advise); window_error_at: which window",
+    "tolerance_ratio": "the efforts' worst window against the shipped scenes' tolerances (2 % of their own change "
+                       "through the start-up and each load pulse, 1e-3 N m or 1e-3 of the static leg force in steady "
+                       "tracking: cosim.platform.accuracy), at most 1 within them (trade); tolerance_ratio_at: which "
+                       "window",
 }
-
-
-def efforts(run: np.ndarray, effort: str) -> np.ndarray:
-    """A run's time and per-leg drive efforts as the legs feel them: `<effort>_applied[i]` where the
-    interface Jacobian corrects them, `<effort>[i]` otherwise, under the names `<effort>[i]`."""
-    names = [f"{effort}_applied[{i}]" if f"{effort}_applied[{i}]" in run.dtype.names else f"{effort}[{i}]" for i in LEGS]
-    out = np.zeros(len(run), dtype=[("time", float), *[(n, float) for n in per_leg(effort)]])
-    out["time"] = run["time"]
-    for target, source in zip(per_leg(effort), names):
-        out[target] = run[source]
-    return out
 
 
 @dataclass(frozen=True)
@@ -86,6 +79,7 @@ class ScenePoint:
                       "peak_effort": per_leg("peak_effort"),
                       "effort_error": ["effort_error", "effort_error_time"],
                       "window_error": ["window_error", "window_error_at"],
+                      "tolerance_ratio": ["tolerance_ratio", "tolerance_ratio_at"],
                       "steps": ["steps", "rejected"]}.get(report, [report])
         return names + [f"{s}.{c}" for c, stats in self.outputs for s in stats]
 
@@ -159,15 +153,21 @@ class ScenePoint:
                 peak = max(float(np.max(np.abs(theirs[n]))) for n in names)
                 error, when = difference(mine, theirs, names, with_time=True)
                 row.update(effort_error=error / peak, effort_error_time=when)
-            elif name == "window_error":
-                from .accuracy import window_errors, windows
+            elif name in ("window_error", "tolerance_ratio"):
+                from .accuracy import steady_bound, tolerance_ratio, window_errors, windows
                 if not len(result) or result["time"][-1] < self.reference["time"][-1] - 1e-9:
-                    row.update(window_error=float("inf"), window_error_at="")
-                else:
-                    found = window_errors(efforts(result, effort), efforts(self.reference, effort), per_leg(effort),
-                                          windows(float(self.reference["time"][-1]), scene.pulses))
+                    row.update({name: float("inf"), f"{name}_at": ""})
+                    continue
+                found = window_errors(efforts(result, effort), efforts(self.reference, effort), per_leg(effort),
+                                      windows(float(self.reference["time"][-1]), scene.pulses))
+                if name == "window_error":
                     worst = max(found, key=lambda e: e.relative)
                     row.update(window_error=worst.relative, window_error_at=worst.window)
+                else:
+                    from .runner import scene_values
+                    from .tuning import leg_plants
+                    bound = steady_bound(scene.drive, [p.static_force for p in leg_plants(scene_values(scene)[0])])
+                    row.update(zip(("tolerance_ratio", "tolerance_ratio_at"), tolerance_ratio(found, bound)))
         row.update(statistics(result, dict(self.outputs)))
         return {**row, "status": status, "message": message}
 
@@ -186,7 +186,7 @@ SCENE = Target(SCENE_REPORTS, ("tracking_error", "energy_residual", "steps"), _s
                       **{f"tracking_error.{a}": "m" if a in "xyz" else "rad" for a in POSE}, "steps": "-",
                       "pose_error": "m, rad", "effort_error": "of the peak", "peak_effort": "N m or N",
                       "stepping_wall": "s"},
-               internal=("pose_error", "effort_error", "window_error"), errors=(SceneError, ValueError),
+               internal=("pose_error", "effort_error", "window_error", "tolerance_ratio"), errors=(SceneError, ValueError),
                named=shipped)
 TARGETS = {"scene": SCENE, "system": SYSTEM}
 
