@@ -26,8 +26,9 @@ from .structure import SystemStructure
 class Outcome:
     """One run of a system: the results (named columns) up to where it got, per macro step the
     largest energy residual of a bond and the step taken, the rejected steps, the wall time of the
-    stepping and the part of it inside the FMUs, every FMU message, per bond the largest residual
-    of a step, the observers that watched, and the failure (None for a run that reached its end)."""
+    stepping and the part of it inside the FMUs (in all and per instance), every FMU message, per
+    bond the largest residual of a step, the observers that watched, and the failure (None for a
+    run that reached its end)."""
     name: str
     result: np.ndarray
     energy_residuals: np.ndarray
@@ -40,6 +41,7 @@ class Outcome:
     bond_residuals: dict[str, float] = field(default_factory=dict)  # [J]
     observers: list[Observer] = field(default_factory=list)
     failure: RunFailed | None = None
+    fmi_seconds_by_instance: dict[str, float] = field(default_factory=dict)  # of the stepping, per instance
 
     @property
     def warnings(self) -> list[str]:
@@ -68,6 +70,7 @@ def execute(structure: SystemStructure, algorithm: Algorithm, control: StepContr
     impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path."""
     with Execution(structure, algorithm, control, record, names, clock=clock) as execution:
         setup_fmi = execution.fmi_seconds  # instantiation and parameters: not part of the stepping
+        setup_by_instance = {name: instance.fmi_seconds for name, instance in execution.instances.items()}
         start = time.perf_counter()
         failure = None
         try:
@@ -77,7 +80,9 @@ def execute(structure: SystemStructure, algorithm: Algorithm, control: StepContr
         wall = time.perf_counter() - start
         outcome = Outcome(structure.name, result, execution.energy_residuals, execution.steps, execution.rejected,
                           wall, execution.fmi_seconds - setup_fmi, control_name(control), execution.messages(),
-                          dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers))
+                          dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers),
+                          fmi_seconds_by_instance={name: instance.fmi_seconds - setup_by_instance[name]
+                                                   for name, instance in execution.instances.items()})
     if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
         from .advice import advice_text
         failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
@@ -105,6 +110,7 @@ class Report:
     log: Path | None = None  # where every FMU message was written
     messages: list[tuple[str, LogMessage]] = field(default_factory=list, repr=False)  # everything logged
     remarks: list[str] = field(default_factory=list)  # what the run chose that its input did not say
+    fmi_seconds_by_instance: dict[str, float] = field(default_factory=dict, repr=False)  # of the stepping
 
     @classmethod
     def of(cls, outcome: Outcome, simulated: float | None = None, **extra) -> "Report":
@@ -112,7 +118,8 @@ class Report:
         return cls(outcome.name, len(outcome.steps), outcome.simulated if simulated is None else simulated,
                    outcome.wall, outcome.fmi_seconds, float(np.max(outcome.energy_residuals, initial=0.0)),
                    outcome.warnings, str(outcome.failure) if outcome.failure else None, outcome.rejected,
-                   outcome.control, message_kinds(outcome.messages), messages=outcome.messages, **extra)
+                   outcome.control, message_kinds(outcome.messages), messages=outcome.messages,
+                   fmi_seconds_by_instance=dict(outcome.fmi_seconds_by_instance), **extra)
 
     @property
     def real_time_factor(self) -> float:

@@ -334,6 +334,8 @@ void model_compute_outputs(FmuInstance *fmu) {
         double q[3];
         pose_at(fmu, d, t, q);
         *fmu_real(fmu, DOFS[d].output) = q[0];
+        fmu->s.internal.derivatives[d][0] = q[1];
+        fmu->s.internal.derivatives[d][1] = q[2];
     }
     for (int c = 0; c < 6; c++) {
         *fmu_real(fmu, WRENCH[c].output) = wrench_at(fmu, c, t, 1);
@@ -344,12 +346,8 @@ void model_compute_outputs(FmuInstance *fmu) {
 }
 
 double model_output_derivative(FmuInstance *fmu, int vr, int order) {
-    for (int d = 0; d < N_DOF; d++) {
-        if (DOFS[d].output == vr) {
-            double q[3];
-            pose_at(fmu, d, fmu->s.time, q);
-            return q[order];
-        }
-    }
+    /* the layer has refreshed the outputs (model_compute_outputs) at the current time */
+    for (int d = 0; d < N_DOF; d++)
+        if (DOFS[d].output == vr) return fmu->s.internal.derivatives[d][order - 1];
     return 0.0; /* the wrench is piecewise constant */
 }

@@ -18,7 +18,10 @@
 #define TRAJECTORY_NEUTRAL_HEIGHT 1.689527733348906
 
 typedef struct {
-    int unused; /* the signals are functions of time alone; the table lives in the model data */
+    /* The signals are functions of time alone (the table lives in the model data); this holds each
+     * pose coordinate's rate and curvature at the outputs' time, computed with its value, for
+     * fmi2GetRealOutputDerivatives. */
+    double derivatives[6][2];
 } ModelInternal;
 
 /* The signal of one pose coordinate: offset + 3 sines + 2 steps + 2 ramps (+ its table column). */
