@@ -7,7 +7,7 @@ one and of two worker processes. Reported: grid points per second, what one poin
 its arithmetic (poses through the dynamics core), and the parallel efficiency T(1 worker) /
 (2 T(2 workers)), with the cluster's start-up apart; and the co-simulated confirmations of the
 study's [confirm] design (every basic motion through the co-simulation) per minute, in one process
-and on two Dask workers; then studies/meng_eq35.toml (a scene's motion as the specification) and
+and on two Dask workers; then studies/meng_eq35_platform.toml (a scene's motion as the specification) and
 its confirmation through the PMSM drives.
 
     python benchmarks/design.py
@@ -70,7 +70,7 @@ def main() -> None:
               f"{60 * confirmations[0][0] / confirmations[0][1]:.0f} per minute in one process, "
               f"{60 * confirmations[2][0] / confirmations[2][1]:.0f} per minute on 2 Dask workers (the cluster's "
               "start-up included: with six short runs it outweighs the second core)."]
-    meng = load_study(ROOT / "studies" / "meng_eq35.toml")
+    meng = load_study(ROOT / "studies" / "meng_eq35_platform.toml")
     scene_map = design_map(meng)
     start = time.perf_counter()
     (driven,) = confirm(meng, meng.confirm["point"], next(a for a in meng.actuators if a.name == meng.confirm["actuator"]),

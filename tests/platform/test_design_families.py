@@ -21,7 +21,7 @@ from cosim.platform.platform_core import Core
 from cosim.platform.scene import load_scene
 from cosim.platform.signals import sine_motion
 
-MENG = ROOT / "studies" / "meng_eq35.toml"
+MENG = ROOT / "studies" / "meng_eq35_platform.toml"
 
 
 @pytest.fixture(scope="module")

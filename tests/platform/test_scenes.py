@@ -316,3 +316,11 @@ def test_a_shipped_scene_or_sweep_is_copied_out_to_edit_and_runs_from_there(tmp_
     assert main(["copy", "meng_eq53"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "exists; copy elsewhere with --to" in err[0] and "did you mean 'meng_eq35'?" in err[1]
+
+
+def test_every_shipped_name_is_one_file():
+    """Scenes, sweep files and design studies are copied and run by name (`cosim copy NAME` takes the
+    first folder that holds it): no name may stand for two of them."""
+    from cosim.platform.scene import shipped_scenes
+    names = [n for folder in ("scenes", "sweeps", "studies") for n in shipped_scenes(folder)]
+    assert len(names) == len(set(names)), sorted(n for n in names if names.count(n) > 1)
