@@ -55,9 +55,9 @@ class Actuator:
     name: str
     stroke: float              # [m]
     running_length_min: float  # L_min [m]: the leg system, stubs included, at the shortest stroke
-    continuous_force: float    # [N], 100 % duty cycle
+    continuous_force: float    # [N], 100 % duty cycle (a study may give the motor's torque: times K_FT)
     peak_force: float | None = None  # [N], what it gives for a moment (checked against the full model)
-    speed: float | None = None       # [m/s], the largest extension rate
+    speed: float | None = None       # [m/s], the largest extension rate (or the motor's speed / i_theta)
 
     @property
     def running_length_max(self) -> float:
@@ -426,7 +426,8 @@ SCHEMA = {"": {"study", "axes", "motion", "actuator", "workspace", "optimise", "
                     "force_margins", "samples", "fixed"},
           "motion": {*[d for d in DOFS if d not in ROTATIONS], *[f"{d}_deg" for d in ROTATIONS], "velocity",
                      "acceleration", "angular_velocity_deg", "angular_acceleration_deg", "scene", "table", "samples"},
-          "actuator": {"name", "stroke", "running_length_min", "continuous_force", "peak_force", "speed"}}
+          "actuator": {"name", "stroke", "running_length_min", "continuous_force", "peak_force", "speed",
+                       "continuous_torque", "peak_torque", "motor_speed"}}
 RECORDED = {"scene", "table", "samples"}  # [motion] keys of a motion given as a time series
 
 
@@ -527,14 +528,28 @@ def load_study(path: str | Path) -> Study:
     raw = data.get("actuator", [])
     if not isinstance(raw, list) or not raw:
         raise fail("", "actuator", "must be one or more [[actuator]] tables")
+    transmission = family.mechanics(config, geometry)
+    force_torque, screw_ratio = transmission["transmission.force_torque"], transmission["transmission.screw_ratio"]
     for entry in raw:
         name = entry.get("name")
         if not isinstance(name, str) or not name:
             raise fail("actuator", "name", "must be a name")
+        limits = {}
+        for force, torque, factor, what in (("continuous_force", "continuous_torque", force_torque, "N m"),
+                                            ("peak_force", "peak_torque", force_torque, "N m"),
+                                            ("speed", "motor_speed", 1.0 / screw_ratio, "rad/s")):
+            if force in entry and torque in entry:
+                raise fail("actuator", torque, f"and '{force}' both given: one of them")
+            if torque in entry:  # the motor's side, through the family's screw (K_FT, i_theta)
+                if force_torque == 1.0 and screw_ratio == 1.0:
+                    raise fail("actuator", torque, f"needs a screw: {parameter_set}'s legs are driven by force "
+                               f"(give '{force}')")
+                limits[force] = number("actuator", entry, torque) * factor
+            elif force in entry or force == "continuous_force":
+                limits[force] = number("actuator", entry, force)
         actuators.append(Actuator(name, number("actuator", entry, "stroke"),
-                                  number("actuator", entry, "running_length_min"),
-                                  number("actuator", entry, "continuous_force"),
-                                  *(number("actuator", entry, k) if k in entry else None for k in ("peak_force", "speed"))))
+                                  number("actuator", entry, "running_length_min"), limits["continuous_force"],
+                                  limits.get("peak_force"), limits.get("speed")))
     payload_mass, payload_inertia = family.payload(config)
     inertia = study.get("payload_inertia", payload_inertia)
     if not (isinstance(inertia, list) and len(inertia) == 3 and all(isinstance(v, (int, float)) and v > 0

@@ -199,3 +199,37 @@ def test_each_joint_may_have_its_own_limit(meng, tmp_path):
             assert np.array_equal(got, shared.kinematic_admissible(meng.actuators[1])["joint angle"])
         else:
             assert not np.array_equal(got, np.maximum(design.top_angle, design.bottom_angle) < math.radians(20))
+
+
+def test_a_rotary_actuator_is_given_by_its_motor(meng, tmp_path, capsys):
+    """continuous_torque, peak_torque, motor_speed: the motor's side, through the family's screw
+    (params/meng2010.toml: K_FT = 250 N/(N m), i_theta = 277.78 rad/m): the same limits as the leg
+    forces and speed they stand for. A family without a screw (Sumnu's linear motors) refuses them,
+    and a limit given both ways is refused, each in one line naming the file and line."""
+    from cosim.__main__ import main
+    transmission = load("meng2010")["transmission"]
+    k_ft = transmission["force_torque_coefficient"]
+    leg = meng.actuators[0]
+    assert leg.continuous_force == pytest.approx(20.1 * k_ft, rel=1e-12)
+    assert leg.peak_force == pytest.approx(63.0 * k_ft, rel=1e-12)
+    screw = platform_values(meng, {})["transmission.screw_ratio"]
+    assert leg.speed == pytest.approx(600.0 / screw, rel=1e-12)
+    text = MENG.read_text()
+    forces = text.replace("continuous_torque = 20.1", f"continuous_force = {20.1 * k_ft!r}").replace(
+        "peak_torque = 63.0", f"peak_force = {63.0 * k_ft!r}").replace("motor_speed = 600.0", f"speed = {600.0 / screw!r}")
+    (tmp_path / "forces.toml").write_text(forces)
+    assert load_study(tmp_path / "forces.toml").actuators == meng.actuators
+    assert "continuous_torque = 20.1  " in text
+    for body, expected in ((text.replace("continuous_torque = 20.1  ", "continuous_force = 5025.0\ncontinuous_torque = 20.1  ", 1),
+                            "'actuator.continuous_torque' and 'continuous_force' both given"),
+                           (text.replace('parameter_set = "meng2010"', 'parameter_set = "sumnu2015"').replace(
+                               "[axes]\nlower_joint_radius = {from = 0.60, to = 1.50, step = 0.01}",
+                               "[axes]\nbase_scale = {from = 0.9, to = 1.1, step = 0.1}").replace(
+                               "middle_leg_length = {from = 1.50, to = 2.40, step = 0.01}",
+                               "home_height = {from = 0.9, to = 1.1, step = 0.1}"),
+                            "'actuator.continuous_torque' needs a screw: sumnu2015's legs are driven by force")):
+        path = tmp_path / "bad.toml"
+        path.write_text(body)
+        assert main(["design", str(path), "--out", str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and expected in err and "bad.toml:" in err, err
