@@ -420,3 +420,59 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
     if (t_reached) *t_reached = t;
     return result;
 }
+
+/* ---- phi-functions of a small matrix (exponential integrators) ---- */
+
+/* out = a b for n x n row-major matrices (out may not alias a or b). */
+static void mat_mul(int n, const double *a, const double *b, double *out) {
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double sum = 0.0;
+            for (int k = 0; k < n; k++) sum += a[i * n + k] * b[k * n + j];
+            out[i * n + j] = sum;
+        }
+}
+
+/* e^M of an n x n matrix (n <= 4 ODE_PHI_MAX): scaled by 2^-s to a 1-norm below 1/2, its Taylor
+ * series to round-off (30 terms bound the remainder by 2^-30 / 30!), squared s times. */
+static void mat_exp(int n, const double *m, double *out) {
+    enum { MAX = 4 * ODE_PHI_MAX };
+    double norm = 0.0, scaled[MAX * MAX], term[MAX * MAX], next[MAX * MAX];
+    for (int j = 0; j < n; j++) {
+        double column = 0.0;
+        for (int i = 0; i < n; i++) column += fabs(m[i * n + j]);
+        norm = fmax(norm, column);
+    }
+    const int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
+    const double scale = ldexp(1.0, -s);
+    for (int i = 0; i < n * n; i++) {
+        scaled[i] = m[i] * scale;
+        out[i] = term[i] = (i % (n + 1) == 0) ? 1.0 : 0.0; /* the identity */
+    }
+    for (int k = 1; k <= 30; k++) {
+        mat_mul(n, term, scaled, next);
+        for (int i = 0; i < n * n; i++) {
+            term[i] = next[i] / k;
+            out[i] += term[i];
+        }
+    }
+    for (int k = 0; k < s; k++) {
+        mat_mul(n, out, out, next);
+        memcpy(out, next, sizeof(double) * (size_t)(n * n));
+    }
+}
+
+void ode_phi_functions(int n, const double *a, double h, int count, double *phi) {
+    enum { MAX = 4 * ODE_PHI_MAX };
+    const int big = (count + 1) * n;
+    double m[MAX * MAX], e[MAX * MAX];
+    memset(m, 0, sizeof(double) * (size_t)(big * big));
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) m[i * big + j] = h * a[i * n + j];
+        for (int k = 1; k <= count; k++) m[((k - 1) * n + i) * big + k * n + i] = 1.0;
+    }
+    mat_exp(big, m, e);
+    for (int k = 0; k <= count; k++)
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) phi[(k * n + i) * n + j] = e[i * big + k * n + j];
+}

@@ -131,6 +131,11 @@ X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 1200.0, 0.0, FM
   "the switching inverter is bounded by its DC link instead") \
 X(Real, initial_current_q, "initial.current_q", parameter, fixed, "A", 0.0, -FMU_INF, FMU_INF, \
   "q current held at the start, with the integrators preset to hold it (e.g. against gravity)") \
+X(Boolean, solver_exponential, "solver.exponential", parameter, fixed, "", 0, 0, 1, \
+  "1: the current loops, the inverter and the winding, linear with constant coefficients between " \
+  "the limits, taken exactly (exponential integrator ETDRK4, Cox and Matthews 2002) and the rest " \
+  "explicitly, at steps of solver.step; RK4 at the inverter's time scale for a step in which a voltage " \
+  "limit holds. The averaged and ideal inverters (the switching one keeps solver.method)") \
 FMU_SOLVER_VARIABLES(X, 1, 1e-4, 1e-6, 1e-6) \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
