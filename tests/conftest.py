@@ -63,8 +63,9 @@ INTERFACE_JACOBIAN_2MS = {
 
 
 def paper_scene(name: str = "meng_eq35", overrides: dict | None = None):
-    """A shipped scene at PAPER_NUMERICS (and `overrides` over them); a solver step the scene file
-    sets goes back to its FMU's own unless the overrides set it. Everything goes through
+    """A shipped scene at PAPER_NUMERICS (and `overrides` over them); a solver setting the scene
+    file sets (solver.step, solver.exponential, solver.method) goes back to its FMU's own unless
+    the overrides set it. Everything goes through
     load_scene's overrides, so whatever reloads the scene from its file (advise, sweeps) gets the
     same scene."""
     from cosim.engine.artifacts import ROOT, fmu_path
@@ -76,7 +77,11 @@ def paper_scene(name: str = "meng_eq35", overrides: dict | None = None):
     scene = load_scene(path, overrides)
     for table, fmu, given in (("drive", DRIVES[scene.drive].fmu, scene.drive_parameters),
                               ("mechanics", "mechanics", scene.mechanics_parameters)):
-        key = f'{table}.parameters."solver.step"'
-        if "solver.step" in given and key not in overrides:
-            overrides[key] = float(variables(fmu_path(fmu))["solver.step"].start)
+        own = variables(fmu_path(fmu))
+        for setting in ("solver.step", "solver.exponential", "solver.method"):
+            key = f'{table}.parameters."{setting}"'
+            if setting in given and key not in overrides:
+                start = own[setting].start
+                overrides[key] = {"Real": float, "Integer": int, "Boolean": lambda v: v in (True, "true", 1)}[
+                    own[setting].type](start)
     return load_scene(path, overrides)

@@ -476,3 +476,108 @@ void ode_phi_functions(int n, const double *a, double h, int count, double *phi)
         for (int i = 0; i < n; i++)
             for (int j = 0; j < n; j++) phi[(k * n + i) * n + j] = e[i * big + k * n + j];
 }
+
+/* ---- the exponential integrator ---- */
+
+static const OdeExponential *exponential_for(OdeExponentialCache *cache, int m, const double *a, double h) {
+    for (int k = 0; k < ODE_EXPONENTIAL_KEPT; k++)
+        if (cache->entry[k].h == h && memcmp(a, cache->entry[k].a, sizeof(double) * (size_t)(m * m)) == 0)
+            return &cache->entry[k];
+    OdeExponential *e = &cache->entry[cache->next];
+    cache->next = (cache->next + 1) % ODE_EXPONENTIAL_KEPT;
+    const int mm = m * m;
+    double phi[4 * ODE_PHI_MAX * ODE_PHI_MAX], half[2 * ODE_PHI_MAX * ODE_PHI_MAX];
+    ode_phi_functions(m, a, h, 3, phi);
+    ode_phi_functions(m, a, 0.5 * h, 1, half);
+    for (int k = 0; k < mm; k++) {
+        const double p1 = phi[mm + k], p2 = phi[2 * mm + k], p3 = phi[3 * mm + k];
+        e->e[k] = phi[k];
+        e->f1[k] = h * (p1 - 3.0 * p2 + 4.0 * p3);
+        e->f2[k] = h * (p2 - 2.0 * p3);
+        e->f3[k] = h * (-p2 + 4.0 * p3);
+        e->e2[k] = half[k];
+        e->q[k] = 0.5 * h * half[mm + k];
+    }
+    memcpy(e->a, a, sizeof(double) * (size_t)mm);
+    e->h = h;
+    return e;
+}
+
+/* out = sum_k M_k v_k on the m stiff states, sum_k s_k v_k on the others (where A = 0 the matrices
+ * are the scalars s_k). */
+static void combine(int n, int m, int terms, const double *const *matrix, const double *scalar,
+                    const double *const *vector, double *out) {
+    for (int i = 0; i < n; i++) {
+        double sum = 0.0;
+        for (int k = 0; k < terms; k++) {
+            if (i < m)
+                for (int j = 0; j < m; j++) sum += matrix[k][i * m + j] * vector[k][j];
+            else
+                sum += scalar[k] * vector[k][i];
+        }
+        out[i] = sum;
+    }
+}
+
+/* N = f - A x at (t, x); 0 where A is not the linear part there. */
+static int nonlinear(OdeRhsLinear rhs_linear, void *ctx, int m, const double *a, double t, const double *x,
+                     double *n) {
+    const int holds = rhs_linear(ctx, t, x, n);
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) n[i] -= a[i * m + j] * x[j];
+    return holds;
+}
+
+/* One ETDRK4 step; 0 (x untouched) where the linear part did not hold at a stage. */
+static int exponential_step(const OdeExponential *e, int n, int m, OdeRhsLinear rhs_linear, void *ctx, double t,
+                            double h, double *x) {
+    double nx[ODE_MAX_STATES], a[ODE_MAX_STATES], na[ODE_MAX_STATES], b[ODE_MAX_STATES], nb[ODE_MAX_STATES];
+    double c[ODE_MAX_STATES], nc[ODE_MAX_STATES], mix[ODE_MAX_STATES], next[ODE_MAX_STATES];
+    const double half[2] = {1.0, 0.5 * h};
+    if (!nonlinear(rhs_linear, ctx, m, e->a, t, x, nx)) return 0;
+    combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){x, nx}, a);
+    if (!nonlinear(rhs_linear, ctx, m, e->a, t + 0.5 * h, a, na)) return 0;
+    combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){x, na}, b);
+    if (!nonlinear(rhs_linear, ctx, m, e->a, t + 0.5 * h, b, nb)) return 0;
+    for (int i = 0; i < n; i++) mix[i] = 2.0 * nb[i] - nx[i];
+    combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){a, mix}, c);
+    if (!nonlinear(rhs_linear, ctx, m, e->a, t + h, c, nc)) return 0;
+    for (int i = 0; i < n; i++) mix[i] = 2.0 * (na[i] + nb[i]);
+    /* e^{hA} x + f1 N_x + 2 f2 (N_a + N_b) + f3 N_c; where A = 0: x + h/6 (N_x + 2 N_a + 2 N_b + N_c) */
+    combine(n, m, 4, (const double *[]){e->e, e->f1, e->f2, e->f3}, (const double[]){1.0, h / 6.0, h / 6.0, h / 6.0},
+            (const double *[]){x, nx, mix, nc}, next);
+    if (!all_finite(n, next)) return 0;
+    memcpy(x, next, sizeof(double) * (size_t)n);
+    return 1;
+}
+
+OdeResult ode_exponential_integrate(OdeExponentialCache *cache, OdeSolver *solver, const OdeProblem *problem,
+                                    OdeRhsLinear rhs_linear, const double *a, void *ctx, double *x, double t0,
+                                    double span, double step, double *t_reached) {
+    const int n = problem->n_states, m = problem->n_stiff;
+    const double t1 = t0 + span;
+    if (n > ODE_MAX_STATES || m < 1 || m > ODE_PHI_MAX || !(step > 0.0) || !(span > 0.0)) {
+        if (t_reached) *t_reached = t0;
+        return (span == 0.0) ? ODE_OK : ODE_BAD_SETTINGS;
+    }
+    const int count = (int)ceil(span / step - 1e-9);
+    const double h = span / count;
+    const OdeExponential *e = exponential_for(cache, m, a, h);
+    double fastest = 0.0;
+    for (int i = 0; i < m; i++) fastest = fmax(fastest, fabs(a[i * m + i]));
+    solver->method = ODE_RK4;
+    solver->step = fastest > 0.0 ? fmin(h, 1.0 / fastest) : h;
+    const int explicit_enough = h <= solver->step; /* where RK4 is stable its step is cheaper */
+    for (int k = 0; k < count; k++) {
+        const double t = t0 + k * h, t_next = (k + 1 == count) ? t1 : t + h;
+        if (!explicit_enough && exponential_step(e, n, m, rhs_linear, ctx, t, t_next - t, x)) {
+            solver->steps += 1;
+            solver->rhs_calls += 4;
+            continue;
+        }
+        const OdeResult r = ode_integrate(solver, problem, ctx, x, t, t_next, t_reached);
+        if (r != ODE_OK) return r;
+    }
+    if (t_reached) *t_reached = t1;
+    return ODE_OK;
+}

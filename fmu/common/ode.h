@@ -96,4 +96,37 @@ const char *ode_result_text(OdeResult r);
 #define ODE_PHI_MAX 8
 void ode_phi_functions(int n, const double *a, double h, int count, double *phi);
 
+/* ---- the exponential integrator ETDRK4 (Cox and Matthews 2002) ----
+ * For x' = A x + N(t, x) with A constant on the leading n_stiff states (zero elsewhere): the linear
+ * part exactly through e^{hA} and its phi-functions, N explicitly; where A = 0 it is classic RK4.
+ * A model gives A and, with each evaluation of its derivatives, whether A is its linear part there
+ * (no limit engaged); a step where it is not is taken by RK4 at the fastest diagonal's time scale
+ * (h |a_ii| <= 1), and so are steps no longer than that. */
+
+/* The derivatives at (t, x) into dxdt; returns whether A is the linear part there. */
+typedef int (*OdeRhsLinear)(void *ctx, double t, const double *x, double *dxdt);
+
+typedef struct {
+    double h;                                   /* the step they are for (0: none yet) */
+    double a[ODE_PHI_MAX * ODE_PHI_MAX];        /* the linear part they are of */
+    double e[ODE_PHI_MAX * ODE_PHI_MAX], e2[ODE_PHI_MAX * ODE_PHI_MAX], q[ODE_PHI_MAX * ODE_PHI_MAX];
+    double f1[ODE_PHI_MAX * ODE_PHI_MAX], f2[ODE_PHI_MAX * ODE_PHI_MAX], f3[ODE_PHI_MAX * ODE_PHI_MAX];
+} OdeExponential;
+
+/* The functions of the last few steps (a run's macro step, a finer start's, a last short one), kept
+ * by the caller outside anything it copies often (they are derived data). */
+enum { ODE_EXPONENTIAL_KEPT = 4 };
+typedef struct {
+    OdeExponential entry[ODE_EXPONENTIAL_KEPT];
+    int next; /* the entry to replace next */
+} OdeExponentialCache;
+
+/* Integrates x from t0 over `span` in place, in equal steps of at most `step`, with the n_stiff x
+ * n_stiff linear part a (row major); the RK4 steps go through `problem` and count in `solver` (its
+ * method and step are set here), as do the exponential ones. The steps are span / count, so that a
+ * run's equal communication steps meet the functions kept for them. On failure as ode_integrate. */
+OdeResult ode_exponential_integrate(OdeExponentialCache *cache, OdeSolver *solver, const OdeProblem *problem,
+                                    OdeRhsLinear rhs_linear, const double *a, void *ctx, double *x, double t0,
+                                    double span, double step, double *t_reached);
+
 #endif

@@ -13,6 +13,7 @@
  */
 #include "fmu_common.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 /* The states: first the current loop's (stiff: the Rosenbrock-W solver takes them implicitly),
@@ -83,11 +84,12 @@ static void evaluate(const FmuInstance *fmu, double t, const double *x, Signals 
     s->force = s->force_em - s->damping - s->friction - s->ripple;
 }
 
-static void rhs(void *ctx, double t, const double *x, double *dxdt) {
-    const FmuInstance *fmu = (const FmuInstance *)ctx;
+/* The derivatives at (t, x), and the signals there (which limits hold). */
+static void derivatives(const FmuInstance *fmu, double t, const double *x, double *dxdt, Signals *signals) {
     const ModelVariables *v = &fmu->s.v;
     Signals s;
     evaluate(fmu, t, x, &s);
+    *signals = s;
     const double power_scale = v->motor_force_constant / v->motor_back_emf_constant;
     memset(dxdt, 0, sizeof(double) * MODEL_N_STATES);
     if (v->effects_electrical) {
@@ -114,9 +116,64 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     dxdt[E_RIPPLE] = s.ripple * s.velocity;
 }
 
+static void rhs(void *ctx, double t, const double *x, double *dxdt) {
+    Signals s;
+    derivatives((const FmuInstance *)ctx, t, x, dxdt, &s);
+}
+
+/* ---- solver.exponential (fmu/common/ode.c: ETDRK4) ----
+ * While the voltage limit does not hold, the current loop and the winding (Eq 4.30 with the PI) are
+ * linear with constant coefficients: i' = (kp (i* - i) + int - R i - K_e v) / L, int' = ki (i* - i).
+ * A is their part in i and int; the current reference, the back-EMF and the rest are explicit. */
+static void linear_part(const ModelVariables *v, double A[N_STIFF * N_STIFF]) {
+    memset(A, 0, sizeof(double) * N_STIFF * N_STIFF);
+    if (!v->effects_electrical) return; /* no winding: nothing stiff */
+    const double L = v->motor_inductance;
+    if (v->control_mode == MODE_VOLTAGE) {
+        A[CURRENT * N_STIFF + CURRENT] = -v->motor_resistance / L;
+        return;
+    }
+    A[CURRENT * N_STIFF + CURRENT] = -(v->control_current_kp + v->motor_resistance) / L;
+    A[CURRENT * N_STIFF + INT_CURRENT] = 1.0 / L;
+    A[INT_CURRENT * N_STIFF + CURRENT] = -v->control_current_ki;
+}
+
+static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
+    Signals s;
+    derivatives((const FmuInstance *)ctx, t, x, dxdt, &s);
+    return s.voltage == s.voltage_raw;
+}
+
+static void release_cache(FmuInstance *fmu, void *data) {
+    (void)fmu;
+    free(data);
+}
+
+static fmi2Status exponential_integrate(FmuInstance *fmu, const OdeProblem *problem, double h) {
+    if (!fmu->model_data) {
+        void *cache = calloc(1, sizeof(OdeExponentialCache));
+        if (!cache) {
+            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: solver.exponential: out of memory");
+            return fmi2Error;
+        }
+        fmu_set_model_data(fmu, cache, release_cache);
+    }
+    double A[N_STIFF * N_STIFF], t_failed;
+    linear_part(&fmu->s.v, A);
+    const OdeResult r = ode_exponential_integrate((OdeExponentialCache *)fmu->model_data, &fmu->s.solver, problem,
+                                                  rhs_linear, A, fmu, fmu->s.x, fmu->s.time, h,
+                                                  fmu->s.v.solver_step, &t_failed);
+    if (r == ODE_OK) return fmi2OK;
+    fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s",
+            t_failed, fmu->s.time, ode_result_text(r));
+    return fmi2Error;
+}
+
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, N_STIFF, NULL};
-    if (fmu_integrate(fmu, &problem, fmu, h, 0.0) != fmi2OK) return fmi2Error;
+    if ((fmu->s.v.solver_exponential ? exponential_integrate(fmu, &problem, h) : fmu_integrate(fmu, &problem, fmu, h, 0.0))
+        != fmi2OK)
+        return fmi2Error;
     Signals s;
     evaluate(fmu, fmu->s.time + h, fmu->s.x, &s);
     const int over = fabs(s.force_command) > fmu->s.v.motor_continuous_force;

@@ -109,6 +109,11 @@ X(Real, limit_force, "limit.force", parameter, tunable, "N", 610.0, 0.0, FMU_INF
   "Force command limit: peak force (assumed about 3 x F_net, usual for iron-core forcers)") \
 X(Real, limit_current, "limit.current", parameter, tunable, "A", 13.9, 0.0, FMU_INF, "Current limit: peak force / K_f (assumed)") \
 X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 325.0, 0.0, FMU_INF, "Voltage limit: DC bus of a 230 V AC drive (assumed)") \
+X(Boolean, solver_exponential, "solver.exponential", parameter, fixed, "", 0, 0, 1, \
+  "1: the current loop and the winding, linear with constant coefficients while the voltage limit " \
+  "does not hold, taken exactly (exponential integrator ETDRK4, Cox and Matthews 2002) and the rest " \
+  "explicitly, at steps of solver.step; RK4 at the current loop's time scale for a step in which " \
+  "the voltage limit holds") \
 FMU_SOLVER_VARIABLES(X, 1, 2.5e-4, 1e-6, 1e-8) \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */

@@ -279,13 +279,6 @@ static void commutate(void *ctx, double t, const double *x, int phase) {
  * its phi-functions exactly and N explicitly, so the step is bounded by the outer loops (500 rad/s)
  * and the cross-coupling (P w_m, about 400 rad/s), not by the inverter (10^4 1/s). */
 
-typedef struct {
-    double h;                                 /* the step they are for (0: none yet) */
-    double A[N_STIFF * N_STIFF];              /* the linear part they are of */
-    double E[N_STIFF * N_STIFF], E2[N_STIFF * N_STIFF], Q[N_STIFF * N_STIFF];
-    double f1[N_STIFF * N_STIFF], f2[N_STIFF * N_STIFF], f3[N_STIFF * N_STIFF];
-} Exponential;
-
 /* A: the stiff block's constant part with neither current controller clamped (the entries of
  * stiff_jacobian without the speed's terms). */
 static void linear_part(const ModelVariables *v, double *A) {
@@ -314,137 +307,39 @@ static void linear_part(const ModelVariables *v, double *A) {
 #undef AT
 }
 
-static void release_exponential(FmuInstance *fmu, void *data) {
+static void release_cache(FmuInstance *fmu, void *data) {
     (void)fmu;
     free(data);
 }
 
-/* The phi-functions of the last few steps (a run's macro step, its finer start's, a last short one). */
-enum { KEPT = 4 };
-typedef struct {
-    Exponential entry[KEPT];
-    int next; /* the entry to replace next */
-} ExponentialCache;
-
-/* The phi-functions for step h and the current parameters, kept in the model data (outside the FMU
- * state: derived, rebuilt when a gain changes). NULL if out of memory. */
-static const Exponential *exponential_for(FmuInstance *fmu, double h) {
-    ExponentialCache *cache = (ExponentialCache *)fmu->model_data;
-    if (!cache) {
-        cache = calloc(1, sizeof *cache);
-        if (!cache) return NULL;
-        fmu_set_model_data(fmu, cache, release_exponential);
-    }
-    double A[N_STIFF * N_STIFF];
-    linear_part(&fmu->s.v, A);
-    for (int k = 0; k < KEPT; k++)
-        if (cache->entry[k].h == h && memcmp(A, cache->entry[k].A, sizeof A) == 0) return &cache->entry[k];
-    Exponential *e = &cache->entry[cache->next];
-    cache->next = (cache->next + 1) % KEPT;
-    enum { M = N_STIFF * N_STIFF };
-    double phi[4 * M], half[2 * M];
-    ode_phi_functions(N_STIFF, A, h, 3, phi);
-    ode_phi_functions(N_STIFF, A, 0.5 * h, 1, half);
-    for (int k = 0; k < M; k++) {
-        const double p1 = phi[M + k], p2 = phi[2 * M + k], p3 = phi[3 * M + k];
-        e->E[k] = phi[k];
-        e->f1[k] = h * (p1 - 3.0 * p2 + 4.0 * p3);
-        e->f2[k] = h * (p2 - 2.0 * p3);
-        e->f3[k] = h * (-p2 + 4.0 * p3);
-        e->E2[k] = half[k];
-        e->Q[k] = 0.5 * h * half[M + k];
-    }
-    memcpy(e->A, A, sizeof A);
-    e->h = h;
-    return e;
-}
-
-/* out = sum of the terms (matrix, vector) applied to the stiff states; for the others (A = 0 there)
- * the matrices are the scalars `scalar` (e^0 = 1, phi-combinations of 0). */
-static void apply(int terms, const double *const *matrix, const double *scalar, const double *const *vector,
-                  double *out) {
-    for (int i = 0; i < MODEL_N_STATES; i++) {
-        double sum = 0.0;
-        for (int k = 0; k < terms; k++) {
-            if (i < N_STIFF) {
-                for (int j = 0; j < N_STIFF; j++) sum += matrix[k][i * N_STIFF + j] * vector[k][j];
-            } else {
-                sum += scalar[k] * vector[k][i];
-            }
-        }
-        out[i] = sum;
-    }
-}
-
-/* N = f - A x at (t, x); 0 if a current controller is clamped there (A is not the linear part). */
-static int nonlinear_part(const FmuInstance *fmu, const double *A, double t, const double *x, double *n) {
+/* The derivatives, and whether A is the linear part here: neither current controller clamped. */
+static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
     Signals s;
-    derivatives(fmu, t, x, n, &s);
-    for (int i = 0; i < N_STIFF; i++)
-        for (int j = 0; j < N_STIFF; j++) n[i] -= A[i * N_STIFF + j] * x[j];
+    derivatives((const FmuInstance *)ctx, t, x, dxdt, &s);
     return s.command_d == s.command_d_raw && s.command_q == s.command_q_raw;
 }
 
-/* One ETDRK4 step of h from fmu->s.time + t0; 0 (x untouched) where a voltage limit held. */
-static int exponential_step(FmuInstance *fmu, const Exponential *e, double t, double h) {
-    double *x = fmu->s.x, nx[MODEL_N_STATES], a[MODEL_N_STATES], na[MODEL_N_STATES], b[MODEL_N_STATES];
-    double nb[MODEL_N_STATES], c[MODEL_N_STATES], nc[MODEL_N_STATES], mix[MODEL_N_STATES], next[MODEL_N_STATES];
-    if (!nonlinear_part(fmu, e->A, t, x, nx)) return 0;
-    apply(2, (const double *[]){e->E2, e->Q}, (double[]){1.0, 0.5 * h}, (const double *[]){x, nx}, a);
-    if (!nonlinear_part(fmu, e->A, t + 0.5 * h, a, na)) return 0;
-    apply(2, (const double *[]){e->E2, e->Q}, (double[]){1.0, 0.5 * h}, (const double *[]){x, na}, b);
-    if (!nonlinear_part(fmu, e->A, t + 0.5 * h, b, nb)) return 0;
-    for (int i = 0; i < MODEL_N_STATES; i++) mix[i] = 2.0 * nb[i] - nx[i];
-    apply(2, (const double *[]){e->E2, e->Q}, (double[]){1.0, 0.5 * h}, (const double *[]){a, mix}, c);
-    if (!nonlinear_part(fmu, e->A, t + h, c, nc)) return 0;
-    for (int i = 0; i < MODEL_N_STATES; i++) mix[i] = 2.0 * (na[i] + nb[i]);
-    /* e^{hA} x + f1 N_x + 2 f2 (N_a + N_b) + f3 N_c; where A = 0, RK4: x + h/6 (N_x + 2 N_a + 2 N_b + N_c) */
-    apply(4, (const double *[]){e->E, e->f1, e->f2, e->f3}, (double[]){1.0, h / 6.0, h / 6.0, h / 6.0},
-          (const double *[]){x, nx, mix, nc}, next);
-    for (int i = 0; i < MODEL_N_STATES; i++)
-        if (!isfinite(next[i])) return 0;
-    memcpy(x, next, sizeof next);
-    return 1;
-}
-
-/* solver.exponential: steps of at most solver.step; a step in which a current controller is clamped
- * is taken again by RK4 at the inverter's time scale (h |lambda| = 1 on the fastest diagonal of A,
- * the inverter's lag: accurate through the saturated transients, where RK4 at twice that step is
- * 17 times further off on the drive bench), and steps that short (a finer start) are RK4's from the
- * outset. */
+/* solver.exponential: ETDRK4 with linear_part's A in steps of at most solver.step (fmu/common/ode.c),
+ * its phi-functions kept in the model data (outside the FMU state: derived, rebuilt for a new step
+ * or gain); RK4 at the inverter's time scale where a current controller is clamped. */
 static fmi2Status exponential_do_step(FmuInstance *fmu, const OdeProblem *problem, double h) {
-    const ModelVariables *v = &fmu->s.v;
-    const int n = (int)ceil(h / v->solver_step - 1e-9);
-    const double step = h / n;
-    const Exponential *e = exponential_for(fmu, step);
-    if (!e) {
-        fmu_log(fmu, fmi2Error, "logStatusError", "solver.exponential: out of memory");
-        return fmi2Error;
-    }
-    double fastest = 0.0;
-    for (int i = 0; i < N_STIFF; i++) fastest = fmax(fastest, fabs(e->A[i * N_STIFF + i]));
-    OdeSolver fallback = fmu->s.solver;
-    fallback.method = ODE_RK4;
-    fallback.step = fmin(step, 1.0 / fastest);
-    const int explicit_enough = step <= fallback.step; /* where RK4 is stable its step is cheaper */
-    for (int k = 0; k < n; k++) {
-        const double t = fmu->s.time + k * step;
-        if (!explicit_enough && exponential_step(fmu, e, t, step)) {
-            fmu->s.solver.steps += 1;
-            fmu->s.solver.rhs_calls += 4;
-            continue;
-        }
-        double t_failed;
-        const OdeResult r = ode_integrate(&fallback, problem, fmu, fmu->s.x, t, t + step, &t_failed);
-        fmu->s.solver.steps = fallback.steps;
-        fmu->s.solver.rhs_calls = fallback.rhs_calls;
-        if (r != ODE_OK) {
-            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: internal solver failed at t = %.9g s: %s", t_failed,
-                    ode_result_text(r));
+    if (!fmu->model_data) {
+        void *cache = calloc(1, sizeof(OdeExponentialCache));
+        if (!cache) {
+            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: solver.exponential: out of memory");
             return fmi2Error;
         }
+        fmu_set_model_data(fmu, cache, release_cache);
     }
-    return fmi2OK;
+    double A[N_STIFF * N_STIFF], t_failed;
+    linear_part(&fmu->s.v, A);
+    const OdeResult r = ode_exponential_integrate((OdeExponentialCache *)fmu->model_data, &fmu->s.solver, problem,
+                                                  rhs_linear, A, fmu, fmu->s.x, fmu->s.time, h,
+                                                  fmu->s.v.solver_step, &t_failed);
+    if (r == ODE_OK) return fmi2OK;
+    fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s",
+            t_failed, fmu->s.time, ode_result_text(r));
+    return fmi2Error;
 }
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
