@@ -443,6 +443,10 @@ static void mat_exp(int n, const double *m, double *out) {
         for (int i = 0; i < n; i++) column += fabs(m[i * n + j]);
         norm = fmax(norm, column);
     }
+    if (!isfinite(norm)) { /* no exponential: NaN, which the caller's steps refuse */
+        for (int i = 0; i < n * n; i++) out[i] = NAN;
+        return;
+    }
     const int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
     const double scale = ldexp(1.0, -s);
     for (int i = 0; i < n * n; i++) {
@@ -560,8 +564,13 @@ OdeResult ode_exponential_integrate(OdeExponentialCache *cache, OdeSolver *solve
         if (t_reached) *t_reached = t0;
         return (span == 0.0) ? ODE_OK : ODE_BAD_SETTINGS;
     }
-    const int count = (int)ceil(span / step - 1e-9);
-    const double h = span / count;
+    const double wanted = ceil(span / step - 1e-9);
+    if (wanted > ODE_MAX_STEPS) { /* bounded work, as ode_integrate's */
+        if (t_reached) *t_reached = t0;
+        return ODE_TOO_MUCH_WORK;
+    }
+    const int count = (int)wanted;
+    const double h = span / count, steps_before = solver->steps;
     const OdeExponential *e = exponential_for(cache, m, a, h);
     double fastest = 0.0;
     for (int i = 0; i < m; i++) fastest = fmax(fastest, fabs(a[i * m + i]));
@@ -577,6 +586,10 @@ OdeResult ode_exponential_integrate(OdeExponentialCache *cache, OdeSolver *solve
         }
         const OdeResult r = ode_integrate(solver, problem, ctx, x, t, t_next, t_reached);
         if (r != ODE_OK) return r;
+        if (solver->steps - steps_before > ODE_MAX_STEPS) { /* the RK4 steps of many clamped steps */
+            if (t_reached) *t_reached = t_next;
+            return ODE_TOO_MUCH_WORK;
+        }
     }
     if (t_reached) *t_reached = t1;
     return ODE_OK;

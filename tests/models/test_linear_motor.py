@@ -350,3 +350,15 @@ def test_the_exponential_integrator_takes_the_current_loop_exactly(make_motor):
     rk4 = run({**limited, "solver.step": time_scale}, "rk4", far, 0.2)
     for name in clamped.dtype.names:
         assert np.array_equal(clamped[name], rk4[name]), name
+
+
+def test_the_exponential_integrators_work_is_bounded(make_motor):
+    """Hostile settings (fuzzing found it): solver.step at 0.1 us under a 1 s communication step asks
+    for 10^7 exponential steps; the step is refused at once (more than 200000 internal steps) as the
+    other solvers' are, instead of running for minutes."""
+    import time
+    motor = make_motor({"solver.exponential": True, "solver.step": 1e-7}, name="hostile")
+    began = time.perf_counter()
+    with pytest.raises(Exception, match="internal steps"):
+        motor.do_step(1.0)
+    assert time.perf_counter() - began < 1.0
