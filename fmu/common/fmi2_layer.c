@@ -229,6 +229,28 @@ fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx,
               fmu->s.time, ode_result_text(r));
     return fmi2Error;
 }
+
+static void release_exponential(FmuInstance *fmu, void *data) { fmu_free(fmu, data); }
+
+fmi2Status fmu_integrate_exponential(FmuInstance *fmu, const OdeProblem *problem, OdeRhsLinear rhs_linear,
+                                     const double *linear_part, double h) {
+    if (!fmu->model_data) { /* derived data: outside the FMU state, rebuilt for a new step or gain */
+        void *cache = fmu_calloc(fmu, 1, sizeof(OdeExponentialCache));
+        if (!cache) {
+            LOG_ERROR(fmu, "fmi2DoStep: solver.exponential: out of memory");
+            return fmi2Error;
+        }
+        fmu_set_model_data(fmu, cache, release_exponential);
+    }
+    double t_failed;
+    const OdeResult r = ode_exponential_integrate((OdeExponentialCache *)fmu->model_data, &fmu->s.solver, problem,
+                                                  rhs_linear, linear_part, fmu, fmu->s.x, fmu->s.time, h,
+                                                  fmu->s.v.solver_step, &t_failed);
+    if (r == ODE_OK) return fmi2OK;
+    LOG_ERROR(fmu, "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s", t_failed,
+              fmu->s.time, ode_result_text(r));
+    return fmi2Error;
+}
 #endif
 
 /* ------------------------------------------------------------------------------------------ */

@@ -102,5 +102,10 @@ int fmu_input_has_derivative(const FmuInstance *fmu, int vr);
 /* Runs the internal solver (solver.* parameters) over [time, time + h] on the model's ODE, with
  * steps no longer than max_step if that is > 0, and logs a failure with the time it happened. */
 fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step);
+/* The same by the exponential integrator (ode_exponential_integrate: ETDRK4 with the stiff states'
+ * constant linear part `linear_part`, in steps of at most solver.step), its functions kept as the
+ * model data (for a model that keeps nothing else there). */
+fmi2Status fmu_integrate_exponential(FmuInstance *fmu, const OdeProblem *problem, OdeRhsLinear rhs_linear,
+                                     const double *linear_part, double h);
 
 #endif

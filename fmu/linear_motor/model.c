@@ -13,7 +13,6 @@
  */
 #include "fmu_common.h"
 
-#include <stdlib.h>
 #include <string.h>
 
 /* The states: first the current loop's (stiff: the Rosenbrock-W solver takes them implicitly),
@@ -144,35 +143,12 @@ static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
     return s.voltage == s.voltage_raw;
 }
 
-static void release_cache(FmuInstance *fmu, void *data) {
-    (void)fmu;
-    free(data);
-}
-
-static fmi2Status exponential_integrate(FmuInstance *fmu, const OdeProblem *problem, double h) {
-    if (!fmu->model_data) {
-        void *cache = calloc(1, sizeof(OdeExponentialCache));
-        if (!cache) {
-            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: solver.exponential: out of memory");
-            return fmi2Error;
-        }
-        fmu_set_model_data(fmu, cache, release_cache);
-    }
-    double A[N_STIFF * N_STIFF], t_failed;
-    linear_part(&fmu->s.v, A);
-    const OdeResult r = ode_exponential_integrate((OdeExponentialCache *)fmu->model_data, &fmu->s.solver, problem,
-                                                  rhs_linear, A, fmu, fmu->s.x, fmu->s.time, h,
-                                                  fmu->s.v.solver_step, &t_failed);
-    if (r == ODE_OK) return fmi2OK;
-    fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s",
-            t_failed, fmu->s.time, ode_result_text(r));
-    return fmi2Error;
-}
-
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, N_STIFF, NULL};
-    if ((fmu->s.v.solver_exponential ? exponential_integrate(fmu, &problem, h) : fmu_integrate(fmu, &problem, fmu, h, 0.0))
-        != fmi2OK)
+    double A[N_STIFF * N_STIFF];
+    linear_part(&fmu->s.v, A);
+    if ((fmu->s.v.solver_exponential ? fmu_integrate_exponential(fmu, &problem, rhs_linear, A, h)
+                                     : fmu_integrate(fmu, &problem, fmu, h, 0.0)) != fmi2OK)
         return fmi2Error;
     Signals s;
     evaluate(fmu, fmu->s.time + h, fmu->s.x, &s);

@@ -21,7 +21,6 @@
  */
 #include "fmu_common.h"
 
-#include <stdlib.h>
 #include <string.h>
 
 /* The states: first the current loops' (stiff: the Rosenbrock-W solver takes them implicitly),
@@ -307,11 +306,6 @@ static void linear_part(const ModelVariables *v, double *A) {
 #undef AT
 }
 
-static void release_cache(FmuInstance *fmu, void *data) {
-    (void)fmu;
-    free(data);
-}
-
 /* The derivatives, and whether A is the linear part here: neither current controller clamped. */
 static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
     Signals s;
@@ -319,34 +313,15 @@ static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
     return s.command_d == s.command_d_raw && s.command_q == s.command_q_raw;
 }
 
-/* solver.exponential: ETDRK4 with linear_part's A in steps of at most solver.step (fmu/common/ode.c),
- * its phi-functions kept in the model data (outside the FMU state: derived, rebuilt for a new step
- * or gain); RK4 at the inverter's time scale where a current controller is clamped. */
-static fmi2Status exponential_do_step(FmuInstance *fmu, const OdeProblem *problem, double h) {
-    if (!fmu->model_data) {
-        void *cache = calloc(1, sizeof(OdeExponentialCache));
-        if (!cache) {
-            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: solver.exponential: out of memory");
-            return fmi2Error;
-        }
-        fmu_set_model_data(fmu, cache, release_cache);
-    }
-    double A[N_STIFF * N_STIFF], t_failed;
-    linear_part(&fmu->s.v, A);
-    const OdeResult r = ode_exponential_integrate((OdeExponentialCache *)fmu->model_data, &fmu->s.solver, problem,
-                                                  rhs_linear, A, fmu, fmu->s.x, fmu->s.time, h,
-                                                  fmu->s.v.solver_step, &t_failed);
-    if (r == ODE_OK) return fmi2OK;
-    fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: internal solver failed at t = %.9g s (step from %.9g s): %s",
-            t_failed, fmu->s.time, ode_result_text(r));
-    return fmi2Error;
-}
-
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const int switching = fmu->s.v.inverter_model == INVERTER_SWITCHING;
     const OdeProblem problem = {MODEL_N_STATES, rhs, switching ? 3 : 0, hysteresis_events, commutate, N_STIFF,
                                 stiff_jacobian};
-    if (fmu->s.v.solver_exponential && !switching) return exponential_do_step(fmu, &problem, h);
+    if (fmu->s.v.solver_exponential && !switching) {
+        double A[N_STIFF * N_STIFF];
+        linear_part(&fmu->s.v, A);
+        return fmu_integrate_exponential(fmu, &problem, rhs_linear, A, h);
+    }
     return fmu_integrate(fmu, &problem, fmu, h, switching ? fmu->s.v.inverter_max_step : 0.0);
 }
 
