@@ -28,13 +28,15 @@
 
 /* Rows every model puts in its table: the internal solver's settings. */
 #define FMU_SOLVER_VARIABLES(X, method, step, rtol, atol)                                          \
-    X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 4,                 \
+    X(Integer, solver_method, "solver.method", parameter, fixed, "", method, 1, 5,                 \
       "Internal ODE solver: 1 = classic Runge-Kutta 4 with fixed step solver.step, "               \
       "2 = Dormand-Prince 5(4) with error control (solver.rtol, solver.atol), steps <= solver.step, " \
       "3 = Rosenbrock-W ROS34PW2 (order 3, L-stable: no stability limit for stiff models) with "    \
-      "fixed step solver.step, 4 = ROS34PW2 with error control, steps <= solver.step")             \
+      "fixed step solver.step, 4 = ROS34PW2 with error control, steps <= solver.step, "            \
+      "5 = Heun (order 2, two evaluations a step: the order of inputs a master interpolates "      \
+      "linearly) with fixed step solver.step")                                                     \
     X(Real, solver_step, "solver.step", parameter, fixed, "s", step, 1e-7, 1.0,                    \
-      "RK4 and ROS34PW2: the integration step; with error control: the largest step")              \
+      "RK4, Heun and ROS34PW2: the integration step; with error control: the largest step")       \
     X(Real, solver_rtol, "solver.rtol", parameter, fixed, "1", rtol, 1e-14, 0.1,                   \
       "Relative error tolerance per step (methods 2 and 4)")                                      \
     X(Real, solver_atol, "solver.atol", parameter, fixed, "1", atol, 1e-16, 1.0,                   \

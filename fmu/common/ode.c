@@ -214,7 +214,7 @@ static int all_finite(int n, const double *x) {
 }
 
 /* One step of length h from (t, x) into x_new. Returns the scaled error norm for the adaptive
- * methods (0 for RK4). */
+ * methods (0 for the fixed-step explicit ones, RK4 and Heun). */
 static double one_step(const OdeSolver *s, const OdeProblem *p, void *ctx, Linearization *lin, double t,
                        const double *x, double h, double *x_new) {
     const int n = p->n_states;
@@ -225,6 +225,13 @@ static double one_step(const OdeSolver *s, const OdeProblem *p, void *ctx, Linea
     if (s->method == ODE_ROSENBROCK || s->method == ODE_ROSENBROCK_ADAPTIVE)
         return rosenbrock_step(s, p, ctx, lin, t, x, h, x_new);
 
+    if (s->method == ODE_HEUN) {
+        p->rhs(ctx, t, x, k1);
+        for (i = 0; i < n; i++) y[i] = x[i] + h * k1[i];
+        p->rhs(ctx, t + h, y, k2);
+        for (i = 0; i < n; i++) x_new[i] = x[i] + 0.5 * h * (k1[i] + k2[i]);
+        return 0.0;
+    }
     if (s->method == ODE_RK4) {
         p->rhs(ctx, t, x, k1);
         for (i = 0; i < n; i++) y[i] = x[i] + 0.5 * h * k1[i];
@@ -345,8 +352,8 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
     if (t_reached) *t_reached = t0;
     if (n < 1 || n > ODE_MAX_STATES || m < 0 || m > ODE_MAX_EVENTS || !(s->step > 0.0) ||
         p->n_stiff < 0 || p->n_stiff > n ||
-        s->method < ODE_RK4 || s->method > ODE_ROSENBROCK_ADAPTIVE ||
-        (s->method != ODE_RK4 && !(s->rtol > 0.0 && s->atol > 0.0)))
+        s->method < ODE_RK4 || s->method > ODE_HEUN ||
+        (s->method != ODE_RK4 && s->method != ODE_HEUN && !(s->rtol > 0.0 && s->atol > 0.0)))
         return ODE_BAD_SETTINGS;
     const int rosenbrock = s->method == ODE_ROSENBROCK || s->method == ODE_ROSENBROCK_ADAPTIVE;
     const int adaptive = s->method == ODE_DOPRI5 || s->method == ODE_ROSENBROCK_ADAPTIVE;
@@ -376,7 +383,7 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
 
         if (rosenbrock && !lin.taken) linearize(s, p, ctx, t, x, &lin);
         double error = one_step(s, p, ctx, &lin, t, x, h, x_new);
-        s->rhs_calls += (s->method == ODE_RK4) ? 4 : (rosenbrock ? lin.rhs_calls : 7);
+        s->rhs_calls += s->method == ODE_RK4 ? 4 : s->method == ODE_HEUN ? 2 : rosenbrock ? lin.rhs_calls : 7;
         lin.rhs_calls = 0;
         if (adaptive) {
             if (error > 1.0 || !all_finite(n, x_new)) {
@@ -511,15 +518,15 @@ static const OdeExponential *exponential_for(OdeExponentialCache *cache, int m, 
  * are the scalars s_k). */
 static void combine(int n, int m, int terms, const double *const *matrix, const double *scalar,
                     const double *const *vector, double *out) {
-    for (int i = 0; i < n; i++) {
-        double sum = 0.0;
-        for (int k = 0; k < terms; k++) {
-            if (i < m)
-                for (int j = 0; j < m; j++) sum += matrix[k][i * m + j] * vector[k][j];
-            else
-                sum += scalar[k] * vector[k][i];
+    for (int i = 0; i < n; i++) out[i] = 0.0;
+    for (int k = 0; k < terms; k++) {
+        const double *restrict mk = matrix[k], *restrict vk = vector[k];
+        for (int i = 0; i < m; i++) {
+            double sum = 0.0;
+            for (int j = 0; j < m; j++) sum += mk[i * m + j] * vk[j];
+            out[i] += sum;
         }
-        out[i] = sum;
+        for (int i = m; i < n; i++) out[i] += scalar[k] * vk[i];
     }
 }
 

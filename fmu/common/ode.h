@@ -2,7 +2,7 @@
  *
  * Plain C with no FMI dependency, so the solvers can be tested and reused on their own.
  *
- * Two methods:
+ * The methods:
  *   ODE_RK4    classic fixed-step Runge-Kutta of order 4; the interval is cut into equal steps
  *              no longer than `step`.
  *   ODE_DOPRI5 Dormand-Prince 5(4) embedded pair with local error control
@@ -21,6 +21,10 @@
  *              taken).
  *   ODE_ROSENBROCK_ADAPTIVE  the same with error control by its embedded order-2 solution (the
  *              Jacobian also retaken after a rejection), steps capped at `step`.
+ *   ODE_HEUN   Heun's method (the explicit trapezoidal rule), order 2, two evaluations per step,
+ *              fixed steps as RK4. For a model inside a co-simulation whose inputs are themselves of
+ *              order 2 (a master interpolating or extrapolating them linearly: the coupling's error
+ *              is O(h^2) whatever the FMU's solver), it matches that order at half RK4's work.
  *
  * State events: a problem may give event functions g(t, x). An event occurs when a component
  * goes from g < 0 to g >= 0 inside a step; the solver locates it by the Illinois variant of
@@ -38,7 +42,7 @@
 #define ODE_MAX_STATES 32
 #define ODE_MAX_EVENTS 8
 
-typedef enum { ODE_RK4 = 1, ODE_DOPRI5 = 2, ODE_ROSENBROCK = 3, ODE_ROSENBROCK_ADAPTIVE = 4 } OdeMethod;
+typedef enum { ODE_RK4 = 1, ODE_DOPRI5 = 2, ODE_ROSENBROCK = 3, ODE_ROSENBROCK_ADAPTIVE = 4, ODE_HEUN = 5 } OdeMethod;
 
 typedef enum {
     ODE_OK = 0,

@@ -10,7 +10,7 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 
-RK4, DOPRI5, ROSENBROCK, ROSENBROCK_ADAPTIVE = 1, 2, 3, 4
+RK4, DOPRI5, ROSENBROCK, ROSENBROCK_ADAPTIVE, HEUN = 1, 2, 3, 4, 5
 
 
 @pytest.fixture(scope="module")
@@ -49,6 +49,20 @@ def test_rk4_is_fourth_order(probe):
     assert order == pytest.approx(4.0, abs=0.15)
 
 
+def test_heun_is_second_order_at_two_evaluations_a_step(probe):
+    """Heun's method on the oscillator x'' = -x: order 2 and, at the smallest step, the error its
+    amplification factor 1 + ih - h^2/2 predicts: a phase lead of h^3/6 a step, t h^2 / 6 at
+    t = 10 s, in x' = -sin t by |cos 10| of it (its growth of the amplitude, t h^3 / 8, is far below
+    that)."""
+    steps = np.array([0.1, 0.05, 0.025, 0.0125])
+    runs = [oscillator(probe, HEUN, h) for h in steps]
+    errors = np.array([r[0] for r in runs])
+    order = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert order == pytest.approx(2.0, abs=0.05)
+    assert errors[-1] == pytest.approx(abs(np.cos(10.0)) * 10.0 * steps[-1] ** 2 / 6.0, rel=0.02)
+    assert [r[1] for r in runs] == [100, 200, 400, 800]
+
+
 def test_rk4_cuts_any_interval_into_equal_steps(probe):
     """Communication points that are not multiples of the step change nothing but round-off:
     10 s in 7 pieces with h = 0.01 takes ceil(10/7/0.01) = 143 equal steps per piece."""
@@ -73,7 +87,8 @@ def test_dormand_prince_respects_its_largest_step(probe):
     assert steps >= 1000
 
 
-@pytest.mark.parametrize("method,step", [(RK4, 0.02), (DOPRI5, 0.5), (ROSENBROCK, 0.01), (ROSENBROCK_ADAPTIVE, 0.5)])
+@pytest.mark.parametrize("method,step", [(RK4, 0.02), (DOPRI5, 0.5), (ROSENBROCK, 0.01), (ROSENBROCK_ADAPTIVE, 0.5),
+                                         (HEUN, 5e-4)])
 def test_events_are_located_where_the_exact_solution_crosses(probe, method, step):
     """x = cos t crosses 0.5 downward at pi/3 and upward at 5 pi/3; the handler flips the sign of
     g each time, so both are events, and the second one leaves g at exactly zero (x = 0.5 to the
