@@ -327,6 +327,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     fmu->logging_on = loggingOn;
     fmu->log_errors = 1; /* errors are always reported; the rest only with logging on (FMI 2.0) */
     fmu->log_warnings = fmu->log_events = fmu->log_all = loggingOn;
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL)
+            fmu->real_outputs[fmu->n_real_outputs++] = vr;
     reset_to_start(fmu);
     return fmu;
 }
@@ -812,6 +815,32 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 #endif
 }
 
+/* The part of the snapshot a step writes: its time, the variables, the ODE state, the solver's and
+ * the model's memory. */
+typedef struct {
+    double time;
+    ModelVariables v;
+    double x[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1];
+    OdeSolver solver;
+    ModelInternal internal;
+} StepBackup;
+
+static void backup_step(const FmuInstance *fmu, StepBackup *b) {
+    b->time = fmu->s.time;
+    b->v = fmu->s.v;
+    memcpy(b->x, fmu->s.x, sizeof b->x);
+    b->solver = fmu->s.solver;
+    b->internal = fmu->s.internal;
+}
+
+static void restore_step(FmuInstance *fmu, const StepBackup *b) {
+    fmu->s.time = b->time;
+    fmu->s.v = b->v;
+    memcpy(fmu->s.x, b->x, sizeof b->x);
+    fmu->s.solver = b->solver;
+    fmu->s.internal = b->internal;
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     FmuInstance *fmu = (FmuInstance *)c;
@@ -833,10 +862,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                   currentCommunicationPoint, t0);
         return fmi2Error;
     }
-    /* A failed step leaves the instance exactly as it was before it, for inspection or retry. */
-    FmuSnapshot before = fmu->s;
+    /* A failed step leaves the instance exactly as it was before it, for inspection or retry: what
+     * a step changes is kept aside (the inputs and their derivatives it only reads). */
+    StepBackup before;
+    backup_step(fmu, &before);
     if (model_do_step(fmu, h) != fmi2OK) {
-        fmu->s = before;
+        restore_step(fmu, &before);
         fmu->s.phase = PHASE_ERROR;
         return fmi2Error;
     }
@@ -848,12 +879,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
     memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given);
-    for (int vr = 1; vr < VR_COUNT; vr++) {
-        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL &&
-            !isfinite(*(double *)value_address(fmu, vr))) {
+    for (int k = 0; k < fmu->n_real_outputs; k++) {
+        const int vr = fmu->real_outputs[k];
+        if (!isfinite(*(double *)value_address(fmu, vr))) {
             LOG_ERROR(fmu, "fmi2DoStep: output '%s' is not finite at t = %.9g s", fmu_variables[vr].name,
                       fmu->s.time);
-            fmu->s = before;
+            restore_step(fmu, &before);
             fmu->s.phase = PHASE_ERROR;
             return fmi2Error;
         }

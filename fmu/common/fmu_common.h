@@ -47,6 +47,8 @@ typedef struct FmuInstance {
      * kept outside the snapshot, so FMU states stay small; released with fmu_set_model_data. */
     void *model_data;
     void (*free_model_data)(struct FmuInstance *fmu, void *data);
+    int n_real_outputs;                    /* the Real outputs, checked finite after every step */
+    int real_outputs[VR_COUNT];
 } FmuInstance;
 
 /* ---- hooks implemented by each model (model.c) ---- */
