@@ -86,22 +86,18 @@ static void rhs(void *ctx, double t, const double *x, double *dxdt) {
     dxdt[E_LOAD] = d.load_power;
 }
 
-/* Largest tilt of leg i from its neutral direction, at the lower joint (base frame) and at the upper
- * joint (platform frame): platform_joint_angles. */
-static double joint_angle(const double *x, const LegGeometry *leg, const double n0[3]) {
-    double R[9], q[4], lower, upper, norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6]);
-    for (int k = 0; k < 4; k++) q[k] = x[3 + k] / norm;
-    platform_rotation_from_quaternion(q, R);
-    platform_joint_angles(R, leg->axis, n0, &lower, &upper);
-    return fmax(lower, upper);
-}
-
 /* Stroke, joint limits and singularity of the platform `in` at state x and time t. Returns
  * fmi2Error for what must stop the run; logs warnings once per excursion otherwise. */
 static fmi2Status check_limits(const FmuInstance *fmu, ModelInternal *in, const double *x, double t) {
     const ModelVariables *v = &fmu->s.v;
     LegGeometry legs[PLATFORM_LEGS];
     platform_legs(&in->platform, x, legs);
+    /* each leg's largest tilt from its neutral direction, at the lower joint (base frame) or at the
+     * upper joint (platform frame): past the limit where its cosine is below the limit's */
+    double R[9], q[4], norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6]);
+    for (int k = 0; k < 4; k++) q[k] = x[3 + k] / norm;
+    platform_rotation_from_quaternion(q, R);
+    const double cos_limit = v->limit_joint_angle < PI ? cos(v->limit_joint_angle) : -2.0; /* pi: never */
     const fmi2Status severity = v->limit_hard_stop ? fmi2Error : fmi2Warning;
     const char *category = v->limit_hard_stop ? "logStatusError" : "logStatusWarning";
     fmi2Status status = fmi2OK;
@@ -122,11 +118,12 @@ static fmi2Status check_limits(const FmuInstance *fmu, ModelInternal *in, const 
             fmu_log(fmu, fmi2OK, "logEvents", "t = %.6f s: leg %d is back inside the stroke", t, i + 1);
         }
         in->out_of_stroke[i] = outside;
-        const double angle = joint_angle(x, &legs[i], in->neutral_axis[i]);
-        const int past = angle > v->limit_joint_angle;
+        double cos_lower, cos_upper;
+        platform_joint_cosines(R, legs[i].axis, in->neutral_axis[i], &cos_lower, &cos_upper);
+        const int past = fmin(cos_lower, cos_upper) < cos_limit;
         if (past && (!in->past_joint_limit[i] || v->limit_hard_stop)) {
             fmu_log(fmu, severity, category, "t = %.6f s: leg %d joint angle %.2f deg exceeds the limit %.2f deg", t,
-                    i + 1, angle * 180.0 / PI, v->limit_joint_angle * 180.0 / PI);
+                    i + 1, acos(fmin(cos_lower, cos_upper)) * 180.0 / PI, v->limit_joint_angle * 180.0 / PI);
             if (v->limit_hard_stop) status = fmi2Error;
         }
         in->past_joint_limit[i] = past;

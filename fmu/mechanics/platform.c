@@ -508,15 +508,22 @@ int platform_leg_plants(const Platform *p, const double *x, double inertia[PLATF
 
 /* ---- design studies ------------------------------------------------------------------------ */
 
-void platform_joint_angles(const double R[9], const double axis[3], const double n0[3], double *lower,
-                           double *upper) {
+void platform_joint_cosines(const double R[9], const double axis[3], const double n0[3], double *lower,
+                            double *upper) {
     double along = 0.0, across = 0.0;
     for (int k = 0; k < 3; k++) {
         along += axis[k] * n0[k];
         across += (R[k] * axis[0] + R[3 + k] * axis[1] + R[6 + k] * axis[2]) * n0[k]; /* (R'n).n0 */
     }
-    *lower = acos(fmax(-1.0, fmin(1.0, along)));
-    *upper = acos(fmax(-1.0, fmin(1.0, across)));
+    *lower = fmax(-1.0, fmin(1.0, along));
+    *upper = fmax(-1.0, fmin(1.0, across));
+}
+
+void platform_joint_angles(const double R[9], const double axis[3], const double n0[3], double *lower,
+                           double *upper) {
+    platform_joint_cosines(R, axis, n0, lower, upper);
+    *lower = acos(*lower);
+    *upper = acos(*upper);
 }
 
 void platform_pose_kinematics(const Platform *p, int n, const double *poses, double *length,

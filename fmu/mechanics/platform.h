@@ -147,6 +147,9 @@ void platform_state_from_pose(const double pose[6], const double pose_rate[6], d
  * between the leg and its bottom and top stubs, which are collinear with it at the neutral). */
 void platform_joint_angles(const double R[9], const double axis[3], const double n0[3], double *lower,
                            double *upper);
+/* Their cosines, n.n0 and (R'n).n0 (clamped to [-1, 1]): what a limit check compares. */
+void platform_joint_cosines(const double R[9], const double axis[3], const double n0[3], double *lower,
+                            double *upper);
 
 /* For design studies, at each of n poses (x, y, z, roll, pitch, yaw; row major): each leg's length,
  * its joint angles (platform_joint_angles) and the leg Jacobian (36 entries, row major). Any
