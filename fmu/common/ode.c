@@ -440,52 +440,50 @@ static void mat_mul(int n, const double *a, const double *b, double *out) {
         }
 }
 
-/* e^M of an n x n matrix (n <= 4 ODE_PHI_MAX): scaled by 2^-s to a 1-norm below 1/2, its Taylor
- * series to round-off (30 terms bound the remainder by 2^-30 / 30!), squared s times. */
-static void mat_exp(int n, const double *m, double *out) {
-    enum { MAX = 4 * ODE_PHI_MAX };
-    double norm = 0.0, scaled[MAX * MAX], term[MAX * MAX], next[MAX * MAX];
+/* phi_0..phi_count of Z = hA by scaling and squaring on the n x n matrices themselves (Skaflestad
+ * and Wright 2009): Z / 2^s with a 1-norm at most 1/2, where phi_k(Z) = sum_j Z^j / (j + k)! to
+ * round-off (17 terms bound the remainder by 2^-17 / 17!), then s times
+ * phi_k(2Z) = 2^-k (phi_0(Z) phi_k(Z) + sum_{j=1..k} phi_j(Z) / (k - j)!). */
+void ode_phi_functions(int n, const double *a, double h, int count, double *phi) {
+    enum { MAX = ODE_PHI_MAX * ODE_PHI_MAX, TERMS = 17 };
+    const int nn = n * n;
+    double norm = 0.0, z[MAX], power[MAX], next[MAX], old[4 * MAX];
     for (int j = 0; j < n; j++) {
         double column = 0.0;
-        for (int i = 0; i < n; i++) column += fabs(m[i * n + j]);
+        for (int i = 0; i < n; i++) column += fabs(h * a[i * n + j]);
         norm = fmax(norm, column);
     }
     if (!isfinite(norm)) { /* no exponential: NaN, which the caller's steps refuse */
-        for (int i = 0; i < n * n; i++) out[i] = NAN;
+        for (int i = 0; i < (count + 1) * nn; i++) phi[i] = NAN;
         return;
     }
     const int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
-    const double scale = ldexp(1.0, -s);
-    for (int i = 0; i < n * n; i++) {
-        scaled[i] = m[i] * scale;
-        out[i] = term[i] = (i % (n + 1) == 0) ? 1.0 : 0.0; /* the identity */
+    const double scale = ldexp(h, -s);
+    double factorial[TERMS + 4]; /* 1 / m! */
+    factorial[0] = 1.0;
+    for (int m = 1; m < TERMS + 4; m++) factorial[m] = factorial[m - 1] / m;
+    for (int i = 0; i < nn; i++) {
+        z[i] = a[i] * scale;
+        power[i] = (i % (n + 1) == 0) ? 1.0 : 0.0; /* the identity */
+        for (int k = 0; k <= count; k++) phi[k * nn + i] = power[i] * factorial[k];
     }
-    for (int k = 1; k <= 30; k++) {
-        mat_mul(n, term, scaled, next);
-        for (int i = 0; i < n * n; i++) {
-            term[i] = next[i] / k;
-            out[i] += term[i];
+    for (int j = 1; j <= TERMS; j++) {
+        mat_mul(n, power, z, next);
+        memcpy(power, next, sizeof(double) * (size_t)nn);
+        for (int k = 0; k <= count; k++)
+            for (int i = 0; i < nn; i++) phi[k * nn + i] += power[i] * factorial[j + k];
+    }
+    for (int r = 0; r < s; r++) {
+        memcpy(old, phi, sizeof(double) * (size_t)((count + 1) * nn));
+        for (int k = 0; k <= count; k++) {
+            double *out = phi + k * nn;
+            mat_mul(n, old, old + k * nn, out);
+            for (int j = 1; j <= k; j++)
+                for (int i = 0; i < nn; i++) out[i] += old[j * nn + i] * factorial[k - j];
+            const double half = ldexp(1.0, -k);
+            for (int i = 0; i < nn; i++) out[i] *= half;
         }
     }
-    for (int k = 0; k < s; k++) {
-        mat_mul(n, out, out, next);
-        memcpy(out, next, sizeof(double) * (size_t)(n * n));
-    }
-}
-
-void ode_phi_functions(int n, const double *a, double h, int count, double *phi) {
-    enum { MAX = 4 * ODE_PHI_MAX };
-    const int big = (count + 1) * n;
-    double m[MAX * MAX], e[MAX * MAX];
-    memset(m, 0, sizeof(double) * (size_t)(big * big));
-    for (int i = 0; i < n; i++) {
-        for (int j = 0; j < n; j++) m[i * big + j] = h * a[i * n + j];
-        for (int k = 1; k <= count; k++) m[((k - 1) * n + i) * big + k * n + i] = 1.0;
-    }
-    mat_exp(big, m, e);
-    for (int k = 0; k <= count; k++)
-        for (int i = 0; i < n; i++)
-            for (int j = 0; j < n; j++) phi[(k * n + i) * n + j] = e[i * big + k * n + j];
 }
 
 /* ---- the exponential integrator ---- */
