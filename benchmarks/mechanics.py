@@ -1,5 +1,5 @@
 """CPU time per simulated second of the mechanics FMU, full and reduced models, at its default
-solver (RK4, 1 ms) and at Dormand-Prince rtol 1e-8, stepped from C at a 1 ms communication step
+solver (RK4, 1 ms), at Dormand-Prince rtol 1e-8 and at Heun's 1 ms (the shipped scenes'), stepped from C at a 1 ms communication step
 (benchmarks/fmu_step_bench.c), so the figure is the FMU's own cost.
 
 One evaluation of the equations of motion against the floating-point work it needs: the dynamics
@@ -9,7 +9,7 @@ every instruction it executes, each classified from the library's disassembly (o
 floating-point operations (add, subtract, multiply, divide, square root; a fused multiply-add two,
 a packed instruction one per lane), the instructions in all, and the calls into libm. Reported: the
 nanoseconds, operations and instructions per evaluation, the operations per nanosecond, and the
-share of the FMU's step that its RK4's four evaluations and the outputs' one take.
+share of the FMU's step that its evaluations take (RK4's four or Heun's two, and the outputs' one).
 
 Duty: weightless, zero inputs, the platform started from a shifted, tilted pose with a twist, so it
 drifts and turns through the workspace (by about 0.1 m and 0.1 rad in 5 s) while every term of the
@@ -47,6 +47,7 @@ TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]
 CASES = [
     ("full model, RK4 1 ms (default)", {}),
     ("full model, Dormand-Prince 1e-8", {"solver.method": 2}),
+    ("full model, Heun 1 ms (the shipped scenes')", {"solver.method": 5}),
     ("without motor systems", {"effects.motor_inertia": 0}),
     ("without actuators and motor systems", {"effects.motor_inertia": 0, "effects.actuator_inertia": 0}),
     ("without friction", {"effects.friction": 0}),
@@ -182,10 +183,12 @@ def main() -> None:
     lines += ["", f"Ratios in this run: the FMU at Dormand-Prince 1e-8 (1000 communication steps per second) / "
               f"scipy's solve_ivp (DOP853, rtol 1e-8, free steps) on the same C dynamics core "
               f"{results[CASES[1][0]] / scipy_cost:.2f} (scipy: {scipy_cost * 1e3:.1f} ms per simulated second); "
-              f"full model / without actuators and motor systems {results[CASES[0][0]] / results[CASES[3][0]]:.2f}."]
+              f"full model / without actuators and motor systems {results[CASES[0][0]] / results[CASES[4][0]]:.2f}; "
+              f"Heun / RK4 at 1 ms {results[CASES[2][0]] / results[CASES[0][0]]:.2f}."]
     if shutil.which("valgrind") and shutil.which("objdump"):
         work = arithmetic(core, x0)
         per_step = results[CASES[0][0]] * 1e-3  # CPU seconds per 1 ms step
+        heun_step = results[CASES[2][0]] * 1e-3
         lines += ["", f"One evaluation of the equations of motion (platform_derivatives, the full model): "
                   f"{work['ns']:.0f} ns for {work['flops']:.0f} floating-point operations "
                   f"({work['flops'] / work['ns']:.2f} per ns{clock(work['flops'] / work['ns'])}) among "
@@ -193,7 +196,9 @@ def main() -> None:
                   f"{work['libm_calls']:.0f} calls into libm (callgrind's counts, classified from the disassembly). "
                   f"The FMU's 1 ms step ({1e9 * per_step:.0f} ns) spends {5 * work['ns'] / (1e9 * per_step):.0%} of it "
                   "in the five evaluations it makes (RK4's four and the outputs' one, which also gives the energy "
-                  "accounts) and the rest in the step's outputs, limit checks and the FMI layer. Two floating-point "
+                  f"accounts) and the rest in the step's outputs, limit checks and the FMI layer; on Heun's method "
+                  f"({1e9 * heun_step:.0f} ns) the three evaluations take {3 * work['ns'] / (1e9 * heun_step):.0%}. "
+                  "Two floating-point "
                   "instructions a cycle is what this core retires at most from scalar SSE2 code (x86-64's baseline, "
                   "which the FMUs are built for so that they run on any x86-64 machine): an evaluation runs at its "
                   "arithmetic's speed, and only fewer operations (or the wider instructions a machine-specific build "
