@@ -133,6 +133,14 @@ static int check_settable(FmuInstance *fmu, const char *call, int vr, double val
     return 1;
 }
 
+/* Does a set call of these (checked) references change a parameter? Only then is the model validated
+ * afterwards, and only then are the variables kept aside to be put back. */
+static int sets_parameter(const fmi2ValueReference vr[], size_t nvr) {
+    for (size_t i = 0; i < nvr; i++)
+        if (fmu_variables[vr[i]].causality != FMU_INPUT) return 1;
+    return 0;
+}
+
 /* Called after values were set: outputs must be recomputed; a tunable parameter changed after
  * initialization must leave the model valid, or it is put back (inputs are checked one by one
  * when set, so setting only inputs costs no model validation). */
@@ -148,9 +156,9 @@ static fmi2Status after_set(FmuInstance *fmu, const ModelVariables *before, int 
 
 /* Every Real output finite? Logs the first that is not, naming the call. */
 static int outputs_finite(FmuInstance *fmu, const char *call) {
-    for (int vr = 1; vr < VR_COUNT; vr++) {
-        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL &&
-            !isfinite(*(double *)value_address(fmu, vr))) {
+    for (int k = 0; k < fmu->n_real_outputs; k++) {
+        const int vr = fmu->real_outputs[k];
+        if (!isfinite(*(double *)value_address(fmu, vr))) {
             LOG_ERROR(fmu, "%s: output '%s' is not finite at t = %.9g s (the inputs or parameters are beyond what the "
                       "model can compute)", call, fmu_variables[vr].name, fmu->s.time);
             return 0;
@@ -467,12 +475,13 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         if (!check_reference(fmu, "fmi2SetReal", vr[i], FMU_REAL) ||
             !check_settable(fmu, "fmi2SetReal", (int)vr[i], value[i]))
             return fmi2Error;
-    ModelVariables before = fmu->s.v;
-    int any_input = 0, any_parameter = 0;
+    const int any_parameter = sets_parameter(vr, nvr);
+    ModelVariables before;
+    if (any_parameter) before = fmu->s.v;
+    int any_input = 0;
     for (size_t i = 0; i < nvr; i++) {
         *(double *)value_address(fmu, (int)vr[i]) = value[i];
         if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
-        else any_parameter = 1;
     }
     return after_set(fmu, &before, any_input, any_parameter);
 }
@@ -485,12 +494,13 @@ static fmi2Status set_ints(FmuInstance *fmu, const char *call, FmuType type,
         if (!check_reference(fmu, call, vr[i], type) ||
             !check_settable(fmu, call, (int)vr[i], type == FMU_BOOLEAN ? (value[i] != 0) : value[i]))
             return fmi2Error;
-    ModelVariables before = fmu->s.v;
-    int any_input = 0, any_parameter = 0;
+    const int any_parameter = sets_parameter(vr, nvr);
+    ModelVariables before;
+    if (any_parameter) before = fmu->s.v;
+    int any_input = 0;
     for (size_t i = 0; i < nvr; i++) {
         *(int *)value_address(fmu, (int)vr[i]) = type == FMU_BOOLEAN ? (value[i] != 0) : value[i];
         if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
-        else any_parameter = 1;
     }
     return after_set(fmu, &before, any_input, any_parameter);
 }
@@ -517,13 +527,14 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
             return fmi2Error;
         }
     }
-    ModelVariables before = fmu->s.v;
-    int any_input = 0, any_parameter = 0;
+    const int any_parameter = sets_parameter(vr, nvr);
+    ModelVariables before;
+    if (any_parameter) before = fmu->s.v;
+    int any_input = 0;
     for (size_t i = 0; i < nvr; i++) {
         FmuText *text = (FmuText *)value_address(fmu, (int)vr[i]);
         strcpy(text->text, value[i] ? value[i] : ""); /* the FMU keeps its own copy (FMI 2.0, 2.1.7) */
         if (fmu_variables[vr[i]].causality == FMU_INPUT) any_input = 1;
-        else any_parameter = 1;
     }
     return after_set(fmu, &before, any_input, any_parameter);
 }
