@@ -14,6 +14,7 @@ command builds it.
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -43,13 +44,23 @@ def _sources() -> list[Path]:
             *(ROOT / "tests" / "fmus").rglob("*"), *(ROOT / "cosim" / "engine" / "kernel").rglob("*.[ch]")]
 
 
+@functools.lru_cache(maxsize=1)
+def _newest_source() -> tuple[float, Path] | None:
+    """The newest C source or build file and its time, looked up once a process (a run asks for
+    its FMUs and libraries dozens of times; the sources do not change under it)."""
+    sources = [p for p in _sources() if p.is_file()]
+    if not sources:
+        return None
+    newest = max(sources, key=lambda p: p.stat().st_mtime)
+    return newest.stat().st_mtime, newest
+
+
 def _check(path: Path, what: str) -> Path:
     if not path.exists():
         raise ArtifactMissing(f"{what} is not built ({path} is missing): run `{BUILD_COMMAND}`")
-    sources = [p for p in _sources() if p.is_file()]
-    if sources and (not BUILD_STAMP.exists() or BUILD_STAMP.stat().st_mtime < max(p.stat().st_mtime for p in sources)):
-        newest = max(sources, key=lambda p: p.stat().st_mtime)
-        raise ArtifactMissing(f"the build in {BUILD_DIR} is older than {newest.relative_to(ROOT)}: "
+    newest = _newest_source()
+    if newest and (not BUILD_STAMP.exists() or BUILD_STAMP.stat().st_mtime < newest[0]):
+        raise ArtifactMissing(f"the build in {BUILD_DIR} is older than {newest[1].relative_to(ROOT)}: "
                               f"run `{BUILD_COMMAND}`")
     return path
 
