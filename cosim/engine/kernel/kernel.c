@@ -56,8 +56,14 @@ static _Thread_local int on_helper; /* set on the helper thread: its calls' time
  * as a short FMI call, and the few arithmetic operations between the calls of a run (its inputs'
  * polynomials) are counted with them. */
 static double clock_start(void) { return on_helper ? 0.0 : now(); }
-static void clock_stop(Kernel *s, int k, double started) {
-    if (!on_helper) s->fmi_seconds[k] += now() - started;
+/* Charges the time since `started` to instance k; returns the time read (0 on the helper). A run of
+ * members that follow each other (a Gauss-Seidel sweep) starts each at the previous one's stop, one
+ * clock read a member: what the loop does between them is counted with the next. */
+static double clock_stop(Kernel *s, int k, double started) {
+    if (on_helper) return 0.0;
+    const double stopped = now();
+    s->fmi_seconds[k] += stopped - started;
+    return stopped;
 }
 
 #define FMI_CALL(s, k, code, expression)                                                          \
@@ -373,12 +379,14 @@ static int start_up(Kernel *s, double t, double h) {
 
 /* ---- a stage on two threads ---- */
 
-/* One Gauss-Seidel member: its inputs, its step, its outputs. */
-static int step_member(Kernel *s, int k, double t, double t_new, double h) {
-    const double started = clock_start();
+/* One Gauss-Seidel member: its inputs, its step, its outputs; timed from *lap (the previous
+ * member's stop), which it moves to its own stop (NULL: timed on its own). */
+static int step_member(Kernel *s, int k, double t, double t_new, double h, double *lap) {
+    const double started = lap ? *lap : clock_start();
     const int ok = (s->instances[k].n_inputs == 0 || set_inputs(s, k, t, t_new, s->order)) && do_step(s, k, h) &&
                    read_outputs(s, k);
-    clock_stop(s, k, started);
+    const double stopped = clock_stop(s, k, started);
+    if (lap) *lap = stopped;
     return ok;
 }
 
@@ -410,15 +418,16 @@ static void *helper_main(void *arg) {
         seen = generation;
         int ok = 1;
         for (int j = helper->first; j < helper->last && ok; j++)
-            ok = step_member(helper->s, helper->s->sequence[j], helper->t, helper->t_new, helper->h);
+            ok = step_member(helper->s, helper->s->sequence[j], helper->t, helper->t_new, helper->h, NULL);
         helper->status = ok;
         atomic_store(&helper->finished, generation);
     }
 }
 
 /* Sequence positions [j0, j1) (a stage) on two threads: the first half here, the rest on the
- * helper; the main thread's wait counts as the helper's first member's FMI time. */
-static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, double h) {
+ * helper; the main thread's wait counts as the helper's first member's FMI time. Timed from *lap,
+ * as step_member. */
+static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, double h, double *lap) {
     Helper *helper = s->helper;
     if (!helper) {
         helper = calloc(1, sizeof *helper);
@@ -431,7 +440,7 @@ static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, dou
         if (!helper) { /* no second thread to be had: this stage, and the next, one after another */
             s->threads = 1;
             for (int j = j0; j < j1; j++)
-                if (!step_member(s, s->sequence[j], t, t_new, h)) return 0;
+                if (!step_member(s, s->sequence[j], t, t_new, h, lap)) return 0;
             return 1;
         }
         s->helper = helper;
@@ -442,11 +451,10 @@ static int parallel_stage(Kernel *s, int j0, int j1, double t, double t_new, dou
     const int generation = atomic_load(&helper->generation) + 1;
     atomic_store(&helper->generation, generation);
     int ok = 1;
-    for (int j = j0; j < helper->first && ok; j++) ok = step_member(s, s->sequence[j], t, t_new, h);
-    const double waiting = now();
+    for (int j = j0; j < helper->first && ok; j++) ok = step_member(s, s->sequence[j], t, t_new, h, lap);
     for (long spins = 0; atomic_load(&helper->finished) != generation;)
         if (++spins > 2000) sched_yield(); /* the helper may be waiting for this core */
-    s->fmi_seconds[s->sequence[helper->first]] += now() - waiting;
+    *lap = clock_stop(s, s->sequence[helper->first], *lap);
     return ok && helper->status;
 }
 
@@ -513,12 +521,13 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
         if (!start_up(s, t, h)) return 0;
     } else {
         memset(s->stepped, 0, (size_t)s->n_instances * sizeof(int));
+        double lap = clock_start(); /* one clock read a member from here on */
         if (s->gauss_seidel) {
             for (int j = 0; j < s->n_instances;) {
                 const int end = s->threads > 1 && s->stage_end ? s->stage_end[j] : j + 1;
                 if (end - j > 1) {
-                    if (!parallel_stage(s, j, end, t, t_new, h)) return 0;
-                } else if (!step_member(s, s->sequence[j], t, t_new, h)) {
+                    if (!parallel_stage(s, j, end, t, t_new, h, &lap)) return 0;
+                } else if (!step_member(s, s->sequence[j], t, t_new, h, &lap)) {
                     return 0;
                 }
                 j = end;
@@ -526,16 +535,14 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
         } else {
             for (int j = 0; j < s->n_instances; j++) {
                 const int k = s->sequence[j];
-                const double started = clock_start();
                 const int ok = s->instances[k].n_inputs == 0 || set_inputs(s, k, t, t_new, s->order);
-                clock_stop(s, k, started);
+                lap = clock_stop(s, k, lap);
                 if (!ok) return 0;
             }
             for (int j = 0; j < s->n_instances; j++) {
                 const int k = s->sequence[j];
-                const double started = clock_start();
                 const int ok = do_step(s, k, h) && read_outputs(s, k);
-                clock_stop(s, k, started);
+                lap = clock_stop(s, k, lap);
                 if (!ok) return 0;
             }
         }
