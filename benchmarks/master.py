@@ -4,23 +4,22 @@ Simulation Platform's engine) stepping the same eight FMUs with the same connect
 step.
 
 Configurations: the paper's scene (Gauss-Seidel order 1 at 1 ms, the drives' exponential integrator
-at 1 ms, the mechanics' Heun at 1 ms, the first 75 ms and the 5 ms after each edge of the impact at a
-sixteenth: the cheapest numerics measured to hold the shipped scenes' tolerances); the same at its
+at 1 ms, the mechanics' Heun at 1 ms, the first 75 ms and the 5 ms after each edge of the impact at
+a sixteenth: the cheapest numerics measured to hold the shipped scenes' tolerances); the same at its
 numerics before (the drives' RK4 at the FMU's 0.1 ms, the first 0.1 s and 20 ms after each edge at a
 sixteenth, the mechanics' RK4); with the mechanics' RK4 at 1 ms; with the drives' RK4 at 0.2 ms;
-with the drives on the L-stable ROS34PW2 at the macro step;
-scenes/meng_eq35_fast.toml, the paper's scene with the drives on two threads; and the
-interface-Jacobian coupling (each drive's d torque / d speed
-applied in the mechanics) at 2 ms, the start and the 20 ms after each edge of the impact at a
+with the drives on the L-stable ROS34PW2 at the macro step; scenes/meng_eq35_fast.toml, the paper's
+scene with the drives on two threads; and the interface-Jacobian coupling (each drive's d torque / d
+speed applied in the mechanics) at 2 ms, the start and the 20 ms after each edge of the impact at a
 sixteenth, the drives' RK4 at 0.2 ms and the mechanics' RK4 at 2 ms (on Heun's method, whose
-stability interval is shorter, the slopes' damping makes it diverge as the finer start ends). For each: the largest pose error
-[m, rad] and drive torque error [% of the torques' peak] at its own steps, through the start-up and
-the impact, against the scene at 31.25 us throughout (its own convergence is printed: its
-difference to the run at 62.5 us), the wall time (the best of five, taken in rounds over the configurations so
-that a busy spell of the machine hits them alike), the real-time factor and the master's share of
-the wall time. libcosim's fixed-step algorithm holds inputs constant over a step (our order-0
-Jacobi): its pose differs from ours by its coupling error (trade.py measures it against the same
-kind of reference on 1 s probes).
+stability interval is shorter, the slopes' damping makes it diverge as the finer start ends). For
+each: the largest pose error [m, rad] and drive torque error [% of the torques' peak] at its own
+steps, through the start-up and the impact, against the scene at 31.25 us throughout (its own
+convergence is printed: its difference to the run at 62.5 us), the wall time (the best of five,
+taken in rounds over the configurations so that a busy spell of the machine hits them alike), the
+real-time factor and the master's share of the wall time. libcosim's fixed-step algorithm holds
+inputs constant over a step (our order-0 Jacobi): its pose differs from ours by its coupling error
+(trade.py measures it against the same kind of reference on 1 s probes).
 
 The torques' error is also given per window (cosim.platform.accuracy): the start-up, the impact
 with the 0.2 s after it, the steady tracking, each against the reference's own change there, so
