@@ -132,3 +132,22 @@ def test_the_slopes_work_shows_in_the_energy_residual():
     assert 5 * plain < slopes < 20 * plain, (plain, slopes)
     assert max(np.abs(runs[True][0][f"pose.{a}"] - runs[False][0][f"pose.{a}"]).max()
                for a in ("x", "y", "z", "roll", "pitch", "yaw")) < 2e-6
+
+
+def test_under_the_interface_jacobian_the_mechanics_needs_rk4_at_2ms():
+    """The drives' slopes put their speed loops' damping into the mechanics' equations. At 2 ms,
+    the finer start over, Heun's method (stability interval 2 on the negative real axis, the
+    shipped scenes' mechanics) lets the paper's scene diverge where RK4 (2.8) holds it; so the
+    interface-Jacobian candidates of `cosim advise` run the mechanics on RK4."""
+    from conftest import INTERFACE_JACOBIAN_2MS
+    from cosim.platform.advise import _point
+    from cosim.platform.scene import load_scene
+    numerics = {**INTERFACE_JACOBIAN_2MS, "scene.duration": 0.4}
+    heun = load_scene("meng_eq35", numerics)
+    assert heun.mechanics_parameters["solver.method"] == 5
+    with pytest.raises(SceneFailed, match="diverged"):
+        run_scene(heun, plots=False)
+    _, report = run_scene(load_scene("meng_eq35", {**numerics, 'mechanics.parameters."solver.method"': 1}), plots=False)
+    assert report.macro_steps > 0
+    point = _point(load_scene("meng_eq35"), 2.0, (), "averaged inverter", True, False)
+    assert point['mechanics.parameters."solver.method"'] == 1
