@@ -889,7 +889,6 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 #endif
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
-    memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given);
     for (int k = 0; k < fmu->n_real_outputs; k++) {
         const int vr = fmu->real_outputs[k];
         if (!isfinite(*(double *)value_address(fmu, vr))) {
@@ -900,6 +899,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
             return fmi2Error;
         }
     }
+    memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given); /* spent by the step */
     return fmu->warned && !fmu->s.v.fmi_warnings_as_ok ? fmi2Warning : fmi2OK;
 }
 
