@@ -24,7 +24,7 @@ from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.design import (basic_motions, confirm, design_map, load_study, parallel_map,  # noqa: E402
                                    platform_values)
-from cosim.platform.platform_core import Core  # noqa: E402
+from cosim.platform.core import Core  # noqa: E402
 
 
 def main() -> None:

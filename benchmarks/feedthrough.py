@@ -24,7 +24,7 @@ from common import publish  # noqa: E402
 from cosim.engine import Algorithm, Execution, FixedStep  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.ports import POSE, per_leg  # noqa: E402
-from cosim.platform.runner import SceneFailed, run_scene  # noqa: E402
+from cosim.platform.run.runner import SceneFailed, run_scene  # noqa: E402
 from cosim.platform.scene import load_scene  # noqa: E402
 from test_coupling import exact_position_1, oscillator  # noqa: E402
 

@@ -21,7 +21,7 @@ real-time factor and the master's share of the wall time. libcosim's fixed-step 
 inputs constant over a step (our order-0 Jacobi): its pose differs from ours by its coupling error
 (trade.py measures it against the same kind of reference on 1 s probes).
 
-The torques' error is also given per window (cosim.platform.accuracy): the start-up, the impact
+The torques' error is also given per window (cosim.platform.run.accuracy): the start-up, the impact
 with the 0.2 s after it, the steady tracking, each against the reference's own change there, so
 that an error that passes as a fraction of the start-up shock's peak shows at its size through the
 impact; for a configuration with the interface Jacobian, the torques the legs felt (what the run
@@ -60,11 +60,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish, run_stepping  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.engine.results import write  # noqa: E402
-from cosim.platform.libcosim import run_in_libcosim  # noqa: E402
+from cosim.platform.run.libcosim import run_in_libcosim  # noqa: E402
 from cosim.engine.settings import FixedStep  # noqa: E402
-from cosim.platform.runner import run_scene, scene_structure  # noqa: E402
+from cosim.platform.run.runner import run_scene, scene_structure  # noqa: E402
 from cosim.platform.scene import load_scene, scene_settings, shipped_scenes  # noqa: E402
-from cosim.platform.accuracy import AFTER, START_UP, difference, window_errors, windows  # noqa: E402
+from cosim.platform.run.accuracy import AFTER, START_UP, difference, window_errors, windows  # noqa: E402
 from cosim.platform.ports import DRIVES, POSE, per_leg  # noqa: E402
 
 SCENE = ROOT / "scenes" / "meng_eq35.toml"
@@ -226,14 +226,14 @@ def main() -> None:
                             "--duration", repr(args.duration)], check=True, capture_output=True)
             end_to_end.append(time.perf_counter() - began)
             began = time.perf_counter()
-            subprocess.run([sys.executable, "-c", "import cosim.__main__, cosim.platform.runner"], check=True)
+            subprocess.run([sys.executable, "-c", "import cosim.__main__, cosim.platform.run.runner"], check=True)
             imports.append(time.perf_counter() - began)
         ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}), plots=False)[0]
         began = time.perf_counter()
         write(ours, Path(out), "timing")
         writing = time.perf_counter() - began
     final = np.array([ours[f"pose.{a}"][-1] for a in POSE])
-    lines += ["", "The drive torques' error per window (cosim.platform.accuracy: the start-up's first "
+    lines += ["", "The drive torques' error per window (cosim.platform.run.accuracy: the start-up's first "
               f"{START_UP:g} s, each load pulse and the {AFTER:g} s after it, the steady tracking between), in N m and "
               "relative to the reference torques' own change in that window:", "",
               "| configuration | " + " | ".join(w.name for w in spans) + " |",

@@ -40,7 +40,7 @@ sys.path.insert(0, str(HERE.parent))
 from common import native_bench, publish, run_stepping  # noqa: E402
 from cosim.engine.artifacts import library_path  # noqa: E402
 from cosim.engine.observers import TaskProgress  # noqa: E402
-from cosim.platform.platform_core import Core  # noqa: E402
+from cosim.platform.core import Core  # noqa: E402
 from cosim.platform.ports import POSE  # noqa: E402
 
 TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]

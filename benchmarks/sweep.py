@@ -25,11 +25,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.engine.sweep import run_sweep  # noqa: E402
-from cosim.platform.sweep import load_sweep  # noqa: E402
+from cosim.platform.run.sweep import load_sweep  # noqa: E402
 
 LOOP = """
 import sys, time
-from cosim.platform.sweep import load_sweep
+from cosim.platform.run.sweep import load_sweep
 sweep = load_sweep(sys.argv[1])
 start = time.perf_counter()
 for point in sweep.points:

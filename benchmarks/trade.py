@@ -7,7 +7,7 @@ and its ECCO algorithm with a power bond per drive).
 For each point: the pose error against a converged reference, for our points the drive efforts'
 error (torque or force as the legs feel them, at every step through the start-up, relative to the
 peak, and in its worst window relative to the efforts' own change there and against the shipped
-scenes' tolerances: cosim.platform.accuracy), the largest
+scenes' tolerances: cosim.platform.run.accuracy), the largest
 energy residual of a bond in one step, macro steps, wall time and real-time factor. Our points
 run as one sweep (cosim.engine.sweep) on every core. The reference is the scene under
 Gauss-Seidel of order 1 at a sixteenth of its step; its convergence is shown as its difference to
@@ -33,14 +33,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.engine import EnergyControl  # noqa: E402
-from cosim.platform.libcosim import run_in_libcosim  # noqa: E402
-from cosim.platform.results import save_figure  # noqa: E402
+from cosim.platform.run.libcosim import run_in_libcosim  # noqa: E402
+from cosim.platform.report.plots import save_figure  # noqa: E402
 from cosim.engine.observers import TaskProgress  # noqa: E402
 from cosim.engine.sweep import run_sweep  # noqa: E402
-from cosim.platform.runner import run_scene  # noqa: E402
-from cosim.platform.sweep import ScenePoint  # noqa: E402
+from cosim.platform.run.runner import run_scene  # noqa: E402
+from cosim.platform.run.sweep import ScenePoint  # noqa: E402
 from cosim.platform.scene import Scene, load_scene  # noqa: E402
-from cosim.platform.system import POSE  # noqa: E402
+from cosim.platform.run.system import POSE  # noqa: E402
 
 
 @dataclass

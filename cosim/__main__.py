@@ -17,8 +17,8 @@ from pathlib import Path
 
 from .engine.artifacts import INSTALLED, ROOT
 from .engine.ssp import ANNOTATION
-from .platform.runner import SceneFailed, run_scene
-from .platform.scene import SceneError, load_scene
+from .platform.run.runner import SceneFailed, run_scene
+from .platform.scene.reader import SceneError, load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,7 +79,7 @@ def _main(argv: list[str] | None = None) -> int:
     advise.add_argument("--workers", type=int, help="Dask worker processes for the probes (default: one per core; "
                         "0: in this process)")
     advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
-    sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (see cosim.platform.sweep)")
+    sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (see cosim.platform.run.sweep)")
     sweep.add_argument("sweep", type=Path, help="the sweep file (TOML)")
     sweep.add_argument("--workers", type=int, help="worker processes of a local Dask cluster (default: one per core; "
                        "0: no Dask, in this process)")
@@ -120,8 +120,8 @@ def _main(argv: list[str] | None = None) -> int:
         print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
         return 0
     if args.command == "view":
-        from .platform.runner import scene_error, scene_values
-        from .platform.view3d import write_view
+        from .platform.run.runner import scene_error, scene_values
+        from .platform.report.view3d import write_view
         try:
             scene = load_scene(args.scene)
             path, lines = write_view(scene, scene_values(scene)[0], args.out / f"{scene.path.stem}_view.html")
@@ -201,7 +201,7 @@ def report(run, user_errors: tuple, failure: type, written: str, out: Path) -> i
 
 def run_design(study: str, out: Path, workers: int, scheduler: str | None) -> int:
     from .platform.design import StudyError, load_study, parallel_map, report_rows, summary, write
-    from .platform.scene import shipped
+    from .platform.scene.reader import shipped
     if workers < 0:
         print(f"error: --workers {workers}: must be 0 (in this process) or more", file=sys.stderr)
         return 2
@@ -222,7 +222,7 @@ def copy_shipped(name: str | None, to: Path) -> int:
     """Copies a shipped scene or sweep file into `to` (never over a file), or lists them."""
     import difflib
     import shutil
-    from .platform.scene import shipped, shipped_scenes
+    from .platform.scene.reader import shipped, shipped_scenes
     kinds = {folder: shipped_scenes(folder) for folder in ("scenes", "sweeps", "studies")}
     if name is None:
         for folder, names in kinds.items():
@@ -251,7 +251,7 @@ def copy_shipped(name: str | None, to: Path) -> int:
 
 def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | None) -> int:
     from .engine.sweep import SweepError, column_name, plot_sweep, run_sweep
-    from .platform.sweep import load_sweep
+    from .platform.run.sweep import load_sweep
     if workers is not None and workers < 0:
         print(f"error: --workers {workers}: must be 0 (no Dask) or more", file=sys.stderr)
         return 2
@@ -283,13 +283,13 @@ def run_sweep_file(path: Path, out: Path, workers: int | None, scheduler: str | 
 def export_scene(path: Path, ssp: Path | None, osp: Path | None, warnings_as_ok: bool = False) -> int:
     from .engine.osp import write_osp
     from .engine.ssp import SspError, not_portable, write_ssp
-    from .platform.runner import scene_structure
+    from .platform.run.runner import scene_structure
     if ssp is None and osp is None:
         print("error: export: give --ssp FILE.ssp, --osp DIR or both", file=sys.stderr)
         return 2
     from .engine import ParameterError
     from .engine.checks import check_parameters
-    from .platform.runner import scene_error
+    from .platform.run.runner import scene_error
     try:
         scene = load_scene(path)
         structure = scene_structure(scene)

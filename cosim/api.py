@@ -27,7 +27,7 @@ import numpy as np
 
 from .engine.outcome import Report, RunStopped
 from .engine.structure import SystemStructure
-from .platform.scene import Scene, SceneError, load_scene
+from .platform.scene.reader import Scene, SceneError, load_scene
 
 SYSTEM_SUFFIXES = (".ssp", ".ssd")
 
@@ -117,7 +117,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         else:
             values, report = run_ssp(Path(model), target, dict(settings or {}), duration)
         return Run(values, report)
-    from .platform.runner import run_scene
+    from .platform.run.runner import run_scene
     scene = model if isinstance(model, Scene) else load_scene(model, dict(overrides or {}))
     if isinstance(model, Scene) and overrides:
         scene = load_scene(scene.path, {**scene.overrides, **overrides})
@@ -131,7 +131,7 @@ def export_ssp(scene: str | Path | Scene, path: str | Path) -> Path:
     """Writes a scene as an SSP 1.0 archive: its FMUs, parameter values (SSV), connections, and
     our run settings in an annotation that other tools ignore. Returns the archive's path."""
     from .engine.ssp import write_ssp
-    from .platform.runner import scene_structure
+    from .platform.run.runner import scene_structure
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
     return write_ssp(scene_structure(loaded), Path(path))
 
@@ -151,7 +151,7 @@ def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None
         SweepError: a bad sweep file (one line naming the file and line).
     """
     from .engine.sweep import run_sweep
-    from .platform.sweep import load_sweep
+    from .platform.run.sweep import load_sweep
     loaded = load_sweep(file)
     return run_sweep(loaded.name, loaded.points, loaded.evaluate, loaded.columns, Path(out), loaded.signature,
                      workers=workers, scheduler=scheduler, points_per_task=loaded.points_per_task,

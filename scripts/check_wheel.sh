@@ -68,7 +68,7 @@ python - "$ADDRESS" <<'EOF'
 import sys
 from distributed import Client
 from cosim.engine.sweep import run_sweep
-from cosim.platform.sweep import load_sweep
+from cosim.platform.run.sweep import load_sweep
 with Client(sys.argv[1], timeout="60s") as client:
     client.wait_for_workers(2, timeout=120)
 for name in ("scene_sweep", "ssp_sweep"):

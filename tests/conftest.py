@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from fmpy import extract
 
-from cosim.platform.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import load as load_parameter_set
 from cosim.engine.fmi import FmuInstance
 from cosim.engine.artifacts import fmu_path
 

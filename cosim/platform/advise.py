@@ -28,9 +28,9 @@ import numpy as np
 
 from ..engine.sweep import run_sweep
 from .ports import POSE
-from .runner import run_scene
-from .scene import Scene
-from .sweep import ScenePoint
+from .run.runner import run_scene
+from .scene.reader import Scene
+from .run.sweep import ScenePoint
 
 EFFECTS = ("effects.motor_inertia", "effects.actuator_inertia", "effects.friction")
 FIDELITY = {"pmsm": {"averaged inverter": {"inverter.model": 2}, "ideal inverter": {"inverter.model": 1}},
@@ -99,11 +99,11 @@ def advise(scene: Scene, tolerance: float, probe: float | None = None, effort_to
            workers: int | None = None, redesign: bool = True) -> tuple[list[Candidate], dict]:
     """Every candidate's errors against the reference and its cost; workers as in
     cosim.engine.sweep.run_sweep (None: every core). redesign: a candidate that leaves effects out
-    runs its drives with loops designed for its reduced plant (cosim.platform.tuning), as a
+    runs its drives with loops designed for its reduced plant (cosim.platform.run.tuning), as a
     designer would; the full-model candidates keep the scene's own gains."""
     # by default the probe lasts 2 s and reaches past the first load pulse and the 0.2 s after it,
     # where the efforts are judged against their own change
-    from .accuracy import AFTER
+    from .run.accuracy import AFTER
     first = min((pulse.end + AFTER for pulse in scene.pulses if pulse.start < scene.duration), default=0.0)
     duration = min(scene.duration, probe if probe is not None else max(2.0, first))
     own = next(name for name, values in fidelities(scene).items()

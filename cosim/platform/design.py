@@ -38,8 +38,8 @@ from typing import Any, Callable
 import numpy as np
 
 from ..engine.tomlfile import line_of, read
-from .parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
-from .platform_core import Core
+from .scene.parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
+from .core import Core
 from .ports import POSE
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
@@ -619,11 +619,11 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> R
     interpolation), the one reader of tables. Either sampled `samples` times evenly over its
     duration (at least 4); the rates and accelerations are the samples' second-order differences.
     Raises StudyError with the reason (the caller adds the file and line)."""
-    from .platform_core import neutral_pose
-    from .runner import scene_values
-    from .scene import SceneError, Signal, load_scene, shipped
-    from .signals import scene_trajectory, trajectory_parameters
-    from .view3d import play
+    from .core import neutral_pose
+    from .run.runner import scene_values
+    from .scene.reader import SceneError, Signal, load_scene, shipped
+    from .scene.signals import scene_trajectory, trajectory_parameters
+    from .report.view3d import play
     if not isinstance(source, str) or not source:
         raise StudyError(f"= {source!r} must name a {'scene' if kind == 'scene' else 'CSV file'}")
     given = study_path.parent / source
@@ -804,7 +804,7 @@ def nearest(study: Study, point: tuple[float, float]) -> tuple[int, int]:
 def paper_rows(design: DesignMap) -> list:
     """Section V's stated numbers beside ours (validation rows), and what the paper's
     simplification of the dynamics costs, for a study over base_radius and disc_height."""
-    from .validation.rows import Row
+    from .report.rows import Row
     study = design.study
     (_, rows), (_, columns) = list(study.axes.items())
     s = stubs(study)
@@ -864,7 +864,7 @@ def map_rows(design: DesignMap) -> list:
     """Any study's answer: per actuator the admissible designs (kinematic, then with its forces and
     speed) and their extent along each axis; the smallest stroke that carries every motion within
     the joint limit, where, and the running lengths it needs there."""
-    from .validation.rows import Row
+    from .report.rows import Row
     study = design.study
     (row_key, rows), (column_key, columns) = list(study.axes.items())
     out = []
@@ -906,7 +906,7 @@ def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | Non
 
 def summary(design: DesignMap, rows: list | None = None) -> list[str]:
     """Markdown lines: the grid, the rows (report_rows unless given), the map's speed."""
-    from .validation.rows import table
+    from .report.rows import table
     (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
     return [f"Grid: {span(row_key, grid_rows)} x {span(column_key, columns)}, {design.points} points, " + (f"the motion of {design.study.recorded.name} "
                                              f"({len(design.study.recorded.times)} samples)." if design.study.recorded else
@@ -1088,7 +1088,7 @@ def study_workspace(study: Study) -> Workspace | None:
 
 def workspace_rows(study: Study, space: Workspace) -> list:
     """The [workspace] design's reach, volume, conditioning and singular distances as rows."""
-    from .validation.rows import Row
+    from .report.rows import Row
     where = ", ".join(value(k, v) for k, v in study.workspace["point"].items())
     reach = space.reach()
     lines = [Row(f"reachable positions at the neutral orientation ({where}, {study.workspace['actuator']})", "",
@@ -1171,7 +1171,7 @@ def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None =
 
 
 def optimum_rows(study: Study, best: Optimum) -> list:
-    from .validation.rows import Row
+    from .report.rows import Row
     where = ", ".join(value(k, v, ".3f") for k, v in best.point.items())
     worst = min(best.margins, key=best.margins.get)
     return [Row(f"the most robust design for {study.optimise['actuator']} (largest worst-case margin)", "", where, "",
@@ -1209,10 +1209,10 @@ def scene_fit(scene, parameter: str, values: np.ndarray, samples: int = 2001) ->
     through the dynamics core, against the platform's stroke and joint limit. The motion is the
     reference poses; a parameter that moves the neutral moves the platform under them (the scene's
     offsets at "neutral" follow it)."""
-    from .platform_core import mechanics_value
-    from .runner import scene_values
-    from .scene import load_scene
-    from .view3d import reference_motion
+    from .core import mechanics_value
+    from .run.runner import scene_values
+    from .scene.reader import load_scene
+    from .report.view3d import reference_motion
     shortest, longest, angle = [], [], []
     base_values = scene_values(scene)[0]
     stroke = (float(mechanics_value(base_values, "limit.leg_length_min")),
@@ -1264,7 +1264,7 @@ def drive_parameters(study: Study, drive: str) -> tuple[dict, dict, str]:
     """For a confirmation through our drive FMU of kind `drive`: its parameters and what it changes
     on the legs (the platform's drive set where the project has one, e.g. meng2010_linear; the
     FMU's own defaults otherwise: Meng's PMSM, Sumnu's linear motor), and the drive's name."""
-    from .parameter_sets import drive_set, drive_set_name
+    from .scene.parameter_sets import drive_set, drive_set_name
     name = drive_set_name(study.parameter_set, drive)
     if name is None:
         return {}, {}, {"pmsm": "pmsm_drive (Meng's PMSM, Table 2)", "linear": "linear_motor (Sumnu's motor)"}[drive]
@@ -1286,10 +1286,10 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
     reason as "problem"."""
     import tempfile
     from ..engine import FixedStep
-    from .scene import Signal
-    from .signals import trajectory_parameters
-    from .system import columns, default_algorithm, platform_structure, run
-    from .tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
+    from .scene.reader import Signal
+    from .scene.signals import trajectory_parameters
+    from .run.system import columns, default_algorithm, platform_structure, run
+    from .run.tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
     t, displacement, rates, accelerations = motion_profile(study, dof)
     values = platform_values(study, point, effects=True)
     if drive == "force":
@@ -1386,7 +1386,7 @@ def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | N
 
 
 def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list:
-    from .validation.rows import Row
+    from .report.rows import Row
     where = ", ".join(value(k, v) for k, v in study.confirm["point"].items())
     out = []
     for r in runs:

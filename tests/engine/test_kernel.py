@@ -13,11 +13,11 @@ import oracle
 from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RecordFull, RunFailed,
                           StepDoubling, SystemStructure)
 from cosim.engine.artifacts import ROOT
-from cosim.platform.runner import scene_record, scene_settings, scene_structure
+from cosim.platform.run.runner import scene_record, scene_settings, scene_structure
 from cosim.platform.scene import load_scene
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.signals import scene_trajectory
-from cosim.platform.system import default_algorithm, platform_structure
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.scene.signals import scene_trajectory
+from cosim.platform.run.system import default_algorithm, platform_structure
 from test_coupling import oscillator
 
 

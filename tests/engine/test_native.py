@@ -11,7 +11,7 @@ import pytest
 from cosim.engine import kernel
 from cosim.engine.artifacts import library_path
 from cosim.engine.native import LayoutError, check_layout, published_layout, python_layout
-from cosim.platform import platform_core
+from cosim.platform import core as platform_core
 
 
 def test_the_bindings_match_the_builds():

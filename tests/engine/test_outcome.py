@@ -13,7 +13,7 @@ from cosim.engine.fmi import FmuInstance
 from cosim.engine.outcome import Report, execute
 from cosim.engine.ssp import write_ssp
 from cosim.engine.artifacts import ROOT
-from cosim.platform.runner import run_scene, scene_structure
+from cosim.platform.run.runner import run_scene, scene_structure
 from cosim.platform.scene import load_scene
 from test_coupling import oscillator
 

@@ -13,7 +13,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from cosim.platform.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import load as load_parameter_set
 from cosim.engine.artifacts import ROOT, fmu_path
 
 SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
@@ -139,7 +139,7 @@ def test_platform_runs_in_libcosim():
     from libcosimpy.CosimObserver import CosimObserver
     from libcosimpy.CosimSlave import CosimLocalSlave
 
-    from cosim.platform.parameter_sets import mechanics_start_values
+    from cosim.platform.scene.parameter_sets import mechanics_start_values
 
     mech_path, motor_path = fmu_path("mechanics"), fmu_path("linear_motor")
     mech_vr = {v.name: v for v in read_model_description(str(mech_path)).modelVariables}
@@ -198,8 +198,8 @@ def test_a_whole_scene_runs_in_libcosim():
     so they differ by the coupling error: measured 0.8 mm)."""
     import dataclasses
 
-    from cosim.platform.libcosim import run_in_libcosim
-    from cosim.platform.runner import run_scene
+    from cosim.platform.run.libcosim import run_in_libcosim
+    from cosim.platform.run.runner import run_scene
     from conftest import paper_scene
 
     scene = dataclasses.replace(paper_scene("meng_eq35"), duration=3.0)  # libcosim at the paper's 1 ms

@@ -15,11 +15,11 @@ from drive_bench import LINEAR, run_on_inertia
 from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
 from drive_bench import RigidInertia
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.scene.parameter_sets import load as load_parameter_set
 from cosim.platform.scene import Signal, Sine
-from cosim.platform.signals import trajectory_parameters
-from cosim.platform.system import POSE, simulate
+from cosim.platform.scene.signals import trajectory_parameters
+from cosim.platform.run.system import POSE, simulate
 
 MOTOR = load_parameter_set("sumnu2015")["linear_motor"]
 
@@ -292,11 +292,11 @@ def test_swapping_the_drive_changes_one_setting():
     """The same Sumnu platform and trajectory with six linear motors or six PMSM drives: only the
     drive kind differs, each drive sized and designed for these legs (the linear motors' defaults
     are the thesis'; the PMSMs come with the project's drive set params/sumnu2015_pmsm.toml, a
-    servo and a 10 mm lead screw, their loops designed by cosim.platform.tuning). Both follow a
+    servo and a 10 mm lead screw, their loops designed by cosim.platform.run.tuning). Both follow a
     1-2 cm, 3 rad/s motion at the 1 ms step: the linear motors within 3 mm and mrad, the PMSMs
     within 5 mm and mrad (their position loop has no velocity feedforward)."""
-    from cosim.platform.parameter_sets import drive_set
-    from cosim.platform.tuning import design, leg_plants
+    from cosim.platform.scene.parameter_sets import drive_set
+    from cosim.platform.run.tuning import design, leg_plants
     values = mechanics_start_values("sumnu2015")
     set_drive, set_mechanics = drive_set("sumnu2015_pmsm")
     pmsm_values = {**values, **set_mechanics}

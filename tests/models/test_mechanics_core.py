@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from cosim.platform.platform_core import Core, load
+from cosim.platform.core import Core, load
 
 
 @pytest.fixture(scope="module")

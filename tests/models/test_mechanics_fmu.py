@@ -9,11 +9,11 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from cosim.platform.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import load as load_parameter_set
 from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.platform_core import Core, load
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.core import Core, load
 from scipy.spatial.transform import Rotation
 
 POSE = ["x", "y", "z", "roll", "pitch", "yaw"]

@@ -9,7 +9,7 @@ import pytest
 from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
 from cosim.platform.scene import Pulse, Ramp, Signal, Sine, Step
-from cosim.platform.signals import trajectory_parameters
+from cosim.platform.scene.signals import trajectory_parameters
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 

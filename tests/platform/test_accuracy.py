@@ -1,4 +1,4 @@
-"""Errors judged where people look (cosim.platform.accuracy, issue 24): the windows of a run (the
+"""Errors judged where people look (cosim.platform.run.accuracy, issue 24): the windows of a run (the
 start-up, each load pulse with the time after it, the steady tracking between) cover it without
 overlap, and a window's error is measured against the reference's own change there, so that an
 error that passes as a fraction of the start-up shock's peak shows at its size through an impact."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cosim.platform.accuracy import window_errors, windows
+from cosim.platform.run.accuracy import window_errors, windows
 from cosim.platform.scene import Pulse
 
 

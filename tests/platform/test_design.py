@@ -16,8 +16,8 @@ from cosim.__main__ import main
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import (Study, basic_motions, design_map, limit_along, load_study, parallel_map,
                                    platform_values, shortest_time, stubs)
-from cosim.platform.parameter_sets import load
-from cosim.platform.platform_core import Core
+from cosim.platform.scene.parameter_sets import load
+from cosim.platform.core import Core
 
 STUDY = ROOT / "studies" / "halder_section5.toml"
 
@@ -261,9 +261,9 @@ def test_a_scenes_motion_as_the_specification():
     same poses; it needs more than Meng's 665 mm stroke at every l_0 tried (the main job's
     out-of-stroke warnings), and a longer l_0 lifts the whole range."""
     from cosim.platform.design import scene_fit
-    from cosim.platform.runner import scene_values
+    from cosim.platform.run.runner import scene_values
     from cosim.platform.scene import load_scene
-    from cosim.platform.view3d import reference_motion
+    from cosim.platform.report.view3d import reference_motion
     scene = load_scene("meng_eq35")
     fit = scene_fit(scene, "geometry.middle_leg_length", np.array([1.80, 1.86]), samples=501)
     _, poses, _ = reference_motion(scene, 501)

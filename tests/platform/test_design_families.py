@@ -16,10 +16,10 @@ import pytest
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import (FAMILIES, basic_motions, design_map, load_study, map_rows, platform_values,
                                    shortest_time)
-from cosim.platform.parameter_sets import load, sumnu_mechanics
-from cosim.platform.platform_core import Core
+from cosim.platform.scene.parameter_sets import load, sumnu_mechanics
+from cosim.platform.core import Core
 from cosim.platform.scene import load_scene
-from cosim.platform.signals import sine_motion
+from cosim.platform.scene.signals import sine_motion
 
 MENG = ROOT / "studies" / "meng_eq35_platform.toml"
 
@@ -166,7 +166,7 @@ def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
     force constant away from those forces (the current loop's error and the motor's friction:
     1 %)."""
     from cosim.platform.design import confirm_motion, confirmation_rows, drive_parameters
-    from cosim.platform.tuning import drive_defaults
+    from cosim.platform.run.tuning import drive_defaults
     point = {"lower_joint_radius": 1.1, "middle_leg_length": 1.86}
     run = confirm_motion(meng, point, meng.actuators[1], "meng_eq35", drive=drive)
     assert run["peak_force"] == pytest.approx(run["predicted_peak"], rel=0.01)

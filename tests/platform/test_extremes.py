@@ -8,12 +8,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.runner import SceneFailed, run_scene
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.run.runner import SceneFailed, run_scene
 from conftest import paper_scene
 from cosim.platform.scene import Pulse, Signal, Sine
-from cosim.platform.signals import scene_trajectory
-from cosim.platform.system import POSE, simulate
+from cosim.platform.scene.signals import scene_trajectory
+from cosim.platform.run.system import POSE, simulate
 
 BASE = dataclasses.replace(paper_scene("meng_eq35"), duration=3.0)
 NOMINAL_ERROR = 3.5e-3  # the scene's largest tracking error after 0.3 s, m or rad, with margin (measured 3.0e-3)

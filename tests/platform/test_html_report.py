@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.runner import run_scene
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -85,7 +85,7 @@ def test_the_numbers_on_the_page_are_the_runs(page):
 
 
 def test_a_failed_run_says_where_and_why_it_stopped(tmp_path):
-    from cosim.platform.runner import SceneFailed
+    from cosim.platform.run.runner import SceneFailed
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0,
                                                            'mechanics.parameters."limit.hard_stop"': True})
     with pytest.raises(SceneFailed):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.runner import run_scene
+from cosim.platform.run.runner import run_scene
 from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import load_scene
 
@@ -97,7 +97,7 @@ def test_the_interface_jacobian_at_2ms_keeps_the_pose_within_1e_5_and_the_torque
     shock's first millisecond, where the reference itself is converged to about 0.3 %; after the
     start 0.21 %, impact included); in 69 % of the shipped scene's macro steps over these 3 s (57 %
     over the whole 10 s)."""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     torques, poses = [f"torque[{i}]" for i in range(1, 7)], [f"pose.{a}" for a in POSE]
     reference, _ = run_scene(paper_scene("meng_eq35", {
         "scene.duration": 3.0, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)

@@ -17,10 +17,10 @@ import pytest
 from cosim.engine.artifacts import fmu_path
 from cosim.engine.checks import variables
 from cosim.engine.fmi import FmuInstance
-from cosim.platform.parameter_sets import mechanics_start_values, scene_mechanics
-from cosim.platform.platform_core import Core, LayoutImpossible, neutral_pose
+from cosim.platform.scene.parameter_sets import mechanics_start_values, scene_mechanics
+from cosim.platform.core import Core, LayoutImpossible, neutral_pose
 from cosim.platform.ports import POSE
-from cosim.platform.tuning import leg_plants
+from cosim.platform.run.tuning import leg_plants
 
 # Every parameter of these groups is swept: the platform's geometry, masses and inertias, the
 # transmission, friction, gravity and the effect switches.

@@ -10,7 +10,7 @@ from cosim.engine import Algorithm, FixedStep
 from cosim.engine.artifacts import ROOT
 from cosim.engine.kernel import stages
 from cosim.engine.settings import from_strings, to_strings
-from cosim.platform.runner import run_scene
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 
 

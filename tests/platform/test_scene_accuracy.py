@@ -14,12 +14,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cosim.platform.accuracy import (POSE_FROM, POSE_TOLERANCE, efforts, steady_bound, tolerance_ratio,
+from cosim.platform.run.accuracy import (POSE_FROM, POSE_TOLERANCE, efforts, steady_bound, tolerance_ratio,
                                      window_errors, windows)
 from cosim.platform.ports import DRIVES, POSE, per_leg
-from cosim.platform.runner import run_scene, scene_values
+from cosim.platform.run.runner import run_scene, scene_values
 from cosim.platform.scene import load_scene, shipped_scenes
-from cosim.platform.tuning import leg_plants
+from cosim.platform.run.tuning import leg_plants
 
 DURATION = 3.0
 

@@ -9,10 +9,10 @@ from scipy.io import loadmat
 
 from cosim.__main__ import main
 from cosim.engine.artifacts import ROOT, fmu_path
-from cosim.platform.runner import SceneFailed, run_scene
+from cosim.platform.run.runner import SceneFailed, run_scene
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.runner import scene_structure
-from cosim.platform.system import DRIVES
+from cosim.platform.run.runner import scene_structure
+from cosim.platform.run.system import DRIVES
 
 SCENES = sorted((ROOT / "scenes").glob("*.toml"))
 
@@ -227,8 +227,8 @@ def test_auto_tuning_on_the_meng_platform_reproduces_the_pmsm_defaults():
     """The documented rules applied to the plant the mechanics' core gives (J_eq = M_ii / (K_FT
     i_theta) = 0.0209 kg m^2 with the rotor, static torque 8.264 N m) give the FMU's own default
     gains, which were designed by hand for it, and the hold current the Meng scene types in."""
-    from cosim.platform.parameter_sets import mechanics_start_values
-    from cosim.platform.tuning import design, leg_plants
+    from cosim.platform.scene.parameter_sets import mechanics_start_values
+    from cosim.platform.run.tuning import design, leg_plants
     from cosim.engine.checks import variables
     values = mechanics_start_values("meng2010")
     designed = design("pmsm", leg_plants(values), {})
@@ -309,7 +309,7 @@ def test_a_shipped_scene_or_sweep_is_copied_out_to_edit_and_runs_from_there(tmp_
     copied = tmp_path / "mine" / "meng_eq35.toml"
     assert copied.read_text() == (ROOT / "scenes" / "meng_eq35.toml").read_text()
     assert main(["copy", "meng_coupling", "--to", str(tmp_path / "mine")]) == 0
-    from cosim.platform.sweep import load_sweep
+    from cosim.platform.run.sweep import load_sweep
     assert load_sweep(tmp_path / "mine" / "meng_coupling.toml").evaluate.path == str(ROOT / "scenes" / "meng_eq35.toml")
     capsys.readouterr()
     assert main(["copy", "meng_eq35", "--to", str(tmp_path / "mine")]) == 2

@@ -10,12 +10,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.runner import SceneFailed, run_scene
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.run.runner import SceneFailed, run_scene
 from conftest import paper_scene
-from cosim.platform.signals import scene_trajectory
+from cosim.platform.scene.signals import scene_trajectory
 from cosim.engine import RunFailed
-from cosim.platform.system import simulate
+from cosim.platform.run.system import simulate
 
 STEPS = (0.25e-3, 0.5e-3, 1e-3, 1.5e-3, 2e-3)
 

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.runner import run_scene, scene_record, scene_settings, scene_structure
+from cosim.platform.run.runner import run_scene, scene_record, scene_settings, scene_structure
 from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.system import POSE, run
+from cosim.platform.run.system import POSE, run
 
 
 def pose_difference(result, reference) -> float:
@@ -116,7 +116,7 @@ def test_a_finer_start_resolves_the_drives_start_up_shock(start_reference):
     shock by more than 15 % of their peak within the first few milliseconds, and the pose by 1e-5;
     with the first 0.1 s at an eighth of the step (the scene's default) the torques stay within 1 %
     of their peak and the pose within 2e-6, for 7 % more macro steps over the 10 s scene."""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     reference, peak = start_reference
     plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}),
                          plots=False)
@@ -135,7 +135,7 @@ def test_drives_on_the_l_stable_solver_at_the_macro_step_need_a_sixteenth_at_the
     per eighth of a millisecond misses the torques by more than 1 % of their peak (measured 1.6 %;
     RK4's two steps of 62.5 us there stay within 1 %); with the start at a sixteenth they stay
     within 1 % (measured 0.53 %) and the pose within 2e-6."""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     reference, peak = start_reference
     rosenbrock = {**START, 'drive.parameters."solver.method"': 3, 'drive.parameters."solver.step"': 1e-3}
     eighth, _ = run_scene(paper_scene("meng_eq35", rosenbrock), plots=False)
@@ -192,7 +192,7 @@ def test_finer_steps_after_the_loads_edges_resolve_the_drives_answer_to_an_impac
     after the start; with the 20 ms after each edge at the start's finer step (`edge_time = 0.02`)
     by 0.62 %, for 280 more macro steps. (In the shipped scene, whose impact comes at 2.5 s: 0.78 %
     and 0.20 % of the whole run's peak, benchmarks/trade.py.)"""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     reference, peak = impact_reference
     settings = {**IMPACT, "scene.step": 1e-3, "coupling.startup_step": 1.25e-4, "coupling.interface_jacobian": False}
     errors, steps = {}, {}

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.parameter_sets import mechanics_start_values
-from cosim.platform.runner import run_scene, scene_structure
+from cosim.platform.scene.parameter_sets import mechanics_start_values
+from cosim.platform.run.runner import run_scene, scene_structure
 from cosim.platform.scene import load_scene
 
 SWAPPED = {"meng_eq35_linear": ("meng_eq35", "SWAPPED_MENG", "Meng on linear motors"),
@@ -96,7 +96,7 @@ def test_the_fast_numerics_on_linear_motors_need_a_longer_finer_start():
     the linear drives' start-up transient is still running; with a 0.2 s finer start they keep 1e-5
     and 1 % (measured 1.0e-6 and 0.24 %, better than the scene's 1 ms). Why the paper's scene has not
     moved to these numerics yet: docs/guide/scenes.md, Step control."""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     path, forces = ROOT / "scenes" / "meng_eq35_linear.toml", [f"force[{i}]" for i in range(1, 7)]
     poses = [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 3.0, "scene.step": 6.25e-5,
@@ -120,7 +120,7 @@ def test_meng_on_linear_motors_converges_at_second_order():
     trajectory's derivatives, all sent, from the first sample on), makes it second order: the pose
     error over 0.5-2 s against the scene at 62.5 us falls at least threefold from 1 ms to 0.5 ms
     (measured 4.5x), and at 1 ms it is under 1e-6 (measured 1.1e-7; it was 1.1e-5)."""
-    from cosim.platform.accuracy import difference
+    from cosim.platform.run.accuracy import difference
     path, poses = ROOT / "scenes" / "meng_eq35_linear.toml", [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": 6.25e-5,
                                                "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)

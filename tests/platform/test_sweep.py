@@ -1,4 +1,4 @@
-"""Sweeps on Dask (cosim.engine.sweep, cosim.platform.sweep): the same rows on a cluster as in one
+"""Sweeps on Dask (cosim.engine.sweep, cosim.platform.run.sweep): the same rows on a cluster as in one
 process, bit for bit; a real scheduler and workers started as separate processes; failing points
 as rows; a killed worker and an interrupted sweep that lose and repeat nothing; one-line errors
 for a bad sweep file."""
@@ -19,7 +19,7 @@ import pytest
 from cosim.__main__ import main
 from cosim.engine.artifacts import ROOT
 from cosim.engine.sweep import Axis, SweepError, grid, latin_hypercube, run_sweep, zipped
-from cosim.platform.sweep import load_sweep
+from cosim.platform.run.sweep import load_sweep
 
 SCENE = ROOT / "scenes" / "meng_eq35.toml"
 # the numerics the studies below count their steps at, whatever the shipped scene's (a sweep file's set)
@@ -79,7 +79,7 @@ def test_a_sweep_on_a_local_cluster_gives_the_rows_of_the_same_points_run_in_one
     csv = np.genfromtxt(tmp_path / "cluster" / "study.csv", delimiter=",", names=True, dtype=None, encoding=None)
     assert np.array_equal(csv["maxposez"], [r["max.pose.z"] for r in rows])
     # a point's reports are those of the scene run on its own
-    from cosim.platform.runner import run_scene
+    from cosim.platform.run.runner import run_scene
     from cosim.platform.scene import load_scene
     result, report = run_scene(load_scene(SCENE, {**FIXED, "scene.duration": 0.2, "scene.step": 1e-3,
                                                   "coupling.order": 1}),

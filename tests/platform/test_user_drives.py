@@ -26,9 +26,9 @@ from cosim.__main__ import main
 from cosim.engine.command import run_ssp
 from cosim.engine.ssp import write_ssp
 from cosim.platform.ports import LEGS
-from cosim.platform.runner import run_scene, scene_structure, scene_values
+from cosim.platform.run.runner import run_scene, scene_structure, scene_values
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.tuning import leg_plants
+from cosim.platform.run.tuning import leg_plants
 
 DRIVES = Path(__file__).parent / "drives"
 BANDWIDTH = 2 * math.pi * 10.0  # [rad/s] the servos' design

@@ -1,4 +1,4 @@
-"""The platform in 3D (cosim.platform.view3d): drawn from the platform the mechanics FMU builds,
+"""The platform in 3D (cosim.platform.report.view3d): drawn from the platform the mechanics FMU builds,
 so every layout draws right; legs marked out of stroke exactly when the mechanics' log says they
 leave it; and in headless Chromium (offline, WebGL through the software renderer) the slider puts
 the platform at the pose the results hold at that time, read back from what was drawn."""
@@ -13,11 +13,11 @@ import pytest
 
 from cosim.__main__ import main
 from cosim.engine.artifacts import ROOT
-from cosim.platform import view3d
-from cosim.platform.parameter_sets import mechanics_start_values, scene_mechanics
-from cosim.platform.platform_core import Core
+from cosim.platform.report import view3d
+from cosim.platform.scene.parameter_sets import mechanics_start_values, scene_mechanics
+from cosim.platform.core import Core
 from cosim.platform.ports import POSE
-from cosim.platform.runner import run_scene, scene_values
+from cosim.platform.run.runner import run_scene, scene_values
 from cosim.platform.scene import load_scene
 from test_html_report import CHROMIUM, chromium
 

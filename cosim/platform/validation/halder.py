@@ -25,15 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import results
-from ..parameter_sets import load, mechanics_start_values
-from ..platform_core import Core
-from ..scene import Pulse, Ramp, Signal, Step
-from ..signals import trajectory_parameters
+from ..report import plots
+from ..scene.parameter_sets import load, mechanics_start_values
+from ..core import Core
+from ..scene.reader import Pulse, Ramp, Signal, Step
+from ..scene.signals import trajectory_parameters
 from ...engine import FixedStep, RunFailed
 from ..ports import POSE
-from ..system import columns, default_algorithm, platform_structure, run
-from .rows import Row
+from ..run.system import columns, default_algorithm, platform_structure, run
+from ..report.rows import Row
 
 STEP = 1e-3
 DURATION = 6.0
@@ -230,4 +230,4 @@ def _plot(data: dict, figures: Path) -> None:
         ax.grid(True, alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    results.save_figure(fig, figures / "halder_fig6.png")
+    plots.save_figure(fig, figures / "halder_fig6.png")

@@ -15,15 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import results
+from ..report import plots
 from ...engine.artifacts import ROOT
-from ..platform_core import Core
-from ..runner import FIGURES, run_scene
-from ..scene import Scene, Signal, Sine, load_scene
-from ..signals import sine_motion
-from ..system import units
+from ..core import Core
+from ..run.runner import FIGURES, run_scene
+from ..scene.reader import Scene, Signal, Sine, load_scene
+from ..scene.signals import sine_motion
+from ..report.plots import units
 from ..ports import POSE, per_leg
-from .rows import Row
+from ..report.rows import Row
 
 SCENES = ROOT / "scenes"
 NEUTRAL_Z = 1.689527733348906
@@ -55,8 +55,8 @@ def tracking(figures: Path | None = None) -> tuple[list[Row], dict]:
     if figures is not None:
         figures.mkdir(parents=True, exist_ok=True)
         impacts = sorted({(p.start, p.end) for p in scene.pulses})
-        results.plot_tracking(result, figures / "meng_eq35_tracking.png", scene.name, FIGURES["meng2010"][0], impacts)
-        results.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed", units("pmsm"),
+        plots.plot_tracking(result, figures / "meng_eq35_tracking.png", scene.name, FIGURES["meng2010"][0], impacts)
+        plots.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed", units("pmsm"),
                             FIGURES["meng2010"][1], impacts)
     # the same run without the impact: its pulses at zero, so that it takes the same steps
     quiet, _ = run_scene(meng_scene(pulses=[dataclasses.replace(p, value=0.0) for p in scene.pulses]))
@@ -152,7 +152,7 @@ def bandwidths(figures: Path | None = None, frequencies=FREQUENCIES, dofs=POSE) 
         for ax in (gain_ax, phase_ax):
             ax.grid(True, which="both", alpha=0.3)
         gain_ax.legend(fontsize=8)
-        results.save_figure(fig, figures / "meng_fig6_bode.png")
+        plots.save_figure(fig, figures / "meng_fig6_bode.png")
     rows = [Row(f"{DOF_NAMES[d]} bandwidth (-3 dB)", PAPER_BANDWIDTH[d], found[d], "Hz",
                 f"resonance peak {peaks[d]:+.1f} dB" if peaks[d] > 0.5 else "") for d in dofs]
     return rows, dict(frequencies=f, responses=responses, bandwidths=found, peaks=peaks)

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...engine.observers import TaskProgress
 from . import halder, meng, sumnu
-from .rows import table
+from ..report.rows import table
 
 INTRO = """# Validation report
 

@@ -14,15 +14,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import results
+from ..report import plots
 from ...engine.artifacts import ROOT
-from ..parameter_sets import mechanics_start_values
-from ..platform_core import Core
-from ..runner import run_scene
-from ..scene import Scene, Signal, Sine, load_scene
-from ..signals import sine_motion
+from ..scene.parameter_sets import mechanics_start_values
+from ..core import Core
+from ..run.runner import run_scene
+from ..scene.reader import Scene, Signal, Sine, load_scene
+from ..scene.signals import sine_motion
 from ..ports import POSE
-from .rows import Row
+from ..report.rows import Row
 
 W = 3.0  # rad/s, every trajectory of the thesis
 F = W / (2 * np.pi)
@@ -66,7 +66,7 @@ def figures_4(figures: Path | None = None) -> tuple[list[Row], dict]:
             axes[row, 0].set_ylabel("leg force [N]")
         for ax in axes[-1]:
             ax.set_xlabel("w t [rad]")
-        results.save_figure(fig, figures / "sumnu_fig4_forces.png")
+        plots.save_figure(fig, figures / "sumnu_fig4_forces.png")
     return rows, data
 
 

@@ -1,7 +1,7 @@
 """Drives designed for the plant they drive.
 
 What a drive designer needs, per leg at the start pose, comes from the mechanics' own dynamics
-core (fmu/mechanics/platform.c: platform_leg_plants, through cosim.platform.platform_core; the
+core (fmu/mechanics/platform.c: platform_leg_plants, through cosim.platform.core; the
 mechanics FMU outputs the same as leg[i].plant.inertia and leg[i].plant.static_force, so other FMI
 tools can design drives from it):
 - the leg's inertia with the other legs held, M_ii of the joint-space mass matrix: twice the
@@ -28,10 +28,10 @@ from typing import Mapping
 
 import numpy as np
 
-from ..engine.checks import variables
-from ..engine.artifacts import fmu_path
-from .platform_core import Core, mechanics_value
-from .ports import DRIVES, POSE
+from ...engine.checks import variables
+from ...engine.artifacts import fmu_path
+from ..core import Core, mechanics_value
+from ..ports import DRIVES, POSE
 
 SPEED_CROSSOVER = 500.0           # w_c [rad/s] of the PMSM speed loop
 POSITION_BANDWIDTH = 2 * math.pi * 10.0  # w [rad/s] of the linear motor's position PID

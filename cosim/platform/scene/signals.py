@@ -8,8 +8,8 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from .scene import CAPACITY, FRAMES, WRENCH_COMPONENTS, Pulse, Scene, Signal
-from .ports import POSE
+from .reader import CAPACITY, FRAMES, WRENCH_COMPONENTS, Pulse, Scene, Signal
+from ..ports import POSE
 
 
 def trajectory_parameters(trajectory: Mapping[str, Signal], pulses: Iterable[Pulse] = (),

@@ -10,7 +10,25 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .ports import LEGS, POSE  # noqa: E402
+from ...engine.artifacts import fmu_path  # noqa: E402
+from ...engine.checks import variables  # noqa: E402
+from ..ports import DRIVES, LEGS, POSE  # noqa: E402
+
+
+def units(drive: str) -> dict[str, str]:
+    """The unit of every variable a platform run can record (the trajectory's, the mechanics' and
+    the drive's; outputs first where two share a name), as the FMUs' modelDescriptions declare it,
+    written for people (N.m -> N m), by variable name: a per-leg column `speed[3]` has the unit of
+    the drive's `speed`."""
+    found = [v for fmu in ("trajectory", "mechanics", DRIVES[drive].fmu) for v in variables(fmu_path(fmu)).values()]
+    out: dict[str, str] = {}
+    for v in sorted(found, key=lambda v: v.causality != "output"):
+        if v.unit:
+            out.setdefault(v.name, v.unit.replace(".", " "))
+            if v.name.startswith("leg[1]."):  # a per-leg mechanics output, recorded as <name>[i]
+                out.setdefault(v.name[len("leg[1]."):], v.unit.replace(".", " "))
+    return out
+
 
 DOF = ["x (surge) [m]", "y (sway) [m]", "z (heave) [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"]
 
@@ -80,7 +98,7 @@ def plot_tracking(result: np.ndarray, path: Path, title: str, source: str = "", 
 def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: str, units: dict[str, str],
                 source: str = "", impacts=(), settle: float = 0.5) -> None:
     """Each drive's speed and effort (torque or force) with their units (by variable name, as
-    cosim.platform.system.units gives them), scaled to after the start-up, and, for each impact,
+    cosim.platform.report.plots.units gives them), scaled to after the start-up, and, for each impact,
     the effort enlarged around it: the shock the drives take while the pose stays put is what
     Meng's Fig 8 shows."""
     t = result["time"]

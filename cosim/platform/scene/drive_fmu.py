@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from .ports import DRIVES
+from ..ports import DRIVES
 
 # the contract's drive ports: (inputs, output) per kind, and their units as FMI writes them
 PORTS = {kind: ((w.reference[1], w.position[1], w.velocity[1]), w.effort[0]) for kind, w in DRIVES.items()}

@@ -16,8 +16,8 @@ from __future__ import annotations
 import math
 import tomllib
 
-from ..engine.artifacts import ROOT, data_dir
-from .ports import LEGS, POSE
+from ...engine.artifacts import ROOT, data_dir
+from ..ports import LEGS, POSE
 
 PARAMS = ROOT / "params"
 
@@ -201,7 +201,7 @@ def scene_mechanics(parameter_set: str, mass_set: str = "heavy", drive_set_name:
     the drive changes on the legs), then the scene's own, which win. The platform starts at its
     neutral pose wherever none of them gives the start pose: the FMU's default start pose is the
     default layout's neutral, which a changed geometry moves."""
-    from .platform_core import neutral_pose
+    from ..core import neutral_pose
     values = {**mechanics_start_values(parameter_set, mass_set), **(drive_set(drive_set_name)[1] if drive_set_name else {}),
               **(parameters or {})}
     missing = [dof for dof in POSE if f"initial.pose.{dof}" not in values]

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .ports import POSE
-from .system import units
+from ..ports import POSE
+from .plots import units
 from .view3d import SYNC_SCRIPT as VIEW_SYNC
 
 BUCKETS = 700  # per trace: each bucket's first, smallest and largest point (every peak and shock kept)
@@ -43,7 +43,7 @@ def _trace(t, y, name, **line):
 def _figures(result: np.ndarray, units: dict[str, str]) -> list[tuple[str, object]]:
     """(title, plotly figure) of every recorded output: pose against reference per DOF, each drive
     quantity for the six legs, each other output alone; units by variable name, as the FMUs
-    declare them (cosim.platform.system.units)."""
+    declare them (cosim.platform.report.plots.units)."""
 
     def axis(name: str) -> str:
         unit = units.get(name.split("[")[0])

@@ -55,11 +55,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..engine.tomlfile import line_of, read
-from ..engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
+from ...engine.tomlfile import line_of, read
+from ...engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .drive_fmu import KIND_NAMES
-from .ports import DRIVES, POSE
-from .system import default_algorithm
+from ..ports import DRIVES, POSE
+from ..run.system import default_algorithm
 
 FRAMES = {"base": 1, "platform": 2}  # as the trajectory FMU's pulse[k].frame numbers them
 WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
@@ -137,7 +137,7 @@ class Scene:
     edge_time: float = 0.0  # [s] after each load pulse's edges at startup_step too
     interface_jacobian: bool = False  # the drives' slopes d effort / d flow wired to the mechanics
     feedthrough: bool = False  # outputs that depend on inputs read again at each communication point
-    tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.tuning)
+    tuning: str = "defaults"  # or "auto": the drives' loops designed for this platform (cosim.platform.run.tuning)
     drive_set: str | None = None  # params/<name>.toml: a drive sized for this platform (parameter_sets.drive_set)
     overrides: dict[str, Any] = field(default_factory=dict)  # the dotted keys load_scene set over the file
     drive_fmu: Path | None = None  # [drive] fmu: a drive FMU of the user's own on every leg (None: ours)
@@ -203,7 +203,7 @@ def with_overrides(data: dict, overrides: dict[str, Any]) -> dict:
 def shipped_scenes(folder: str = "scenes") -> list[str]:
     """The names of the shipped scenes (scenes/<name>.toml), which load_scene takes by name (or
     of the shipped sweep files: folder "sweeps")."""
-    from ..engine.artifacts import ROOT
+    from ...engine.artifacts import ROOT
     return sorted(p.stem for p in (ROOT / folder).glob("*.toml"))
 
 
@@ -212,7 +212,7 @@ def shipped(name: str, folder: str = "scenes") -> Path | None:
     install without its data says so in one line (ArtifactMissing)."""
     if Path(name).suffix or len(Path(name).parts) != 1:
         return None
-    from ..engine.artifacts import data_dir
+    from ...engine.artifacts import data_dir
     path = data_dir(folder) / f"{name}.toml"
     return path if path.is_file() else None
 
@@ -269,8 +269,8 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         given = values.get("parameters", {})
         if not isinstance(given, dict):
             raise fail(table, "parameters", f"= {given!r} must be a table of FMU variable = value")
-        from ..engine.artifacts import fmu_path
-        from ..engine.checks import ParameterError, check_values
+        from ...engine.artifacts import fmu_path
+        from ...engine.checks import ParameterError, check_values
         try:
             check_values(table, fmu if isinstance(fmu, Path) else fmu_path(fmu), given)
         except ParameterError as error:
@@ -295,7 +295,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         return out
 
     def drive_fmu(table: str, values: dict):
-        """A user's drive FMU named at <table>.fmu, inspected (cosim.platform.drive_fmu), or None."""
+        """A user's drive FMU named at <table>.fmu, inspected (cosim.platform.scene.drive_fmu), or None."""
         given = values.get("fmu")
         if given is None:
             return None
@@ -460,7 +460,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         limits[leg] = name
     if at_neutral:
         from .parameter_sets import scene_mechanics
-        from .platform_core import neutral_pose
+        from ..core import neutral_pose
         try:
             pose = neutral_pose(scene_mechanics(parameter_set, mass_set, drive_set, mechanics_parameters))
         except (KeyError, ValueError) as error:
@@ -486,7 +486,7 @@ def load_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Sce
         raise fail(table, key, f"is refused: {error}") from None
     user = {f.path: f for f in (top, *leg_fmus.values()) if f is not None}
     if user:  # what the user's drive FMUs cannot do limits the step control
-        from ..engine.checks import capability_problem
+        from ...engine.checks import capability_problem
         control = scene_settings(loaded)[1]
         for fmu in user.values():
             reason = capability_problem(fmu.path, control, sum(loaded.leg_fmu(i) == fmu.path for i in range(1, 7)))

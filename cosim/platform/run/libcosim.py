@@ -1,5 +1,5 @@
 """A scene run in libcosim (libcosimpy, the Open Simulation Platform's engine): the FMUs, start
-values, connections and power bonds of the scene's system structure (cosim.platform.runner
+values, connections and power bonds of the scene's system structure (cosim.platform.run.runner
 .scene_structure, the one wiring), stepped by libcosim's fixed-step or ECCO algorithm. Since
 the trajectory is an FMU too, the scene needs nothing but FMUs and connections there.
 
@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 from fmpy import read_model_description
 
-from ..engine import EnergyControl
-from .ports import POSE
+from ...engine import EnergyControl
+from ..ports import POSE
 from .runner import scene_structure
-from .scene import Scene
+from ..scene.reader import Scene
 
 
 @dataclass

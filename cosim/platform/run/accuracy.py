@@ -10,7 +10,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .ports import LEGS, per_leg
+from ..ports import LEGS, per_leg
 
 START_UP = 0.2  # [s] the drives' start-up shock and its settling
 AFTER = 0.2     # [s] judged with each load pulse after its end

@@ -14,10 +14,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
-from ..engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
+from ...engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
                       StepControl, SystemStructure, fmu_path)
-from ..engine.outcome import Outcome, execute
-from .ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE re-exported)
+from ...engine.outcome import Outcome, execute
+from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE re-exported)
 
 
 def drive_names(drive: str) -> list[str]:
@@ -37,7 +37,7 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     flow feeds the mechanics, with the flow the drive was given (the mechanics' own flow output
     wired back to its `*_seen` input: every coupling algorithm hands both the same
     extrapolation), so the mechanics integrates the drives' damping implicitly."""
-    from ..engine.checks import variables
+    from ...engine.checks import variables
     if drive not in DRIVES:
         raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
     wiring = DRIVES[drive]
@@ -75,22 +75,6 @@ def default_algorithm(drive: str, kind: str = "gauss-seidel", order: int = 1) ->
     """The platform's coupling: Gauss-Seidel steps the trajectory, the drives, then the mechanics."""
     sequence = ("trajectory", *drive_names(drive), "mechanics") if kind == "gauss-seidel" else None
     return Algorithm(kind, order, sequence)
-
-
-def units(drive: str) -> dict[str, str]:
-    """The unit of every variable a platform run can record (the trajectory's, the mechanics' and
-    the drive's; outputs first where two share a name), as the FMUs' modelDescriptions declare it,
-    written for people (N.m -> N m), by variable name: a per-leg column `speed[3]` has the unit of
-    the drive's `speed`."""
-    from ..engine.checks import variables
-    found = [v for fmu in ("trajectory", "mechanics", DRIVES[drive].fmu) for v in variables(fmu_path(fmu)).values()]
-    out: dict[str, str] = {}
-    for v in sorted(found, key=lambda v: v.causality != "output"):
-        if v.unit:
-            out.setdefault(v.name, v.unit.replace(".", " "))
-            if v.name.startswith("leg[1]."):  # a per-leg mechanics output, recorded as <name>[i]
-                out.setdefault(v.name[len("leg[1]."):], v.unit.replace(".", " "))
-    return out
 
 
 def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = (),
@@ -132,7 +116,7 @@ def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mappin
              interface_jacobian: bool = False) -> Outcome:
     """A platform run at a fixed step in one call (for studies and tests): the pose and reference
     and the chosen outputs recorded. leg_values: per drive, on top of drive_values."""
-    from ..engine import FixedStep
+    from ...engine import FixedStep
     structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,
                                    interface_jacobian=interface_jacobian)
     return run(structure, default_algorithm(drive, algorithm, order), FixedStep(step), stop_time,

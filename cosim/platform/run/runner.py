@@ -13,18 +13,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine import Experiment, FmuError, NoStep, ParameterError, Progress, RunFailed, SystemStructure
-from ..engine.artifacts import fmu_path
-from ..engine.checks import variables
-from ..engine.outcome import Outcome, Report, RunStopped
-from ..engine.results import thin, write as write_results, write_log
-from ..engine.settings import output_settings, to_strings
-from .parameter_sets import drive_set, scene_mechanics
-from .ports import DRIVES, LEGS, POSE, per_leg
-from .scene import Scene, SceneError, line_of, load_scene, scene_settings
-from .signals import scene_trajectory
-from .platform_core import LayoutImpossible, SingularPose
-from .system import columns, platform_structure, run, units
+from ...engine import Experiment, FmuError, NoStep, ParameterError, Progress, RunFailed, SystemStructure
+from ...engine.artifacts import fmu_path
+from ...engine.checks import variables
+from ...engine.outcome import Outcome, Report, RunStopped
+from ...engine.results import thin, write as write_results, write_log
+from ...engine.settings import output_settings, to_strings
+from ..scene.parameter_sets import drive_set, scene_mechanics
+from ..ports import DRIVES, LEGS, POSE, per_leg
+from ..scene.reader import Scene, SceneError, line_of, load_scene, scene_settings
+from ..scene.signals import scene_trajectory
+from ..core import LayoutImpossible, SingularPose
+from ..report.plots import units
+from .system import columns, platform_structure, run
 from .tuning import SizingError, check_limit, check_sizing, design, hold_currents, leg_plants, summary
 
 
@@ -147,7 +148,7 @@ def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
 def user_drive_notes(scene: Scene) -> list[str]:
     """For the run report: each drive FMU of the user's own, its tool, legs, what fmpy's
     validation says of it and what the master does not do with it."""
-    from .drive_fmu import inspect
+    from ..scene.drive_fmu import inspect
     notes = []
     for fmu in dict.fromkeys(f for f in (scene.leg_fmu(leg) for leg in LEGS) if f is not None):
         drive = inspect(fmu)
@@ -236,7 +237,7 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
 
 def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, float, float]]:
     """The run against its converged twin, the same scene at a 16th of its step throughout (no
-    finer start, no edge windows): per window (cosim.platform.accuracy) the pose's largest
+    finer start, no edge windows): per window (cosim.platform.run.accuracy) the pose's largest
     difference [m, rad] and the drive efforts' (as the legs feel them), absolute and against their
     own change there."""
     from .accuracy import window_errors, windows
@@ -286,14 +287,14 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
         if scene.interface_jacobian:  # the legs feel the drives' efforts corrected by their slopes: plot what they feel
             effort = f"{effort}_applied"
         if plots and len(result) > 1:
-            from . import results
+            from ..report.plots import plot_drives, plot_tracking
             tracking, drives = FIGURES.get(scene.parameter_set, ("", ""))
             impacts = sorted({(p.start, p.end) for p in scene.pulses})
-            results.plot_tracking(result, out / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
+            plot_tracking(result, out / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
             if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
-                results.plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed,
+                plot_drives(result, out / f"{scene.path.stem}_drives.png", scene.name, effort, speed,
                                     units(scene.drive), drives, impacts)
-            from .report_html import write_report
+            from ..report.html import write_report
             report.html = write_report(out / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
                                        outcome.bond_residuals, scene_values(scene)[0])
     if outcome.failure is not None:

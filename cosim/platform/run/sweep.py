@@ -34,11 +34,11 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..engine.sweep import SYSTEM, Sweep, Target, statistics
-from ..engine.sweep import load_sweep as engine_load_sweep
+from ...engine.sweep import SYSTEM, Sweep, Target, statistics
+from ...engine.sweep import load_sweep as engine_load_sweep
 from .accuracy import difference, efforts
-from .ports import DRIVES, LEGS, POSE, per_leg
-from .scene import SceneError, load_scene, shipped
+from ..ports import DRIVES, LEGS, POSE, per_leg
+from ..scene.reader import SceneError, load_scene, shipped
 
 SCENE_REPORTS = {  # report name -> what it adds to a row
     "tracking_error": "largest |pose - pose_ref| per DOF after the first tenth of the run [m, rad]",
@@ -55,7 +55,7 @@ SCENE_REPORTS = {  # report name -> what it adds to a row
                     "window's (advise); window_error_at: which window",
     "tolerance_ratio": "the efforts' worst window against the shipped scenes' tolerances (2 % of their own change "
                        "through the start-up and each load pulse, 1e-3 N m or 1e-3 of the static leg force in steady "
-                       "tracking: cosim.platform.accuracy), at most 1 within them (trade); tolerance_ratio_at: which "
+                       "tracking: cosim.platform.run.accuracy), at most 1 within them (trade); tolerance_ratio_at: which "
                        "window",
 }
 
@@ -63,7 +63,7 @@ SCENE_REPORTS = {  # report name -> what it adds to a row
 @dataclass(frozen=True)
 class ScenePoint:
     """Runs a scene at one point: `values` are overrides at dotted keys of the scene's document
-    (cosim.platform.scene.load_scene). `reference` (a recorded run, for pose_error and
+    (cosim.platform.scene.reader.load_scene). `reference` (a recorded run, for pose_error and
     effort_error) is compared at its own times."""
     path: str
     reports: tuple[str, ...] = ("tracking_error", "energy_residual", "steps")
@@ -105,8 +105,8 @@ class ScenePoint:
     def check(self, values: Mapping[str, Any]) -> None:
         """Raises SceneError (one line) when the point cannot start: its keys, types and the
         FMUs' modelDescriptions (nothing is instantiated)."""
-        from ..engine import ParameterError
-        from ..engine.checks import check_parameters
+        from ...engine import ParameterError
+        from ...engine.checks import check_parameters
         from .runner import scene_error, scene_structure
         scene = self.scene(values)
         try:

@@ -2,7 +2,7 @@
 reference motion alone for `python -m cosim view SCENE`.
 
 What is drawn is the platform the mechanics FMU simulates: its joints, stroke and joint-angle limit
-come from the scene's mechanics values through the FMU's own mapping (cosim.platform.platform_core,
+come from the scene's mechanics values through the FMU's own mapping (cosim.platform.core,
 the one place the master reads a platform from), so Meng's, Sumnu's and Halder's layouts, and any
 geometry a study sets, draw right. Per frame: the base and the platform (its joints joined), the six
 legs from lower to upper joint coloured by how much of their stroke they use (red and thick outside
@@ -20,8 +20,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .platform_core import build, mechanics_value
-from .ports import POSE
+from ..core import build, mechanics_value
+from ..ports import POSE
 
 MAX_FRAMES = 200
 CAMERAS = {"iso": dict(x=1.6, y=-1.6, z=1.1), "front": dict(x=0.0, y=-2.4, z=0.4),
@@ -254,7 +254,7 @@ def reference_motion(scene, frames_most: int = MAX_FRAMES) -> tuple[np.ndarray, 
     """The scene's reference pose and base-frame load force over its duration, from its trajectory
     FMU run alone through the engine (the one evaluation of the scene's signals, tables included):
     times, poses (n x 6), forces (n x 3)."""
-    from .signals import scene_trajectory
+    from ..scene.signals import scene_trajectory
     frames_most = max(2, min(frames_most, int(scene.duration / 0.02) + 1))
     return play(scene_trajectory(scene), scene.duration, scene.duration / (frames_most - 1))
 
@@ -263,8 +263,8 @@ def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndar
     """The trajectory FMU with these start values run alone for `duration` at `step`: times,
     reference poses (n x 6), base-frame load forces (n x 3). Raises what the FMU refuses (a bad
     table: its file and line) as the engine's error."""
-    from ..engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
-    from ..engine.outcome import execute
+    from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
+    from ...engine.outcome import execute
     alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), trajectory_values)], [],
                             experiment=Experiment(0.0, duration, step))
     names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
