@@ -226,7 +226,7 @@ def main() -> None:
                             "--duration", repr(args.duration)], check=True, capture_output=True)
             end_to_end.append(time.perf_counter() - began)
             began = time.perf_counter()
-            subprocess.run([sys.executable, "-c", "import cosim.__main__, cosim.platform.run.runner"], check=True)
+            subprocess.run([sys.executable, "-c", "import cosim.cli, cosim.platform.run.runner"], check=True)
             imports.append(time.perf_counter() - began)
         ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}), plots=False)[0]
         began = time.perf_counter()

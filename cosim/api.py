@@ -25,6 +25,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .engine.errors import UsageError
 from .engine.outcome import Report, RunStopped
 from .engine.structure import SystemStructure
 from .platform.scene.reader import Scene, SceneError, load_scene
@@ -87,7 +88,7 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
 
 def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | None = None,
              overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
-             out: str | Path | None = None, plots: bool = False, progress: bool = False) -> Run:
+             out: str | Path | None = None, plots: bool = False, progress: bool = False, twin: bool = False) -> Run:
     """Runs a scene or an SSP system and returns its named results.
 
     Args:
@@ -102,28 +103,40 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
             interactive report with `plots`).
         plots: draw a scene's figures and its HTML report into `out`.
         progress: a progress bar on a terminal.
+        twin: judge a scene's run against its converged twin (the scene at a 16th of its step
+            throughout), window by window (start-up, each load pulse, steady tracking).
 
     Raises:
         SceneError, SspError, SettingsError: the input cannot run (one line).
+        UsageError: an argument that does not apply to the model (one line).
         RunStopped: the run stopped part way (an FMU failed, or the coupling diverged);
             `.result` holds the results up to then, `.report` says why.
     """
     target = Path(out) if out is not None else None
+    if plots and target is None:
+        raise UsageError("simulate: plots are drawn into a folder: give out as well")
     if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
                                               and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
+        given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin)) if value]
+        if given:
+            raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
+                             "settings)")
         from .engine.command import run_ssp, run_structure
         if isinstance(model, SystemStructure):
             values, report = run_structure(model, dict(settings or {}), duration, progress=progress)
         else:
             values, report = run_ssp(Path(model), target, dict(settings or {}), duration)
         return Run(values, report)
+    if settings:
+        raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "
+                         "as overrides (e.g. {'scene.step': 5e-4, 'coupling.order': 2})")
     from .platform.run.runner import run_scene
     scene = model if isinstance(model, Scene) else load_scene(model, dict(overrides or {}))
     if isinstance(model, Scene) and overrides:
         scene = load_scene(scene.path, {**scene.overrides, **overrides})
     if duration is not None:
         scene = dataclasses.replace(scene, duration=float(duration))
-    values, report = run_scene(scene, target, plots=plots and target is not None, progress=progress)
+    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin)
     return Run(values, report)
 
 

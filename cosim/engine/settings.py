@@ -11,10 +11,12 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Mapping, Sequence
 
+from .errors import InputError
+
 ALGORITHMS = ("jacobi", "gauss-seidel")
 
 
-class SettingsError(ValueError):
+class SettingsError(InputError):
     """A setting with a wrong name or value; the message names it, and `setting` is its name
     (a field of the settings classes) where one setting is at fault."""
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from fmpy import read_model_description
 from lxml import etree
 
+from .errors import InputError
 from .structure import Bond, Component, Connection, Experiment, SystemStructure, Value
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -39,7 +40,7 @@ NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM, "osp": OSP, "oms": OMS
 _SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "schema"
 
 
-class SspError(ValueError):
+class SspError(InputError):
     """An SSP file that cannot be read or run: the message names the file, and the line where known."""
 
 

@@ -37,6 +37,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..engine.errors import InputError
 from ..engine.tomlfile import line_of, read
 from .scene.parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
 from .core import Core
@@ -46,7 +47,7 @@ DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 ROTATIONS = ("roll", "pitch", "yaw")
 
 
-class StudyError(ValueError):
+class StudyError(InputError):
     """A study file that cannot run: one line naming the file, the line and the reason."""
 
 

@@ -38,7 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from cosim.__main__ import main  # noqa: E402
+from cosim.cli import main  # noqa: E402
 
 HOSTILE = ["0", "-1", "-0.0", "1e300", "-1e300", "1e-300", "nan", "inf", "-inf", '"text"', '""', "true", "false",
            "[]", "{}", "[1, 2]", '"neutral"', "3.5", "1e12"]

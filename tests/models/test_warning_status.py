@@ -10,7 +10,7 @@ import zipfile
 import pytest
 from fmpy import read_model_description
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.engine.fmi import FmuInstance
 from cosim.platform.ports import POSE

@@ -46,7 +46,7 @@ def test_a_run_reports_its_errors_against_its_converged_twin(tmp_path, capsys):
     differences to the same scene at a 16th of its step; on the Meng scene's first 0.6 s the pose
     is within 1e-5 and the torques within 2 % of their change in each window, and the HTML report
     carries the same rows."""
-    from cosim.__main__ import main
+    from cosim.cli import main
     from cosim.engine.artifacts import ROOT
     text = (ROOT / "scenes" / "meng_eq35.toml").read_text().replace("duration = 10.0", "duration = 0.6")
     path = tmp_path / "short.toml"

@@ -4,7 +4,7 @@ tolerance, is the cheapest that does, and never picks a candidate the divergence
 from __future__ import annotations
 
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.platform.advise import advise, recommend, within
 from cosim.engine.artifacts import ROOT
 from conftest import paper_scene

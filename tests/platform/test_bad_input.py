@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 
 # Meng's platform in a scene of the tests' own (the shipped scenes' layout and numerics may change)
@@ -171,12 +171,12 @@ def test_a_folder_given_as_the_scene_is_one_line(capsys):
 
 
 def test_an_unexpected_failure_says_it_is_a_bug(monkeypatch, capsys):
-    import cosim.__main__ as cli
+    import cosim.cli.run as command
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("deliberately broken for this test")
 
-    monkeypatch.setattr(cli, "run_scene", broken)
+    monkeypatch.setattr(command, "simulate", broken)
     assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--no-plots"]) == 3
     err = capsys.readouterr().err
     assert "Traceback" in err and "is a bug in cosim" in err

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import (Study, basic_motions, design_map, limit_along, load_study, parallel_map,
                                    platform_values, shortest_time, stubs)

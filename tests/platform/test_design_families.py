@@ -206,7 +206,7 @@ def test_a_rotary_actuator_is_given_by_its_motor(meng, tmp_path, capsys):
     (params/meng2010.toml: K_FT = 250 N/(N m), i_theta = 277.78 rad/m): the same limits as the leg
     forces and speed they stand for. A family without a screw (Sumnu's linear motors) refuses them,
     and a limit given both ways is refused, each in one line naming the file and line."""
-    from cosim.__main__ import main
+    from cosim.cli import main
     transmission = load("meng2010")["transmission"]
     k_ft = transmission["force_torque_coefficient"]
     leg = meng.actuators[0]

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.platform.run.runner import SceneFailed, run_scene
 from cosim.platform.scene import SceneError, load_scene

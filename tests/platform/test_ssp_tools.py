@@ -19,7 +19,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine import Algorithm, Execution, FixedStep
 from cosim.engine.artifacts import ROOT
 from cosim.engine.ssp import PARAMETER_SET, read_ssp

@@ -16,7 +16,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 from cosim.engine.sweep import Axis, SweepError, grid, latin_hypercube, run_sweep, zipped
 from cosim.platform.run.sweep import load_sweep

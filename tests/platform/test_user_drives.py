@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.command import run_ssp
 from cosim.engine.ssp import write_ssp
 from cosim.platform.ports import LEGS

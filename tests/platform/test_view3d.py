@@ -11,7 +11,7 @@ import re
 import numpy as np
 import pytest
 
-from cosim.__main__ import main
+from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 from cosim.platform.report import view3d
 from cosim.platform.scene.parameter_sets import mechanics_start_values, scene_mechanics

@@ -9,10 +9,12 @@ import json
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
+from ..errors import InputError
+
 Value = Any
 
 
-class SweepError(ValueError):
+class SweepError(InputError):
     """A sweep that cannot start (its file, its output folder): one line."""
 
 

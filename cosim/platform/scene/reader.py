@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ...engine.errors import InputError
 from ...engine.tomlfile import line_of, read
 from ...engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from .drive_fmu import KIND_NAMES
@@ -65,7 +66,7 @@ FRAMES = {"base": 1, "platform": 2}  # as the trajectory FMU's pulse[k].frame nu
 WRENCH_COMPONENTS = ("force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z")
 
 
-class SceneError(ValueError):
+class SceneError(InputError):
     """A scene file that cannot be run: the message names the file, the key and its line."""
 
 

@@ -1,0 +1,33 @@
+"""`cosim design STUDY`: which platform carries a motion, a configuration design study (studies/,
+after Halder et al. Section V): the map, its figures and table, the summary."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import workers
+
+
+def add(commands) -> argparse.ArgumentParser:
+    design = commands.add_parser("design", help="which platform carries a motion: a configuration design study "
+                                 "(studies/, Halder et al. Section V)")
+    design.add_argument("study", help="a study file (TOML) or a shipped study's name, e.g. halder_section5")
+    design.add_argument("--workers", type=int, default=0, help="Dask worker processes for the map (default 0: in "
+                        "this process)")
+    design.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    design.add_argument("--out", type=Path, default=Path("out"), help="folder for the figures, the map and the summary")
+    return design
+
+
+def main(args: argparse.Namespace) -> int:
+    from ..platform.design import load_study, parallel_map, report_rows, summary, write
+    from ..platform.scene import shipped
+    count = workers("--workers", args.workers, "in this process")
+    study = load_study(shipped(args.study, "studies") or args.study if not Path(args.study).exists() else args.study)
+    design = parallel_map(study, workers=count, scheduler=args.scheduler)
+    rows = report_rows(design, count, args.scheduler)
+    print("\n".join(summary(design, rows)))
+    files = write(design, args.out, rows)
+    print("written: " + ", ".join(str(f) for f in files))
+    return 0

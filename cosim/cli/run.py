@@ -1,0 +1,46 @@
+"""`cosim run SCENE|FILE.ssp|FILE.ssd`: one run through `cosim.simulate`, its report printed and its
+results written to --out (CSV, .mat, the FMUs' log; a scene's plots and interactive report)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..api import SYSTEM_SUFFIXES, simulate
+from ..engine.errors import UsageError
+from .common import report, seconds
+
+
+def add(commands) -> argparse.ArgumentParser:
+    run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
+    run.add_argument("scene", type=Path)
+    run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                     help="an SSP system's run setting (algorithm, order, step_control, step, rtol, atol, ...)")
+    run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
+    run.add_argument("--no-plots", action="store_true")
+    run.add_argument("--duration", type=str, help="override the scene's duration [s]")
+    run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
+                     "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
+    return run
+
+
+def settings(items: list[str]) -> dict[str, str]:
+    """--set NAME=VALUE, each."""
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise UsageError(f"--set {item!r}: expected NAME=VALUE")
+        name, value = item.split("=", 1)
+        out[name.strip()] = value.strip()
+    return out
+
+
+def main(args: argparse.Namespace) -> int:
+    duration = seconds("--duration", args.duration)
+    system = args.scene.suffix.lower() in SYSTEM_SUFFIXES
+    stem = args.scene.stem
+    written = f"{args.out}/{stem}.csv and .mat" if system else \
+        f"{args.out}/{stem}.csv, .mat, .log" + ("" if args.no_plots else f", plots and the report {stem}.html")
+    return report(lambda: simulate(args.scene, duration=duration, settings=settings(args.set) or None, out=args.out,
+                                   plots=not args.no_plots and not system, twin=args.twin, progress=True).report,
+                  written, args.out)

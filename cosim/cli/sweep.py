@@ -1,0 +1,46 @@
+"""`cosim sweep SWEEP.toml`: a scene or SSP system run at many points on Dask, its rows written as
+Parquet and CSV (and a plot), a sweep interrupted resumed where it stopped."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .common import workers
+
+
+def add(commands) -> argparse.ArgumentParser:
+    sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (docs/guide/sweeps.md)")
+    sweep.add_argument("sweep", type=Path, help="the sweep file (TOML)")
+    sweep.add_argument("--workers", type=int, help="worker processes of a local Dask cluster (default: one per core; "
+                       "0: no Dask, in this process)")
+    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
+    return sweep
+
+
+def main(args: argparse.Namespace) -> int:
+    from ..engine.sweep import column_name, plot_sweep, run_sweep
+    from ..platform.run.sweep import load_sweep
+    count = workers("--workers", args.workers, "no Dask")
+    sweep = load_sweep(args.sweep)
+    try:
+        outcome = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, args.out, sweep.signature,
+                            workers=count, scheduler=args.scheduler, points_per_task=sweep.points_per_task,
+                            retries=sweep.retries)
+    except KeyboardInterrupt:
+        print(f"interrupted: the points finished so far are in {args.out}/{args.sweep.stem}.parts; run the same "
+              "command again to run only the others", file=sys.stderr)
+        return 130
+    kinds = {s: sum(r["status"] == s for r in outcome.rows) for s in ("ok", "diverged", "failed")}
+    print(f"{sweep.name}: {len(outcome.rows)} points ({outcome.ran} run now, {outcome.skipped} found done): "
+          + ", ".join(f"{n} {s}" for s, n in kinds.items() if n))
+    for row in [r for r in outcome.rows if r["status"] != "ok"][:5]:
+        print(f"  {row['status']}: {', '.join(f'{a.name}={row[column_name(a.name)]!r}' for a in sweep.axes)}: "
+              f"{row['message'][:200]}")
+    written = [*outcome.files]
+    if sweep.plot is not None:
+        written.append(plot_sweep(outcome.rows, sweep.plot, args.out / f"{sweep.name}.png", sweep.name, sweep.units))
+    print("results: " + ", ".join(str(f) for f in written))
+    return 0
