@@ -33,8 +33,13 @@ def parser() -> argparse.ArgumentParser:
     for command in COMMANDS:
         command.add(commands).set_defaults(main=command.main)
     top.epilog = "usage of each command:\n" + "\n".join(
-        "  " + " ".join(sub.format_usage().split())[len("usage: "):] for sub in commands.choices.values())
+        "  " + " ".join(sub.format_usage().split())[len("usage: "):] for sub in subcommands(top).values())
     return top
+
+
+def subcommands(top: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """Each command's parser by its name."""
+    return next(a.choices for a in top._actions if isinstance(a, argparse._SubParsersAction))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,10 +8,11 @@ annotation and the command line carry.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Mapping, Sequence
 
 from .errors import InputError
+from .schema import REQUIRED, Choice, Flag, Key, Number, Schema, Table, Text
 
 ALGORITHMS = ("jacobi", "gauss-seidel")
 
@@ -194,50 +195,141 @@ def to_strings(algorithm: Algorithm, control: StepControl) -> dict[str, str]:
     return out
 
 
+# -- the settings by name: their schema, and their text (an SSP annotation, the command line) -------
+
+@dataclass(frozen=True)
+class Names:
+    """Component names, separated by spaces."""
+
+    def describe(self) -> str:
+        return "component names separated by spaces"
+
+    def parse(self, text: str) -> tuple[str, ...]:
+        return tuple(text.split())
+
+
+@dataclass(frozen=True)
+class Spans:
+    """(start, end) pairs in seconds, written start:end separated by spaces."""
+
+    def describe(self) -> str:
+        return "start:end pairs [s] separated by spaces"
+
+    def parse(self, text: str) -> tuple[tuple[float, ...], ...]:
+        return tuple(tuple(float(t) for t in item.split(":", 1)) for item in text.split())
+
+
+@dataclass(frozen=True)
+class PerComponent:
+    """A number, or component=number pairs separated by spaces (a value per component)."""
+    unit: str = ""
+
+    def describe(self) -> str:
+        return "a positive number, or component=number pairs separated by spaces"
+
+    def parse(self, text: str) -> float | dict[str, float]:
+        if "=" in text:
+            return {k: float(v) for k, v in (item.split("=", 1) for item in text.split())}
+        return float(text)
+
+
+def _default(cls: type, name: str):
+    """A settings class's own default for a field (one source of the defaults)."""
+    found = next(f for f in fields(cls) if f.name == name)
+    return REQUIRED if found.default is MISSING and found.default_factory is MISSING else \
+        (found.default if found.default is not MISSING else found.default_factory())
+
+
+def _keys(cls: type, docs: Mapping[str, tuple]) -> tuple[Key, ...]:
+    """Keys named as the settings name them, each with its field's default (the step's is the
+    system's: its DefaultExperiment's)."""
+    return tuple(Key(name, kind, doc, None if name == "step" else _default(cls, field_name))
+                 for name, (field_name, kind, doc) in docs.items())
+
+
+POSITIVE = Number(low=0, above=True)
+SECONDS = Number("s", low=0, above=True)
+COUPLING_KEYS = _keys(Algorithm, {
+    "algorithm": ("kind", Choice(ALGORITHMS), "Jacobi (every component from the others' last outputs) or "
+                  "Gauss-Seidel (in `sequence`, each from the newest outputs)"),
+    "order": ("order", Number(low=0, high=2, whole=True), "the inputs' extrapolation over a step: 0 held, 1 "
+              "linear, 2 quadratic (from the last outputs, or the FMUs' output derivatives)"),
+    "sequence": ("sequence", Names(), "the Gauss-Seidel order of the components (default: the system's)"),
+    "initial_sweeps": ("initial_sweeps", Number(low=0, whole=True), "fixed-point sweeps making the start's outputs "
+                       "consistent with the connected inputs (0: as the FMUs initialized them)"),
+    "zero_start": ("zero_start", Flag(), "every input 0 over the first step (fmpy.ssp's convention)"),
+    "threads": ("threads", Number(low=1, high=2, whole=True), "2: each Gauss-Seidel stage of components that feed "
+                "none of each other on two threads, bit for bit the same"),
+    "feedthrough": ("feedthrough", Flag(), "after each step, outputs that depend on inputs at the same "
+                    "communication point read again with those inputs' new values (as OMSimulator does)")})
+FIXED_KEYS = _keys(FixedStep, {
+    "step": ("step", SECONDS, "the macro step (default: the system's DefaultExperiment step)"),
+    "startup_time": ("startup_time", Number("s", 0), "the first seconds at the finer startup_step (a whole number "
+                     "of steps; 0: no finer start)"),
+    "startup_step": ("startup_step", Number("s", 0), "the finer step of the start (a whole fraction of the step)"),
+    "windows": ("windows", Spans(), "further spans taken at startup_step too (where an input jumps)")})
+DOUBLING_KEYS = _keys(StepDoubling, {
+    "step": ("step", SECONDS, "the first macro step (default: the system's DefaultExperiment step)"),
+    "rtol": ("rtol", POSITIVE, "the relative tolerance of the local error"),
+    "atol": ("atol", PerComponent(), "the absolute tolerance of the local error, in the outputs' units (one, or "
+             "per component)"),
+    "h_min": ("h_min", SECONDS, "the smallest step"),
+    "h_max": ("h_max", SECONDS, "the largest step")})
+ENERGY_KEYS = _keys(EnergyControl, {
+    "step": ("step", SECONDS, "the first macro step (default: the system's DefaultExperiment step)"),
+    "rtol": ("rtol", POSITIVE, "the energy residual's tolerance relative to the energy a bond transferred"),
+    "atol": ("atol", POSITIVE, "the energy residual's absolute tolerance [J]"),
+    "h_min": ("h_min", SECONDS, "the smallest step"),
+    "h_max": ("h_max", SECONDS, "the largest step"),
+    "k_i": ("k_i", Number(low=0), "the PI controller's integral gain"),
+    "k_p": ("k_p", Number(low=0), "its proportional gain"),
+    "safety": ("safety", POSITIVE, "the safety factor on the proposed step"),
+    "change_min": ("change_min", POSITIVE, "the least factor a step changes by (at most 1)"),
+    "change_max": ("change_max", POSITIVE, "the largest factor a step changes by (at least 1)")})
+CONTROL_KEYS = {"fixed": FIXED_KEYS, "doubling": DOUBLING_KEYS, "energy": ENERGY_KEYS}
+OUTPUT_KEYS = (Key("record", Text(), "what is recorded: component.variable=name separated by spaces (default: every "
+                   "connected output, named component.variable)"),
+               Key("output_interval", Number("s", 0, above=True), "results written every interval (default: every "
+                   "macro step)"))
+SCHEMA = Schema("run settings", "A system's run settings by name: the SSP annotation "
+                "`com.stewart-cosim.settings` carries them, `cosim run SYSTEM --set NAME=VALUE` and a sweep's axes "
+                "set them (cosim.engine.settings: Algorithm, FixedStep, StepDoubling, EnergyControl).", (
+    Table("coupling", "How the components are coupled, whatever the step control.",
+          (*COUPLING_KEYS, Key("step_control", Choice(tuple(CONTROLS)), "how the macro step is chosen: fixed (with a "
+                               "finer start), doubling (local error by step doubling, with rollback) or energy "
+                               "(ECCO: the power bonds' energy residual)", "fixed"))),
+    *(Table(f"step_control = {name}", f"The settings of the {name} step control.", keys)
+      for name, keys in CONTROL_KEYS.items()),
+    Table("recording", "What the run records and how often.", OUTPUT_KEYS)), SettingsError, groups=True)
+
+
 def from_strings(values: Mapping[str, str], default_step: float) -> tuple[Algorithm, StepControl]:
     """The settings from name -> text (an SSP annotation, command-line options); unknown names
     and bad values raise SettingsError naming them."""
     values = dict(values)
-    try:
-        kind = values.pop("algorithm", "gauss-seidel")
-        order = int(values.pop("order", "1"))
-        sweeps = int(values.pop("initial_sweeps", "20"))
-        sequence = tuple(values.pop("sequence").split()) if "sequence" in values else None
-        zero_start = values.pop("zero_start", "false")
-        if zero_start not in ("true", "false"):
-            raise SettingsError(f"zero_start '{zero_start}': true or false")
-        threads = int(values.pop("threads", "1"))
-        feedthrough = values.pop("feedthrough", "false")
-        if feedthrough not in ("true", "false"):
-            raise SettingsError(f"feedthrough '{feedthrough}': true or false", "feedthrough")
-        algorithm = Algorithm(kind, order, sequence, sweeps, zero_start == "true", threads, feedthrough == "true")
-        name = values.pop("step_control", "fixed")
-        if name not in CONTROLS:
-            raise SettingsError(f"step_control '{name}': one of {', '.join(CONTROLS)}")
-        cls = CONTROLS[name]
-        known = {f.name for f in fields(cls)} - {"force_reject"}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise SettingsError(f"unknown setting '{unknown[0]}' for {name} step control (known: "
-                                f"{', '.join(sorted(known))})")
-        args: dict = {"step": float(values.pop("step", default_step))}
-        for key, text in values.items():
-            if key == "atol" and "=" in text:
-                args[key] = {k: float(v) for k, v in (item.split("=", 1) for item in text.split())}
-            elif key == "windows":
-                args[key] = tuple(tuple(float(t) for t in item.split(":", 1)) for item in text.split())
-            else:
-                args[key] = float(text)
-        return algorithm, cls(**args)
-    except ValueError as error:
-        if isinstance(error, SettingsError):
-            raise
-        raise SettingsError(f"bad setting value: {error}") from None
+    name = values.pop("step_control", "fixed")
+    if name not in CONTROLS:
+        raise SettingsError(f"step_control '{name}': one of {', '.join(CONTROLS)}", "step_control")
+    coupling = {k.name: k for k in COUPLING_KEYS}
+    control = {k.name: k for k in CONTROL_KEYS[name]}
+    unknown = sorted(set(values) - set(coupling) - set(control))
+    if unknown:
+        raise SettingsError(f"unknown setting '{unknown[0]}' for {name} step control (known: "
+                            f"{', '.join(sorted({*coupling, *control}))})", unknown[0])
+    parsed = {}
+    for key, text in values.items():
+        own = coupling.get(key) or control[key]
+        try:
+            parsed[key] = own.type.parse(str(text))
+        except ValueError:
+            raise SettingsError(f"{key} '{text}': must be {own.type.describe()}", key) from None
+    algorithm = Algorithm(**{{"algorithm": "kind"}.get(k, k): parsed[k] for k in coupling if k in parsed})
+    return algorithm, CONTROLS[name](**{"step": default_step, **{k: parsed[k] for k in control if k in parsed}})
 
 
 # -- a system's settings as its SSP annotation carries them: how it runs, and what it records ---
 
-OUTPUT_SETTINGS = ("record", "output_interval")
+OUTPUT_SETTINGS = tuple(k.name for k in OUTPUT_KEYS)
 
 
 def system_settings(settings: Mapping[str, object], default_step: float,

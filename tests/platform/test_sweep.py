@@ -105,21 +105,21 @@ def test_failing_points_are_rows_with_their_messages_and_the_sweep_goes_on(tmp_p
 def test_a_bad_sweep_file_is_one_line_naming_its_line(tmp_path, capsys):
     cases = {
         '[sweep]\nscene = "SCENE"\nstepp = 1\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":3: 'sweep.stepp'",
-        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.stepp"\nvalues = [1e-3]\n': ":3: axis 'scene.stepp'",
-        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\n': ":3: axis 'scene.step' needs one of",
-        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = ["fast"]\n': ":3: axis 'scene.step' = 'fast'",
-        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "x"\nbetween = [0, 1]\n': ":3: axis 'x': between",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.stepp"\nvalues = [1e-3]\n': ":4: 'axis[1].key' = 'scene.stepp':",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\n': ":3: 'axis[1]' needs one of",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = ["fast"]\n': ":4: 'axis[1].key' = 'scene.step': with the value 'fast'",
+        '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "x"\nbetween = [0, 1]\n': ":5: 'axis[1].between' = [0, 1]: is for sample",
         '[sweep]\nscene = "nowhere.toml"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":2: 'sweep.scene'",
         '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[plot]\nreport = "torque"\nx = '
-        '"scene.step"\n': ":7: 'plot.report' = 'torque' is not a column",
+        '"scene.step"\n': ":7: 'plot.report' = 'torque': is not a column",
         '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.z" = '
         '["median"] }\n': ":7: 'report.outputs'",
         '[sweep]\nscene = "SCENE"\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n[report]\noutputs = { "pose.q" = '
         '["max"] }\n': ":7: 'report.outputs' names 'pose.q', which the run does not record (did you mean",
-        '[sweep]\nscene = "SCENE"\nset = 3\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":3: 'sweep.set' = 3 must be a "
+        '[sweep]\nscene = "SCENE"\nset = 3\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n': ":3: 'sweep.set' = 3: must be a "
         "table",
         '[sweep]\nscene = "SCENE"\nset = { "coupling.order" = 7 }\n[[axis]]\nkey = "scene.step"\nvalues = [1e-3]\n':
-        ":3: [sweep] set: the sweep's target cannot run as it is: 'coupling.order' = 7: use 0, 1 or 2",
+        ":3: 'sweep.set': the sweep's target cannot run as it is: 'coupling.order' = 7: use 0, 1 or 2",
     }
     for number, (text, expected) in enumerate(cases.items()):
         path = tmp_path / f"bad{number}.toml"
@@ -142,7 +142,8 @@ EIGHT_POINTS = '[[axis]]\nkey = "scene.step"\nvalues = [4e-4, 5e-4, 6e-4, 7e-4, 
 
 
 def test_an_interrupted_sweep_resumes_losing_and_repeating_nothing(tmp_path):
-    path = sweep_file(tmp_path, EIGHT_POINTS, duration=0.5, extra="points_per_task = 1")
+    # long enough points (about 0.4 s each) that the interrupt lands mid-sweep on a loaded machine too
+    path = sweep_file(tmp_path, EIGHT_POINTS, duration=2.0, extra="points_per_task = 1")
     reference = in_process(path, tmp_path / "reference")
     out = tmp_path / "out"
     command = [sys.executable, "-m", "cosim", "sweep", str(path), "--workers", "0", "--out", str(out)]
@@ -162,7 +163,7 @@ def test_an_interrupted_sweep_resumes_losing_and_repeating_nothing(tmp_path):
     csv_rows = (out / "study.csv").read_text().strip().splitlines()
     assert len(csv_rows) == 9  # header and each point once
     # a changed scene duration is another sweep: refused, the old results kept
-    path.write_text(path.read_text().replace("duration = 0.5", "duration = 0.4"))
+    path.write_text(path.read_text().replace("duration = 2.0", "duration = 0.4"))
     failed = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert failed.returncode == 2 and "holds the results of another sweep" in failed.stderr
     assert len(list((out / "study.parts").glob("part-*.parquet"))) == 8

@@ -94,4 +94,5 @@ SYSTEM_REPORTS = {"energy_residual": "largest energy residual of a power bond in
                   "steps": "macro steps taken and rejected", "real_time_factor": "simulated time / wall time"}
 SYSTEM = Target(SYSTEM_REPORTS, tuple(SYSTEM_REPORTS), _system_point,
                 "a run setting (step, order, ...: cosim.engine.settings) or component.parameter",
-                units={"energy_residual": "J", "real_time_factor": "-", "steps": "-", "step": "s"})
+                units={"energy_residual": "J", "real_time_factor": "-", "steps": "-", "step": "s"},
+                what="an SSP system (.ssp, or an unpacked .ssd)")

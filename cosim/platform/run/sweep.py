@@ -187,7 +187,7 @@ SCENE = Target(SCENE_REPORTS, ("tracking_error", "energy_residual", "steps"), _s
                       "pose_error": "m, rad", "effort_error": "of the peak", "peak_effort": "N m or N",
                       "stepping_wall": "s"},
                internal=("pose_error", "effort_error", "window_error", "tolerance_ratio"), errors=(SceneError, ValueError),
-               named=shipped)
+               named=shipped, what="a scene")
 TARGETS = {"scene": SCENE, "system": SYSTEM}
 
 

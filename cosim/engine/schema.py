@@ -1,0 +1,555 @@
+"""The files a user writes, declared: every table and key of a kind of TOML file (a scene, a sweep
+file, a design study) with its type, range, unit, default and one line of documentation. One
+checker reads any of them (`read`), and reports a mistake as one line,
+`file:line: 'full.key' = value: reason`; one writer turns a schema into its reference page
+(`reference`, docs/reference/).
+
+A schema is a list of `Table`s. A table's name is dotted; a part in angle brackets names a family
+of tables (`trajectory.<dof>`: one table per DOF, `drive.leg.<i>`), and a table with `many` is an
+array of tables (`[[axis]]`). A key's type is one of the small classes below; `Free` leaves a
+table of names and values to the application (an FMU's parameters are checked against the FMU),
+and `Items` is a list of inline tables with keys of their own. What involves more than one key (a
+finer start needs its step, a value that must be one of the parameter set's) the application
+checks after `read`, reporting through the same `Document.fail`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from .errors import InputError
+
+
+class _Required:
+    def __repr__(self) -> str:
+        return "required"
+
+
+REQUIRED: Any = _Required()  # a key's default when the file must give it
+
+
+# -- the types of a value ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Number:
+    """A finite number within [low, high] (either end open with `above` / `below`, `whole` for
+    whole numbers)."""
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    above: bool = False
+    below: bool = False
+    whole: bool = False
+
+    def problem(self, value: Any) -> str | None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return f"must be {self.describe()}"
+        if not math.isfinite(value):
+            return f"must be a finite {'whole number' if self.whole else 'number'}"
+        too_low = self.low is not None and (value <= self.low if self.above else value < self.low)
+        too_high = self.high is not None and (value >= self.high if self.below else value > self.high)
+        return f"must be {self.describe()}" if too_low or too_high or (self.whole and value != int(value)) else None
+
+    def describe(self) -> str:
+        noun = "whole number" if self.whole else "number"
+        if self.low is not None and self.high is not None:
+            return f"a {noun} in {'(' if self.above else '['}{self.low:g}, {self.high:g}{')' if self.below else ']'}"
+        if self.low == 0:
+            return f"a {'positive' if self.above else 'non-negative'} {noun}"
+        if self.low is not None:
+            return f"a {noun} {'>' if self.above else '>='} {self.low:g}"
+        if self.high is not None:
+            return f"a {noun} {'<' if self.below else '<='} {self.high:g}"
+        return f"a {noun}"
+
+    def parse(self, text: str) -> float | int:
+        """From a setting's text (an SSP annotation, the command line)."""
+        value = float(text)
+        return int(value) if self.whole and value == int(value) else value
+
+
+@dataclass(frozen=True)
+class Flag:
+    """true or false."""
+
+    def problem(self, value: Any) -> str | None:
+        return None if isinstance(value, bool) else "must be true or false"
+
+    def describe(self) -> str:
+        return "true or false"
+
+    def parse(self, text: str) -> bool:
+        if text not in ("true", "false"):
+            raise ValueError(f"{text!r}: true or false")
+        return text == "true"
+
+
+@dataclass(frozen=True)
+class Text:
+    """A non-empty text (a name, or a file's path: `path`, relative to the file that names it)."""
+    path: bool = False
+
+    def problem(self, value: Any) -> str | None:
+        return None if isinstance(value, str) and value else f"must be {self.describe()}"
+
+    def describe(self) -> str:
+        return "a file's path (text)" if self.path else "text"
+
+    def parse(self, text: str) -> str:
+        return text
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One of a few values."""
+    options: tuple
+
+    def problem(self, value: Any) -> str | None:
+        same_type = [o for o in self.options if type(o) is type(value)]
+        return None if value in same_type else f"use {self.describe()}"
+
+    def describe(self) -> str:
+        shown = [repr(o) for o in self.options]
+        return shown[0] if len(shown) == 1 else ", ".join(shown[:-1]) + " or " + shown[-1]
+
+    def parse(self, text: str) -> Any:
+        for option in self.options:
+            if str(option) == text:
+                return option
+        raise ValueError(f"{text!r}: {self.describe()}")
+
+
+@dataclass(frozen=True)
+class Either:
+    """A value of one of these types."""
+    types: tuple
+
+    def problem(self, value: Any) -> str | None:
+        problems = [t.problem(value) for t in self.types]
+        return None if any(p is None for p in problems) else f"must be {self.describe()}"
+
+    def describe(self) -> str:
+        return " or ".join(t.describe() for t in self.types)
+
+
+@dataclass(frozen=True)
+class Row:
+    """A list of a fixed length, a type per place (`[start, stop, count]`)."""
+    types: tuple
+
+    def problem(self, value: Any) -> str | None:
+        if not isinstance(value, list) or len(value) != len(self.types) or \
+                any(t.problem(v) is not None for t, v in zip(self.types, value)):
+            return f"must be {self.describe()}"
+        return None
+
+    def describe(self) -> str:
+        return "[" + ", ".join(t.describe() for t in self.types) + "]"
+
+
+@dataclass(frozen=True)
+class ListOf:
+    """A list of values of one type, `least` to `most` of them."""
+    type: Any
+    least: int = 0
+    most: int | None = None
+
+    def problem(self, value: Any) -> str | None:
+        if not isinstance(value, list) or len(value) < self.least or (self.most is not None and len(value) > self.most) \
+                or any(self.type.problem(v) is not None for v in value):
+            return f"must be {self.describe()}"
+        return None
+
+    def describe(self) -> str:
+        count = f"{self.least} to {self.most}" if self.most is not None else f"at least {self.least}" if self.least \
+            else "any number of"
+        return f"a list of {count} ({self.type.describe()})"
+
+
+@dataclass(frozen=True)
+class Anything:
+    """Any TOML value (an axis' values: whatever the key they go to takes)."""
+
+    def problem(self, value: Any) -> str | None:
+        return None
+
+    def describe(self) -> str:
+        return "any value"
+
+
+@dataclass(frozen=True)
+class Free:
+    """A table of names and values that the application checks (`what` says what they are)."""
+    what: str
+
+    def problem(self, value: Any) -> str | None:
+        return None if isinstance(value, dict) else f"must be a table of {self.what}"
+
+    def describe(self) -> str:
+        return f"a table of {self.what}"
+
+
+@dataclass(frozen=True)
+class Items:
+    """A list of inline tables with keys of their own (at most `most`)."""
+    keys: tuple["Key", ...]
+    most: int | None = None
+
+    def problem(self, value: Any) -> str | None:
+        return None if isinstance(value, list) else f"must be {self.describe()}"
+
+    def describe(self) -> str:
+        return f"a list of inline tables {{{', '.join(k.name for k in self.keys)}}}" + \
+            (f", at most {self.most}" if self.most is not None else "")
+
+
+# -- keys and tables ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Key:
+    name: str
+    type: Any
+    doc: str
+    default: Any = None  # None: may be left out (the application's own default applies); REQUIRED
+
+    @property
+    def unit(self) -> str:
+        return getattr(self.type, "unit", "")
+
+
+@dataclass(frozen=True)
+class Table:
+    name: str  # dotted; "<x>" a family of tables; "" the file's top level
+    doc: str
+    keys: tuple[Key, ...] = ()
+    many: bool = False            # an array of tables, [[name]]
+    names: tuple[str, ...] = ()   # what a family's <x> may be (empty: any, the application checks)
+    required: bool = False
+
+    def key(self, name: str) -> Key | None:
+        return next((k for k in self.keys if k.name == name), None)
+
+
+@dataclass(frozen=True)
+class Schema:
+    kind: str         # "scene file"
+    doc: str
+    tables: tuple[Table, ...]
+    error: type[InputError] = InputError
+    groups: bool = False  # the tables are groups of names (settings given by name), not TOML tables
+
+    def table(self, name: str) -> Table:
+        return next(t for t in self.tables if t.name == name)
+
+    def extended(self, name: str, keys: Sequence[Key]) -> "Schema":
+        """The schema with more keys in one table (a sweep's targets)."""
+        tables = tuple(Table(t.name, t.doc, (*t.keys, *keys), t.many, t.names, t.required) if t.name == name else t
+                       for t in self.tables)
+        return Schema(self.kind, self.doc, tables, self.error, self.groups)
+
+
+# -- where a key stands in the file's text -----------------------------------------------------------
+
+def line_of(text: str, table: str, key: str, index: int | None = None) -> int:
+    """The line (1-based) on which `key` stands inside [table] (or the index-th [[table]], 0 the
+    first; the table's header itself when key is ""), also inside an inline table there; the
+    first line naming it anywhere else; 0 if none does."""
+    assignment = re.compile(r'(^|[{,\s])"?' + re.escape(key) + r'"?\s*=')
+    current, count, found, header = "", -1, 0, 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if line.startswith("["):
+            current = line.strip("[]").strip()
+            inside = current == table and (index is None or (line.startswith("[[") and (count := count + 1) == index))
+            if inside:
+                header = number
+                if not key:
+                    return number
+            elif current == table and index is not None:
+                inside = False
+            if index is None and current == (f"{table}.{key}" if table else key):
+                return number
+            current = current if inside or index is None else f"\0{current}"
+            continue
+        if key and assignment.search(line):
+            if current == table and (index is None or header):
+                return number
+            found = found or number
+    return header or found
+
+
+def split_key(full: str) -> list[str]:
+    """A dotted key's parts, quoted names kept whole: 'drive.parameters."motor.resistance"' ->
+    ['drive', 'parameters', 'motor.resistance']. Raises ValueError for text that is not a key."""
+    try:
+        data = tomllib.loads(f"{full} = 0")
+    except tomllib.TOMLDecodeError:
+        raise ValueError(f"{full!r} is not a TOML key (quote a name with dots: 'drive.parameters.\"motor.resistance\"')") \
+            from None
+    parts = []
+    while isinstance(data, dict):
+        (name, data), = data.items()
+        parts.append(name)
+    return parts
+
+
+def join_key(parts: Sequence[str]) -> str:
+    """The dotted key of these parts, a part with a dot in quotes."""
+    return ".".join(f'"{p}"' if "." in p else p for p in parts)
+
+
+# -- a file read against its schema ------------------------------------------------------------------
+
+@dataclass
+class Document:
+    """A TOML file's document, checked against its schema: `value` gives a key's value (or its
+    default), `table`, `family` and `entries` its tables, and `fail` the one-line error for any
+    key of it."""
+    schema: Schema
+    path: Path
+    text: str
+    data: dict = field(default_factory=dict)
+
+    def table(self, name: str) -> dict:
+        """[name]'s keys and tables ({} where the file has none)."""
+        found = self.data
+        for part in name.split(".") if name else []:
+            found = found.get(part, {}) if isinstance(found, dict) else {}
+        return found if isinstance(found, dict) else {}
+
+    def value(self, table: str, key: str, default: Any = None) -> Any:
+        """The key's value in [table] (a dotted table name: "trajectory.x"), else its schema's
+        default, else `default`."""
+        found = self.table(table)
+        if key in found:
+            return found[key]
+        declared = _declared(self.schema, table)
+        own = declared.key(key) if declared else None
+        return own.default if own is not None and own.default not in (None, REQUIRED) else default
+
+    def family(self, name: str) -> dict[str, dict]:
+        """The tables of a family by their names: "trajectory.<dof>" -> {"x": {...}, ...}."""
+        parent = name.rsplit(".", 1)[0]
+        return {k: v for k, v in self.table(parent).items()
+                if isinstance(v, dict) and (found := _declared(self.schema, f"{parent}.{k}")) and found.name == name}
+
+    def entries(self, name: str) -> list[dict]:
+        """The tables of an array of tables, [[name]]."""
+        found = self.data.get(name, [])
+        return found if isinstance(found, list) else []
+
+    def line(self, full: str) -> int:
+        """The line of a full key ('trajectory.x.sines[1].amplitude', 'axis[2].values'; a table's
+        name: its header), the nearest enclosing one's where the file does not give it, or 0."""
+        parts = _parts(full)
+        for cut in range(len(parts), 0, -1):
+            names, index = [], None
+            for part in parts[:cut - 1]:
+                name, k = _indexed(part)
+                names.append(name)
+                table = _declared(self.schema, ".".join(names))
+                if k is not None and table is not None and table.many:
+                    index = k - 1
+            key, k = _indexed(parts[cut - 1])
+            table = _declared(self.schema, ".".join([*names, key]))
+            if k is not None and table is not None and table.many:
+                found = line_of(self.text, ".".join([*names, key]), "", k - 1)
+            else:
+                found = line_of(self.text, ".".join(names), key, index)
+            if found:
+                return found
+        return 0
+
+    def fail(self, full: str, problem: str, value: Any = None) -> InputError:
+        """The schema's error for the key `full`: `file:line: 'full' = value: problem`, or
+        `file:line: 'full' problem` where no value is given ("is missing")."""
+        line = self.line(full)
+        where = f"{self.path}:{line}" if line else f"{self.path}"
+        shown = f"'{full}' = {value!r}:" if value is not None else f"'{full}'"
+        return self.schema.error(f"{where}: {shown}{'' if problem.startswith(':') else ' '}{problem}")
+
+
+def _parts(full: str) -> list[str]:
+    """'drive.parameters."motor.resistance"' -> ['drive', 'parameters', 'motor.resistance'];
+    indices stay on their part ('sines[1]')."""
+    return [p.replace('"', "") for p in re.findall(r'"[^"]*"(?:\[\d+\])?|[^.]+', full)]
+
+
+def _indexed(part: str) -> tuple[str, int | None]:
+    found = re.fullmatch(r"(.*)\[(\d+)\]", part)
+    return (found.group(1), int(found.group(2))) if found else (part, None)
+
+
+def _matches(table: Table, given: Sequence[str]) -> bool:
+    """Whether the first len(given) parts of the table's name name `given` (a family's <x> any of
+    its names)."""
+    declared = table.name.split(".") if table.name else []
+    return len(declared) >= len(given) and all(
+        d == g or (d.startswith("<") and (not table.names or g in table.names)) for d, g in zip(declared, given))
+
+
+def _declared(schema: Schema, name: str) -> Table | None:
+    """The schema's table of this name, a family's member matched to its family."""
+    given = name.split(".") if name else []
+    return next((t for t in schema.tables if len(t.name.split(".") if t.name else []) == len(given)
+                 and _matches(t, given)), None)
+
+
+def _children(schema: Schema, name: str) -> dict[str, Table | None]:
+    """The tables directly below [name]: their name (a family's "<x>") -> the table, or None for
+    a table that only holds others (like [drive.leg])."""
+    given = name.split(".") if name else []
+    out: dict[str, Table | None] = {}
+    for table in schema.tables:
+        parts = table.name.split(".") if table.name else []
+        if len(parts) > len(given) and _matches(table, given):
+            child = parts[len(given)]
+            out[child] = table if len(parts) == len(given) + 1 else out.get(child)
+    return out
+
+
+def read(schema: Schema, path: str | Path, overrides: Mapping[str, Any] | None = None,
+         text: str | None = None, data: dict | None = None) -> Document:
+    """Reads and checks a file against its schema: its text and document (or the given ones, read
+    before), with values set at dotted keys over it (`overrides`, as if the file said them);
+    every mistake raises the schema's error, one line."""
+    path = Path(path)
+    if data is None:
+        text, data = _load(schema, path)
+    document = Document(schema, path, text or "", _with_overrides(schema, path, data, overrides or {}))
+    _check_table(document, "", document.data, "")
+    return document
+
+
+def _load(schema: Schema, path: Path) -> tuple[str, dict]:
+    if not path.is_file():
+        raise schema.error(f"{path}: no such {schema.kind}" + (" (a folder)" if path.is_dir() else ""))
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as problem:
+        raise schema.error(f"{path}: cannot be read: {problem}") from None
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as problem:
+        raise schema.error(f"{path}: not valid TOML: {problem}") from None
+
+
+def _with_overrides(schema: Schema, path: Path, data: dict, overrides: Mapping[str, Any]) -> dict:
+    """A copy of the document with values set at dotted keys (tables made as needed)."""
+    import copy
+    data = copy.deepcopy(data)
+    for key, value in overrides.items():
+        try:
+            *tables, name = split_key(key)
+        except ValueError as error:
+            raise schema.error(f"{path}: {error}") from None
+        table = data
+        for t in tables:
+            table = table.setdefault(t, {})
+            if not isinstance(table, dict):
+                raise schema.error(f"{path}: {key!r}: {t!r} is a value in the file, not a table")
+        table[name] = value
+    return data
+
+
+def _check_table(document: Document, name: str, values: Any, shown: str) -> None:
+    """Checks [name] (`shown`: its full name, with an array's index) and every table below it."""
+    declared = _declared(document.schema, name)
+    children = _children(document.schema, name)
+    if not isinstance(values, dict):
+        raise document.fail(shown, f"must be a table ([{shown}])", values)
+    for key, value in values.items():
+        full = f"{shown}.{key}" if shown else key
+        own = declared.key(key) if declared else None
+        if own is not None:
+            _check_value(document, own, value, full)
+            continue
+        below = f"{name}.{key}" if name else key
+        table = _declared(document.schema, below)
+        if table is not None and table.many:
+            if not isinstance(value, list):
+                raise document.fail(full, f"must be [[{below}]] tables", value)
+            for k, entry in enumerate(value, start=1):
+                _check_table(document, below, entry, f"{full}[{k}]")
+        elif table is not None or key in children:
+            _check_table(document, below, value, full)
+        else:
+            known = sorted({*(k.name for k in (declared.keys if declared else ())),
+                            *(c for c in children if not c.startswith("<")),
+                            *(n for c, t in children.items() if c.startswith("<") and t for n in t.names)})
+            raise document.fail(full, "is not a known key" + (f" (known here: {', '.join(known)})" if known else ""))
+    for key in declared.keys if declared else ():
+        if key.default is REQUIRED and key.name not in values:
+            raise document.fail(f"{shown}.{key.name}" if shown else key.name, "is missing")
+    for child, table in children.items():
+        if table is not None and table.required and child not in values:
+            raise document.fail(f"{shown}.{child}" if shown else child, "is missing")
+
+
+def _check_value(document: Document, key: Key, value: Any, full: str) -> None:
+    problem = key.type.problem(value)
+    if problem is not None:
+        raise document.fail(full, problem, value)
+    if not isinstance(key.type, Items):
+        return
+    if key.type.most is not None and len(value) > key.type.most:
+        raise document.fail(full, f"has {len(value)} entries; at most {key.type.most}")
+    for k, entry in enumerate(value, start=1):
+        item = f"{full}[{k}]"
+        if not isinstance(entry, dict):
+            raise document.fail(item, f"must be an inline table {{{', '.join(i.name for i in key.type.keys)}}}", entry)
+        for name, given in entry.items():
+            own = next((i for i in key.type.keys if i.name == name), None)
+            if own is None:
+                raise document.fail(f"{item}.{name}", "is not a known key (known here: "
+                                    f"{', '.join(i.name for i in key.type.keys)})")
+            _check_value(document, own, given, f"{item}.{name}")
+        for own in key.type.keys:
+            if own.default is REQUIRED and own.name not in entry:
+                raise document.fail(f"{item}.{own.name}", "is missing")
+
+
+# -- the reference page ------------------------------------------------------------------------------
+
+def reference(schema: Schema, title: str) -> str:
+    """The schema as a Markdown page: a section per table, a row per key (type and range, unit,
+    default, what it is)."""
+    lines = [f"# {title}", "", "<!-- generated from the schema by scripts/reference.py; do not edit -->", "",
+             schema.doc, ""]
+    for table in schema.tables:
+        header = table.name if schema.groups else f"`[[{table.name}]]`" if table.many else f"`[{table.name}]`" \
+            if table.name else "The file"
+        lines += [f"## {header}", "", table.doc + (" Required." if table.required else ""), ""]
+        if table.keys:
+            lines += _key_rows(table.keys)
+            lines.append("")
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def _key_rows(keys: Sequence[Key], prefix: str = "") -> list[str]:
+    rows = ["| key | type | unit | default | meaning |", "|---|---|---|---|---|"]
+    nested = []
+    for key in keys:
+        default = "required" if key.default is REQUIRED else "" if key.default is None else f"`{_toml(key.default)}`"
+        cells = [f"`{prefix}{key.name}`", key.type.describe(), key.unit, default, key.doc]
+        rows.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+        if isinstance(key.type, Items):
+            nested.append(key)
+    for key in nested:
+        rows += ["", f"Each entry of `{prefix}{key.name}`:", "", *_key_rows(key.type.keys)[0:]]
+    return rows
+
+
+def _toml(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return f"{value:g}" if isinstance(value, float) else str(value)
