@@ -63,7 +63,7 @@ from cosim.engine.results import write  # noqa: E402
 from cosim.platform.run.libcosim import run_in_libcosim  # noqa: E402
 from cosim.engine.settings import FixedStep  # noqa: E402
 from cosim.platform.run.runner import run_scene, scene_structure  # noqa: E402
-from cosim.platform.scene import load_scene, scene_settings, shipped_scenes  # noqa: E402
+from cosim.platform.scene import load_scene, shipped_scenes  # noqa: E402
 from cosim.platform.run.accuracy import AFTER, START_UP, difference, window_errors, windows  # noqa: E402
 from cosim.platform.ports import DRIVES, POSE, per_leg  # noqa: E402
 
@@ -106,7 +106,7 @@ def _renamed(result: np.ndarray, names: list[str], under: list[str] = TORQUES) -
 
 def fine_time(scene) -> tuple[float, float]:
     """The scene's finer step and the simulated time it is taken at (its start and its windows)."""
-    _, control = scene_settings(scene)
+    _, control = scene.algorithm, scene.control
     if not isinstance(control, FixedStep) or control.startup_time == 0.0:
         return scene.step, 0.0
     return control.startup_step, control.startup_time + sum(end - start for start, end in control.windows)

@@ -21,7 +21,6 @@ docs/figures/trade_<scene>.png.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -40,7 +39,7 @@ from cosim.engine.sweep import run_sweep  # noqa: E402
 from cosim.platform.run.runner import run_scene  # noqa: E402
 from cosim.platform.run.sweep import ScenePoint  # noqa: E402
 from cosim.platform.scene import Scene, load_scene  # noqa: E402
-from cosim.platform.run.system import POSE  # noqa: E402
+from cosim.platform.ports import POSE  # noqa: E402
 
 
 @dataclass
@@ -113,9 +112,9 @@ def pareto(points: list[Point]) -> list[Point]:
 def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[str, dict]) -> tuple[list[Point], dict]:
     h = scene.step
     checkpoints = np.round(np.arange(0.05, scene.duration + 1e-9, 0.05), 9)
-    reference_result, _ = run_scene(dataclasses.replace(scene, step=h / 16), progress=False)
+    reference_result, _ = run_scene(scene.changed({"scene.step": h / 16}), progress=False)
     reference = _at(reference_result, checkpoints)
-    eighth, _ = run_scene(dataclasses.replace(scene, step=h / 8), progress=False)
+    eighth, _ = run_scene(scene.changed({"scene.step": h / 8}), progress=False)
     convergence = float(np.abs(_at(eighth, checkpoints) - reference).max())
     planned = []
     for algorithm in ("gauss-seidel", "jacobi"):
@@ -131,7 +130,7 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
     for name, drive in fidelities.items():
         for factor in (0.5, 1.0):
             changes = dict(step=h * factor, drive=drive)
-            if drive.get("solver.method") == 3 and scene.startup_time:  # one drive step per macro step
+            if drive.get("solver.method") == 3 and scene.control.startup_time:  # one drive step per macro step
                 changes["startup_step"] = h * factor / 16                  # needs the finer start finer
             planned.append((f"{name}, {h * factor * 1e3:g} ms", "ours fidelity", changes))
     for name, mechanics in effects.items():
@@ -144,7 +143,7 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
                     f"mechanics' RK4 at {2 * h * 1e3:g} ms", "ours interface Jacobian",
                     dict(step=2 * h, interface_jacobian=True, drive={"solver.exponential": False, "solver.step": h * 0.2},
                          mechanics={"solver.method": 1, "solver.step": 2 * h})))
-    if scene.startup_time:  # what the scene's finer start buys
+    if scene.control.startup_time:  # what the scene's finer start buys
         for factor in (0.5, 1.0):
             planned.append((f"gauss-seidel 1, {h * factor * 1e3:g} ms, no finer start", "ours fixed",
                             dict(step=h * factor, startup_time=0.0)))
@@ -152,7 +151,7 @@ def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[
     progress = TaskProgress(f"trade {scene.path.stem}: libcosim", 6)
     for factor in (0.25, 0.5, 1.0, 2.0):
         point = Point("libcosim fixed", f"libcosim fixed {h * factor * 1e3:g} ms")
-        run = run_in_libcosim(dataclasses.replace(scene, step=h * factor), checkpoints=checkpoints)
+        run = run_in_libcosim(scene.changed({"scene.step": h * factor}), checkpoints=checkpoints)
         point.error, point.wall = float(np.abs(run.poses - reference).max()), run.wall
         point.steps = int(round(scene.duration / (h * factor)))
         points.append(point)
@@ -249,8 +248,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--probe", type=float, default=1.0, help="simulated seconds per point")
     args = parser.parse_args()
-    meng = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), duration=args.probe, pulses=[])
-    sumnu = dataclasses.replace(load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), duration=args.probe)
+    meng = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": args.probe, "load.pulses": []})
+    sumnu = load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"scene.duration": args.probe})
     studies = [  # name, scene, the same as overrides of its file (for the sweep), fidelities, effects
         ("meng", meng, (("scene.duration", args.probe), ("load.pulses", [])), {"ideal inverter": {"inverter.model": 1}, "averaged inverter": {"inverter.model": 2},
                         "switching inverter": {"inverter.model": 3},

@@ -10,7 +10,8 @@ The same run path as the `cosim` command, for a notebook or a script:
     ssp = cosim.simulate("meng.ssp", settings={"step": "5e-4"})  # any SSP system
 
 A scene is a TOML file (a shipped scene's name, or a path; `cosim copy NAME` copies one out to
-edit), or a `Scene` from `load`, which may be changed before it runs (`dataclasses.replace`).
+edit), or a `Scene` from `load`, changed before it runs with `scene.changed({"scene.step": 5e-4})`
+(values at the keys its file writes, checked as the file's own).
 Mistakes in the input raise one-line errors (`SceneError`, `SspError`, `SettingsError`,
 `SweepError`); a run that stops part way raises `RunStopped`, which carries the results computed
 up to then (`.result`) and the report that says why (`.report`).
@@ -18,7 +19,6 @@ up to then (`.result`) and the report that says why (`.report`).
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -28,7 +28,7 @@ import numpy as np
 from .engine.errors import UsageError
 from .engine.outcome import Report, RunStopped
 from .engine.structure import SystemStructure
-from .platform.scene.reader import Scene, SceneError, load_scene
+from .platform.scene import Scene, SceneError, load_scene
 
 SYSTEM_SUFFIXES = (".ssp", ".ssd")
 
@@ -95,8 +95,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         model: a scene's name or path, a `Scene` (from `load`), an .ssp/.ssd path or a
             `SystemStructure`.
         duration: the simulated time [s], instead of the scene's or system's own.
-        overrides: a scene's values at dotted keys (see `load`); with a `Scene`, its file is
-            read again with them over the ones it was loaded with.
+        overrides: a scene's values at dotted keys (see `load`); with a `Scene`, over the ones
+            it was made with (`Scene.changed`; its file is not read again).
         settings: an SSP system's run settings by name (`step`, `algorithm`, `order`,
             `step_control`, `rtol`, ...: cosim.engine.settings), as `cosim run --set`.
         out: a folder for the results as files (CSV, .mat, the log; a scene's plots and
@@ -131,11 +131,9 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "
                          "as overrides (e.g. {'scene.step': 5e-4, 'coupling.order': 2})")
     from .platform.run.runner import run_scene
-    scene = model if isinstance(model, Scene) else load_scene(model, dict(overrides or {}))
-    if isinstance(model, Scene) and overrides:
-        scene = load_scene(scene.path, {**scene.overrides, **overrides})
+    scene = model.changed(overrides or {}) if isinstance(model, Scene) else load_scene(model, overrides)
     if duration is not None:
-        scene = dataclasses.replace(scene, duration=float(duration))
+        scene = scene.changed({"scene.duration": float(duration)})
     values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin)
     return Run(values, report)
 

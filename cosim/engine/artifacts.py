@@ -57,6 +57,8 @@ def _newest_source() -> tuple[float, Path] | None:
 
 def _check(path: Path, what: str) -> Path:
     if not path.exists():
+        if not INSTALLED and not (ROOT / "CMakeLists.txt").exists():  # neither a wheel nor a checkout
+            data_dir("params")
         raise ArtifactMissing(f"{what} is not built ({path} is missing): run `{BUILD_COMMAND}`")
     newest = _newest_source()
     if newest and (not BUILD_STAMP.exists() or BUILD_STAMP.stat().st_mtime < newest[0]):

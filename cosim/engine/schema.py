@@ -47,7 +47,7 @@ class Number:
     whole: bool = False
 
     def problem(self, value: Any) -> str | None:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, int if self.whole else (int, float)):
             return f"must be {self.describe()}"
         if not math.isfinite(value):
             return f"must be a finite {'whole number' if self.whole else 'number'}"
@@ -280,7 +280,7 @@ def line_of(text: str, table: str, key: str, index: int | None = None) -> int:
             if current == table and (index is None or header):
                 return number
             found = found or number
-    return header or found
+    return found
 
 
 def split_key(full: str) -> list[str]:
@@ -370,8 +370,13 @@ class Document:
         `file:line: 'full' problem` where no value is given ("is missing")."""
         line = self.line(full)
         where = f"{self.path}:{line}" if line else f"{self.path}"
-        shown = f"'{full}' = {value!r}:" if value is not None else f"'{full}'"
+        shown = f"'{full}' = {_shown(value)}:" if value is not None else f"'{full}'"
         return self.schema.error(f"{where}: {shown}{'' if problem.startswith(':') else ' '}{problem}")
+
+
+def _shown(value: Any) -> str:
+    """A value as a TOML file writes it (true, not True); text and the rest as Python shows it."""
+    return ("true" if value else "false") if isinstance(value, bool) else repr(value)
 
 
 def _parts(full: str) -> list[str]:

@@ -18,7 +18,6 @@ question: what leaving out the motor systems costs.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import tempfile
 from dataclasses import dataclass
@@ -29,7 +28,7 @@ import numpy as np
 from ..engine.sweep import run_sweep
 from .ports import POSE
 from .run.runner import run_scene
-from .scene.reader import Scene
+from .scene import Scene
 from .run.sweep import ScenePoint
 
 EFFECTS = ("effects.motor_inertia", "effects.actuator_inertia", "effects.friction")
@@ -66,11 +65,10 @@ def fidelities(scene: Scene) -> dict[str, dict]:
     return {f"{scene.drive_fmu.name} as it is": {}} if scene.drive_fmu else FIDELITY[scene.drive]
 
 
-def _variant(scene: Scene, step: float, effects_off, fidelity: str, duration: float) -> Scene:
-    drive = {**scene.drive_parameters, **fidelities(scene)[fidelity]}
-    mechanics = {**scene.mechanics_parameters, **{e: False for e in effects_off}}
-    return dataclasses.replace(scene, step=step, duration=duration, mechanics_parameters=mechanics,
-                               drive_parameters=drive, step_control="fixed")
+def _variant(scene: Scene, step: float, fidelity: str, duration: float) -> Scene:
+    """The scene at a fixed `step` for `duration`, its drives at `fidelity` (the reference runs)."""
+    return scene.changed({"scene.step": step, "scene.duration": duration, "coupling.step_control": "fixed",
+                          **{f'drive.parameters."{k}"': v for k, v in fidelities(scene)[fidelity].items()}})
 
 
 def _point(scene: Scene, factor: float, effects_off, fidelity: str, interface_jacobian: bool, redesign: bool) -> dict:
@@ -109,12 +107,12 @@ def advise(scene: Scene, tolerance: float, probe: float | None = None, effort_to
     own = next(name for name, values in fidelities(scene).items()
                if all(scene.drive_parameters.get(k, v if name.startswith(("averaged", "electrical")) else None) == v
                       for k, v in values.items()))
-    reference, _ = run_scene(_variant(scene, scene.step / 4, (), own, duration))
-    half, _ = run_scene(_variant(scene, scene.step / 2, (), own, duration))
+    reference, _ = run_scene(_variant(scene, scene.step / 4, own, duration))
+    half, _ = run_scene(_variant(scene, scene.step / 2, own, duration))
     convergence = _pose_difference(half, reference)
     subsets = [c for r in range(len(EFFECTS) + 1) for c in itertools.combinations(EFFECTS, r)]
     plan = list(itertools.product((0.5, 1, 2, 4), subsets, fidelities(scene), (False,)))
-    if scene.order > 0 and not scene.interface_jacobian:
+    if scene.algorithm.order > 0 and not scene.interface_jacobian:
         plan += list(itertools.product((1, 2, 4), [()], fidelities(scene), (True,)))
     evaluate = ScenePoint(str(scene.path), ("pose_error", "effort_error", "window_error", "steps", "stepping_wall"),
                           base=(*scene.overrides.items(), ("scene.duration", duration),

@@ -622,7 +622,7 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> R
     Raises StudyError with the reason (the caller adds the file and line)."""
     from .core import neutral_pose
     from .run.runner import scene_values
-    from .scene.reader import SceneError, Signal, load_scene, shipped
+    from .scene import SceneError, Signal, load_scene, shipped
     from .scene.signals import scene_trajectory, trajectory_parameters
     from .report.view3d import play
     if not isinstance(source, str) or not source:
@@ -1212,7 +1212,6 @@ def scene_fit(scene, parameter: str, values: np.ndarray, samples: int = 2001) ->
     offsets at "neutral" follow it)."""
     from .core import mechanics_value
     from .run.runner import scene_values
-    from .scene.reader import load_scene
     from .report.view3d import reference_motion
     shortest, longest, angle = [], [], []
     base_values = scene_values(scene)[0]
@@ -1221,7 +1220,7 @@ def scene_fit(scene, parameter: str, values: np.ndarray, samples: int = 2001) ->
     joint_limit = float(mechanics_value(base_values, "limit.joint_angle"))
     core = Core(actuators=False, motors=False, friction=False)
     for value in values:
-        changed = load_scene(scene.path, {**scene.overrides, f'mechanics.parameters."{parameter}"': float(value)})
+        changed = scene.changed({f'mechanics.parameters."{parameter}"': float(value)})
         _, poses, _ = reference_motion(changed, samples)
         core.use_start_values(scene_values(changed)[0])
         k = core.pose_kinematics(poses)
@@ -1287,9 +1286,10 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
     reason as "problem"."""
     import tempfile
     from ..engine import FixedStep
-    from .scene.reader import Signal
+    from .scene import Signal
     from .scene.signals import trajectory_parameters
-    from .run.system import columns, default_algorithm, platform_structure, run
+    from .ports import platform_algorithm
+    from .run.system import columns, platform_structure, run
     from .run.tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
     t, displacement, rates, accelerations = motion_profile(study, dof)
     values = platform_values(study, point, effects=True)
@@ -1336,7 +1336,7 @@ def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, do
         # recorded motion starts moving) at a sixteenth of the step, as the shipped scenes take them
         control = FixedStep(step) if drive == "force" else \
             FixedStep(step, 0.1, step / 16, ((HOLD - step, HOLD + 0.02),))
-        outcome = run(structure, default_algorithm(kind), control, duration, columns(kind, drive_outputs=(effort, current),
+        outcome = run(structure, platform_algorithm(kind), control, duration, columns(kind, drive_outputs=(effort, current),
                                                                             applied=jacobian))
     finally:
         if scratch is not None:

@@ -1,11 +1,15 @@
-"""The platform's ports as ../shared/INTERFACES.md names them: the pose and wrench signals and, per
-drive kind, which mechanics outputs feed a drive and which drive output feeds the mechanics. Pure
-data: the scene parser checks names against it without importing the runtime.
+"""The platform's ports as ../shared/INTERFACES.md names them: the pose and wrench signals, the
+components (trajectory, mechanics, one drive per leg) and, per drive kind, which mechanics outputs
+feed a drive and which drive output feeds the mechanics; and the platform's coupling, the order in
+which Gauss-Seidel steps the components. The scene reader checks names against it without
+importing the runtime.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from ..engine.settings import Algorithm
 
 POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 WRENCH = ("load.force.x", "load.force.y", "load.force.z", "load.torque.x", "load.torque.y", "load.torque.z")
@@ -46,3 +50,14 @@ DRIVES = {
                           ("force_velocity_slope", "leg[{i}].force_velocity_slope", "leg[{i}].velocity_seen"),
                           ("leg[{i}].velocity_ref", "velocity_ref"), (("control.velocity_ref_input", True),)),
 }
+
+
+def drive_names(drive: str) -> list[str]:
+    """The drives' component names, one per leg: pmsm1 .. pmsm6, linear1 .. linear6."""
+    return [f"{drive}{i}" for i in LEGS]
+
+
+def platform_algorithm(drive: str, kind: str = "gauss-seidel", order: int = 1) -> Algorithm:
+    """The platform's coupling: Gauss-Seidel steps the trajectory, the drives, then the mechanics
+    (each drive from the mechanics' last samples, the mechanics with the drives' new efforts)."""
+    return Algorithm(kind, order, ("trajectory", *drive_names(drive), "mechanics") if kind == "gauss-seidel" else None)

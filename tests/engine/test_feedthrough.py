@@ -19,7 +19,7 @@ from cosim.engine.structure import SystemStructure
 from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.platform.run.runner import scene_record, scene_structure
 from cosim.platform.scene import load_scene
-from cosim.platform.run.system import default_algorithm
+from cosim.platform.ports import platform_algorithm
 from test_coupling import oscillator
 from test_kernel import assert_equal, both
 
@@ -39,10 +39,11 @@ def test_kernel_equals_the_oracle_with_feedthrough_on_the_oscillator(kind, order
 
 @pytest.mark.parametrize("algorithm,order", [("jacobi", 0), ("gauss-seidel", 1), ("jacobi", 2)])
 def test_kernel_equals_the_oracle_with_feedthrough_on_the_meng_scene(algorithm, order):
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), algorithm=algorithm, order=order,
-                                outputs_mechanics=["leg[1].angle_ref"], outputs_drive=["speed"])
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"coupling.algorithm": algorithm, "coupling.order": order,
+                                                            "outputs.mechanics": ["leg[1].angle_ref"],
+                                                            "outputs.drive": ["speed"]})
     record, names = scene_record(scene)
-    settings = dataclasses.replace(default_algorithm("pmsm", algorithm, order), feedthrough=True)
+    settings = dataclasses.replace(platform_algorithm("pmsm", algorithm, order), feedthrough=True)
     reference, result, execution, failure = both(scene_structure(scene), settings, FixedStep(scene.step), 0.4,
                                                  record, names, "mechanics")
     assert failure is None
@@ -61,7 +62,7 @@ def test_at_order_0_the_references_arrive_at_the_same_communication_point():
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
     structure = scene_structure(scene)
     record = [("trajectory", "pose_ref.z"), ("mechanics", "leg[1].angle_ref"), ("mechanics", "leg[1].length_ref")]
-    plain = default_algorithm("pmsm", "jacobi", 0)
+    plain = platform_algorithm("pmsm", "jacobi", 0)
     late = run(structure, plain, FixedStep(1e-3), 0.3, record)
     resolved = run(structure, dataclasses.replace(plain, feedthrough=True), FixedStep(1e-3), 0.3, record)
     from cosim.platform.core import Core
@@ -94,6 +95,5 @@ def test_the_setting_travels_in_the_ssp_annotation_and_the_scene():
     from cosim.engine.settings import from_strings, to_strings
     algorithm = Algorithm("jacobi", 0, feedthrough=True)
     assert from_strings(to_strings(algorithm, FixedStep(1e-3)), 1e-3)[0] == algorithm
-    from cosim.platform.scene import scene_settings
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"coupling.feedthrough": True})
-    assert scene_settings(scene)[0].feedthrough
+    assert scene.algorithm.feedthrough

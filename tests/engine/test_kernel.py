@@ -4,7 +4,6 @@ oscillator and on the whole platform system, and the same failure handling."""
 
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 import pytest
@@ -13,11 +12,12 @@ import oracle
 from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RecordFull, RunFailed,
                           StepDoubling, SystemStructure)
 from cosim.engine.artifacts import ROOT
-from cosim.platform.run.runner import scene_record, scene_settings, scene_structure
+from cosim.platform.run.runner import scene_record, scene_structure
 from cosim.platform.scene import load_scene
 from cosim.platform.scene.parameter_sets import mechanics_start_values
 from cosim.platform.scene.signals import scene_trajectory
-from cosim.platform.run.system import default_algorithm, platform_structure
+from cosim.platform.ports import platform_algorithm
+from cosim.platform.run.system import platform_structure
 from test_coupling import oscillator
 
 
@@ -112,11 +112,11 @@ def test_kernel_equals_the_oracle_with_an_interface_jacobian(kind, order):
 def test_kernel_equals_the_oracle_on_the_meng_scene(algorithm, order, interface_jacobian):
     """The Meng scene (trajectory FMU with exact derivatives, six PMSM drives, mechanics) for 0.6 s,
     across batch boundaries: every recorded value, every energy residual and the final time."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), algorithm=algorithm, order=order,
-                                outputs_mechanics=["leg[1].length"], outputs_drive=["speed"],
-                                interface_jacobian=interface_jacobian)
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {
+        "coupling.algorithm": algorithm, "coupling.order": order, "outputs.mechanics": ["leg[1].length"],
+        "outputs.drive": ["speed"], "coupling.interface_jacobian": interface_jacobian})
     record, names = scene_record(scene)
-    reference, result, execution, failure = both(scene_structure(scene), default_algorithm("pmsm", algorithm, order),
+    reference, result, execution, failure = both(scene_structure(scene), platform_algorithm("pmsm", algorithm, order),
                                                  FixedStep(scene.step), 0.6, record, names, "mechanics")
     assert failure is None
     assert_equal(reference, result, execution, names)
@@ -125,12 +125,12 @@ def test_kernel_equals_the_oracle_on_the_meng_scene(algorithm, order, interface_
 def test_kernel_failure_names_the_instance_and_keeps_the_rows():
     """Six linear motors cannot hold the Meng platform: the mechanics fails mid-run; the error names
     it and the call, and the rows kept equal the oracle's up to there."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / "meng_eq35.toml"), drive="linear", drive_parameters={},
-                                outputs_drive=["velocity"])
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"drive.kind": "linear", "drive.parameters": {},
+                                                            "outputs.drive": ["velocity"]})
     record, names = scene_record(scene)
     # built directly: the scene compiler refuses it up front (the motors cannot hold the legs)
     structure = platform_structure("linear", mechanics_start_values("meng2010"), {}, scene_trajectory(scene))
-    reference, result, execution, failure = both(structure, default_algorithm("linear"), FixedStep(scene.step), 3.0,
+    reference, result, execution, failure = both(structure, platform_algorithm("linear"), FixedStep(scene.step), 3.0,
                                                  record, names, "mechanics")
     assert isinstance(failure, FmuError) and isinstance(reference.failure, FmuError)
     assert str(failure).startswith("mechanics: fmi2DoStep failed at t = ")
@@ -143,10 +143,10 @@ def test_kernel_failure_names_the_instance_and_keeps_the_rows():
 def test_kernel_step_doubling_equals_the_oracle_on_the_platform(name):
     """Step doubling on the scene for 0.5 s, rejections included (87 on the Meng scene): the same
     rows, accepted steps, rejections and energy residuals."""
-    scene = dataclasses.replace(load_scene(ROOT / "scenes" / f"{name}.toml"), duration=0.5, step_control="doubling",
-                                rtol=1e-3, atol=1e-3)
+    scene = load_scene(ROOT / "scenes" / f"{name}.toml", {"scene.duration": 0.5, "coupling.step_control": "doubling",
+                                                          "coupling.rtol": 1e-3, "coupling.atol": 1e-3})
     record, names = scene_record(scene)
-    settings, control = scene_settings(scene)
+    settings, control = scene.algorithm, scene.control
     reference, result, execution, failure = both(scene_structure(scene), settings, control, 0.5, record, names,
                                                  "mechanics")
     assert failure is None

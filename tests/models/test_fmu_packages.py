@@ -196,13 +196,12 @@ def test_a_whole_scene_runs_in_libcosim():
     impact): libcosim runs it at 1 ms and its platform ends within 5 mm / 5 mrad of the reference
     and of our master's run (its fixed-step algorithm holds inputs over a step, ours extrapolates,
     so they differ by the coupling error: measured 0.8 mm)."""
-    import dataclasses
 
     from cosim.platform.run.libcosim import run_in_libcosim
     from cosim.platform.run.runner import run_scene
     from conftest import paper_scene
 
-    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=3.0)  # libcosim at the paper's 1 ms
+    scene = paper_scene("meng_eq35", {"scene.duration": 3.0})  # libcosim at the paper's 1 ms
     peer = run_in_libcosim(scene)
     ours, _ = run_scene(scene)
     final = np.array([ours[f"pose.{a}"][-1] for a in ("x", "y", "z", "roll", "pitch", "yaw")])

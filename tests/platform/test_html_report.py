@@ -31,8 +31,7 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
-    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml")
-    scene.duration = 3.0
+    scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.0})
     result, report = run_scene(scene, out)
     return out / "meng_eq35.html", report, result, out
 

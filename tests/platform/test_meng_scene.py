@@ -16,10 +16,7 @@ POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 def meng(duration: float, impact: bool = True):
-    scene = paper_scene("meng_eq35")
-    scene.duration = duration
-    if not impact:
-        scene.pulses = []
+    scene = paper_scene("meng_eq35", {"scene.duration": duration, **({} if impact else {"load.pulses": []})})
     return run_scene(scene)
 
 

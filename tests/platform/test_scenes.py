@@ -12,7 +12,7 @@ from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.platform.run.runner import SceneFailed, run_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.run.runner import scene_structure
-from cosim.platform.run.system import DRIVES
+from cosim.platform.ports import DRIVES
 
 SCENES = sorted((ROOT / "scenes").glob("*.toml"))
 
@@ -41,7 +41,7 @@ order = 1
 @pytest.mark.parametrize("extra,message", [
     ('algoritm = "jacobi"\n', "scene.toml:7: 'coupling.algoritm' is not a known key"),
     ("[trajectory.surge]\n", "scene.toml:7: 'trajectory.surge' is not a known key"),
-    ("[trajectory.x]\nsines = [{amplitude = 1.0, frequncy = 2.0}]\n", "scene.toml:8: 'trajectory.x.frequncy' is not a known key"),
+    ("[trajectory.x]\nsines = [{amplitude = 1.0, frequncy = 2.0}]\n", "scene.toml:8: 'trajectory.x.sines[1].frequncy' is not a known key"),
 ])
 def test_a_wrong_key_is_named_with_its_line(tmp_path, extra, message):
     with pytest.raises(SceneError) as error:
@@ -52,12 +52,12 @@ def test_a_wrong_key_is_named_with_its_line(tmp_path, extra, message):
 
 @pytest.mark.parametrize("text,message", [
     (BASE.replace("order = 1", "order = 3"), ":6: 'coupling.order' = 3"),
-    (BASE.replace('kind = "pmsm"', 'kind = "hydraulic"'), ":4: 'drive.kind' = 'hydraulic' is not a drive kind"),
-    (BASE.replace("duration = 1.0", "duration = -1"), ":2: 'scene.duration' = -1 must be a positive number"),
+    (BASE.replace('kind = "pmsm"', 'kind = "hydraulic"'), ":4: 'drive.kind' = 'hydraulic': use 'pmsm' or 'linear'"),
+    (BASE.replace("duration = 1.0", "duration = -1"), ":2: 'scene.duration' = -1: must be a positive number"),
     (BASE.replace("duration = 1.0", 'duration = "long"'), ":2: 'scene.duration' = 'long'"),
-    (BASE.replace("order = 1", "order = 1\ninterface_jacobian = 1"), ":7: 'coupling.interface_jacobian' = 1: use true"),
+    (BASE.replace("order = 1", "order = 1\ninterface_jacobian = 1"), ":7: 'coupling.interface_jacobian' = 1: must be true or false"),
     (BASE.replace("order = 1", "order = 0\ninterface_jacobian = true"),
-     ":7: 'coupling.interface_jacobian' = true needs coupling.order 1 or 2"),
+     ":7: 'coupling.interface_jacobian' = true: needs coupling.order 1 or 2"),
 ])
 def test_a_wrong_value_is_named_with_its_line(tmp_path, text, message):
     with pytest.raises(SceneError) as error:
@@ -96,7 +96,9 @@ def test_swapping_the_drive_is_one_line_of_the_scene(tmp_path):
     assert differing == [('kind = "linear"', 'kind = "pmsm"')]
     a, b = load_scene(ROOT / "scenes" / "sumnu_case_1.toml"), load_scene(write(tmp_path, swapped))
     # the swapped drive is designed for the platform (tuning "auto"); the native one keeps its defaults
-    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path", "tuning", "drive_set"}
+    assert {k for k in vars(a) if vars(a)[k] != vars(b)[k]} == {"drive", "path", "tuning", "drive_set", "text", "data",
+                                                               "document", "algorithm"}
+    assert a.algorithm.sequence != b.algorithm.sequence and a.algorithm.kind == b.algorithm.kind  # its components' names
     assert (a.tuning, b.tuning) == ("defaults", "auto")
     assert (a.drive_set, b.drive_set) == (None, "sumnu2015_pmsm")  # a PMSM and screw sized for these legs
     for scene in (a, b):
@@ -163,9 +165,9 @@ def test_a_scene_table_drives_the_platform_like_the_signal_it_samples(tmp_path):
 @pytest.mark.parametrize("extra,message", [
     ('[trajectory]\ntable = "missing.csv"\n', ":8: 'trajectory.table' = 'missing.csv': no such file"),
     ("[trajectory.x]\nsines = [" + ", ".join(["{amplitude = 1.0, frequency = 1.0}"] * 4) + "]\n",
-     ":8: 'trajectory.x.sines' has 4 entries; the trajectory FMU holds 3"),
+     ":8: 'trajectory.x.sines' has 4 entries; at most 3"),
     ("[load]\npulses = [" + ", ".join(['{component = "force.z", value = 1.0, start = 0.0, end = 1.0}'] * 3) + "]\n",
-     ":8: 'load.pulses' has more than 2 pulses on force.z"),
+     ":8: 'load.pulses[3].component' = 'force.z': one pulse too many on it"),
 ])
 def test_what_the_trajectory_fmu_cannot_hold_is_named_with_its_line(tmp_path, extra, message):
     with pytest.raises(SceneError) as error:

@@ -24,7 +24,7 @@ from cosim.engine import Algorithm, Execution, FixedStep
 from cosim.engine.artifacts import ROOT
 from cosim.engine.ssp import PARAMETER_SET, read_ssp
 from conftest import paper_scene
-from cosim.platform.scene import load_scene, scene_settings
+from cosim.platform.scene import load_scene
 
 STOP, STEP = 0.3, 1e-3
 LEGS = [f"pmsm{i}" for i in range(1, 7)]
@@ -56,7 +56,7 @@ def test_export_then_run_reproduces_the_scene_bit_for_bit(meng_ssp, tmp_path):
     a = np.genfromtxt(tmp_path / "a" / "meng_eq35.csv", delimiter=",", names=True)
     b = np.genfromtxt(tmp_path / "b" / "meng.csv", delimiter=",", names=True)
     assert a.dtype.names == b.dtype.names and len(a) == len(b)
-    control = scene_settings(load_scene(ROOT / "scenes" / "meng_eq35.toml"))[1]
+    control = load_scene(ROOT / "scenes" / "meng_eq35.toml").control
     first = control.startup_step if control.startup_time else control.step
     assert np.diff(b["time"])[0] == pytest.approx(first, rel=1e-9)  # the finer start travels in the SSP
     for name in a.dtype.names:

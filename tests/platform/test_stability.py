@@ -5,7 +5,6 @@ beyond it a fixed-step run stops with a diagnosis while step doubling runs throu
 
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 import pytest
@@ -30,7 +29,7 @@ def chatter(torque: np.ndarray) -> float:
 def run(scene, step: float, monitor: bool):
     values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
     return simulate(scene.drive, scene.duration, step, values, scene.drive_parameters, scene_trajectory(scene),
-                    drive_outputs=["torque"], order=scene.order, algorithm=scene.algorithm,
+                    drive_outputs=["torque"], order=scene.algorithm.order, algorithm=scene.algorithm.kind,
                     divergence_ratio=0.05 if monitor else None, interface_jacobian=scene.interface_jacobian).result
 
 
@@ -60,8 +59,8 @@ def test_divergence_verdict_agrees_with_torque_chatter(algorithm, order):
     found (the table of docs/guide/scenes.md): Gauss-Seidel order 0: 1.5 ms, order 1: 1 ms, order 2: 0.5 ms; Jacobi
     order 0: 0.5 ms, orders 1 and 2: 0.25 ms. Extrapolation buys accuracy at the price of stability,
     and Gauss-Seidel, which gives the mechanics the drives' new torques, is twice as stable."""
-    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.6, pulses=[],
-                                algorithm=algorithm, order=order)
+    scene = paper_scene("meng_eq35", {"scene.duration": 0.6, "load.pulses": [], "coupling.algorithm": algorithm,
+                                      "coupling.order": order})
     found = verdicts(scene, STEPS)
     assert all(stopped == chattering for stopped, chattering in found.values()), found
     stable = [step for step, (stopped, _) in found.items() if not stopped]
@@ -79,8 +78,8 @@ def test_the_interface_jacobian_doubles_the_largest_stable_step(algorithm, order
     verdict, which counts the energy the slope's correction carries, still agrees with the torques'
     chatter at every step up to 4 ms. Order 2 gains nothing (0.5 ms either way); order 0 is refused
     with the slope (tests/platform/test_scenes.py)."""
-    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.6, pulses=[],
-                                algorithm=algorithm, order=order, interface_jacobian=True)
+    scene = paper_scene("meng_eq35", {"scene.duration": 0.6, "load.pulses": [], "coupling.algorithm": algorithm,
+                                      "coupling.order": order, "coupling.interface_jacobian": True})
     steps = (*STEPS, 3e-3, 4e-3)
     found = verdicts(scene, steps)
     assert all(stopped == chattering for stopped, chattering in found.values()), found
@@ -92,25 +91,24 @@ def test_a_diverging_run_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
     """The Meng scene without the rotors' inertia at 1 ms (the drives' speed loops then three times
     faster than designed): the run stops early, names the worst bond, suggests a quarter of the step only after a probe ran stable at it,
     and keeps the results up to there; at the suggested 0.25 ms it runs through."""
-    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=1.0, pulses=[],
-                                mechanics_parameters={"effects.motor_inertia": False})
+    scene = paper_scene("meng_eq35", {"scene.duration": 1.0, "load.pulses": [],
+                                      "mechanics.parameters": {"effects.motor_inertia": False}})
     with pytest.raises(SceneFailed) as failed:
         run_scene(scene, out=tmp_path, plots=False)
     message = failed.value.report.failure
     assert "the coupling diverged" in message and "-> mechanics.leg[" in message and "a probe at 0.25 ms ran stable" in message and "try a step of 0.25 ms" in message
     assert 0 < failed.value.result["time"][-1] < 0.5
     assert (tmp_path / "meng_eq35.csv").exists()
-    scene.step = 0.25e-3
-    _, report = run_scene(scene)
+    _, report = run_scene(scene.changed({"scene.step": 0.25e-3}))
     assert report.failure is None
 
 
 def test_step_doubling_runs_through_where_the_fixed_step_diverges():
     """The same scene under step doubling from 1 ms: the controller shrinks the step where the fixed
     step diverged, and the torques do not chatter."""
-    scene = dataclasses.replace(paper_scene("meng_eq35"), duration=0.5, pulses=[],
-                                mechanics_parameters={"effects.motor_inertia": False}, step_control="doubling",
-                                rtol=1e-3, atol=1e-3)
+    scene = paper_scene("meng_eq35", {"scene.duration": 0.5, "load.pulses": [],
+                                      "mechanics.parameters": {"effects.motor_inertia": False},
+                                      "coupling.step_control": "doubling", "coupling.rtol": 1e-3, "coupling.atol": 1e-3})
     result, report = run_scene(scene)
     late = result["time"] > 0.2
     torques = [result[f"torque[{i}]"][late] for i in range(1, 7)]

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.run.runner import run_scene, scene_record, scene_settings, scene_structure
+from cosim.platform.run.runner import run_scene, scene_record, scene_structure
 from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.run.system import POSE, run
+from cosim.platform.ports import POSE
+from cosim.platform.run.system import run
 
 
 def pose_difference(result, reference) -> float:
@@ -21,9 +22,8 @@ def pose_difference(result, reference) -> float:
 
 @pytest.fixture(scope="module")
 def sumnu_scene():
-    scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"coupling.startup_time": 0.0})  # plain fixed steps
-    scene.duration = 1.0
-    return scene
+    return load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"coupling.startup_time": 0.0,  # plain fixed steps
+                                                              "scene.duration": 1.0})
 
 
 def test_step_doubling_beats_the_fixed_step_with_fewer_steps(sumnu_scene):
@@ -31,16 +31,11 @@ def test_step_doubling_beats_the_fixed_step_with_fewer_steps(sumnu_scene):
     0.2 ms steps is below a tenth of what is compared). The doubling control (rtol = atol = 1e-4)
     lands closer to the reference than the scene's fixed 1 ms step, with fewer macro steps
     (measured: 647 + 3 rejected vs 1000; 4e-5 vs 1.1e-4 m)."""
-    scene = sumnu_scene
-    scene.step = 1e-4
-    reference, _ = run_scene(scene)
-    scene.step = 2e-4
-    half, _ = run_scene(scene)
-    scene.step = 1e-3
-    fixed, fixed_report = run_scene(scene)
-    scene.step_control, scene.rtol, scene.atol = "doubling", 1e-4, 1e-4
-    adaptive, report = run_scene(scene)
-    scene.step_control, scene.atol = "fixed", None
+    reference, _ = run_scene(sumnu_scene.changed({"scene.step": 1e-4}))
+    half, _ = run_scene(sumnu_scene.changed({"scene.step": 2e-4}))
+    fixed, fixed_report = run_scene(sumnu_scene.changed({"scene.step": 1e-3}))
+    adaptive, report = run_scene(sumnu_scene.changed({"scene.step": 1e-3, "coupling.step_control": "doubling",
+                                                      "coupling.rtol": 1e-4, "coupling.atol": 1e-4}))
     assert pose_difference(half, reference) < 0.1 * pose_difference(fixed, reference)
     assert pose_difference(adaptive, reference) < 0.6 * pose_difference(fixed, reference)
     assert report.macro_steps + report.rejected_steps < 0.8 * fixed_report.macro_steps
@@ -51,21 +46,19 @@ def test_energy_control_tightens_the_energy_error_with_its_tolerance(sumnu_scene
     """ECCO's controller on the same scene: each tenfold tighter tolerance takes more steps and
     lowers the run's total |energy residual| over the six power bonds (measured 0.41, 0.085, 0.050 J
     for rtol 1e-2, 1e-3, 1e-4)."""
-    scene = sumnu_scene
     totals, steps = [], []
     for rtol in (1e-2, 1e-3, 1e-4):
-        scene.step_control, scene.rtol, scene.atol = "energy", rtol, rtol / 10
-        outcome = run(scene_structure(scene), *scene_settings(scene), scene.duration, scene_record(scene))
+        scene = sumnu_scene.changed({"coupling.step_control": "energy", "coupling.rtol": rtol, "coupling.atol": rtol / 10})
+        outcome = run(scene_structure(scene), scene.algorithm, scene.control, scene.duration, scene_record(scene))
         totals.append(outcome.energy_residuals.sum())
         steps.append(len(outcome.steps))
-    scene.step_control, scene.atol = "fixed", None
     assert totals[0] > totals[1] > totals[2], totals
     assert steps[0] < steps[1] < steps[2], steps
 
 
 @pytest.mark.parametrize("line,message", [
     ('step_control = "pid"', "'coupling.step_control' = 'pid'"),
-    ("rtol = -1.0", "'coupling.rtol' = -1.0 must be a positive number"),
+    ("rtol = -1.0", "'coupling.rtol' = -1.0: must be a positive number"),
     ('step_control = "energy"\nh_max = 1e-3\nh_min = 1e-2', None),  # refused by the settings object itself
 ])
 def test_a_bad_step_control_is_named_with_its_line(tmp_path, line, message):
@@ -89,7 +82,7 @@ def test_a_scene_s_settings_are_the_settings_object_s_with_its_defaults(tmp_path
     path = tmp_path / "scene.toml"
     path.write_text(f'[scene]\nduration = 1.0\n[coupling]\nstep_control = "{control}"\n')
     scene = load_scene(path)
-    algorithm, chosen = scene_settings(scene)
+    algorithm, chosen = scene.algorithm, scene.control
     for field in dataclasses.fields(chosen):
         if field.name in ("rtol", "h_min", "h_max", "k_i", "k_p", "safety", "change_min", "change_max"):
             assert getattr(chosen, field.name) == field.default, field.name
@@ -162,14 +155,14 @@ def test_a_finer_start_without_its_step_is_named_with_its_line(tmp_path):
     from cosim.engine.settings import FixedStep
     path = tmp_path / "scene.toml"
     path.write_text("[scene]\nduration = 1.0\n[coupling]\nstartup_time = 0.1\n")
-    with pytest.raises(SceneError, match=r"scene.toml:4: 'coupling.startup_time' needs startup_step"):
+    with pytest.raises(SceneError, match=r"scene.toml:4: 'coupling.startup_time' = 0.1: needs startup_step"):
         load_scene(path)
     # in a scene the finer start is a bound: whole steps, a whole fraction of the step no longer
     # than startup_step (so a sweep over the step never trips on it); none when the step is finer
     path.write_text("[scene]\nduration = 1.0\nstep = 1.5e-3\n[coupling]\nstartup_time = 0.1\nstartup_step = 3e-4\n")
-    assert scene_settings(load_scene(path))[1] == FixedStep(1.5e-3, 67 * 1.5e-3, 1.5e-3 / 5)
+    assert load_scene(path).control == FixedStep(1.5e-3, 67 * 1.5e-3, 1.5e-3 / 5)
     path.write_text("[scene]\nduration = 1.0\nstep = 1e-4\n[coupling]\nstartup_time = 0.1\nstartup_step = 3e-4\n")
-    assert scene_settings(load_scene(path))[1] == FixedStep(1e-4)
+    assert load_scene(path).control == FixedStep(1e-4)
 
 
 IMPACT = {"scene.duration": 0.45, "load.pulses": [{"component": "force.z", "value": 500.0, "start": 0.3, "end": 0.32,

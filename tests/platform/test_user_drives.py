@@ -200,9 +200,8 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     assert run_scene(load_scene(scene_file(tmp_path, one_step, duration=0.1)), plots=False)[1].failure is None
     # no input derivatives to a drive that cannot interpolate its inputs (pythonfmu's): the coupling holds them
     from cosim.engine import Execution
-    from cosim.platform.scene import scene_settings
     scene = load_scene(scene_file(tmp_path, linear, duration=0.1))
-    with Execution(scene_structure(scene), *scene_settings(scene)) as execution:
+    with Execution(scene_structure(scene), scene.algorithm, scene.control) as execution:
         assert execution.coupling.interpolating["linear1"] is False
         assert execution.coupling.interpolating["mechanics"] is True  # ours takes them
     # no interface Jacobian from a drive without the slope output: the run says so and keeps going
@@ -220,7 +219,7 @@ def test_the_sizing_check_holds_a_users_drive_to_the_limit_it_names(fmus, tmp_pa
         run_scene(load_scene(scene_file(tmp_path, low.replace("[drive.parameters]", 'continuous_limit = '
                                                                    '"torque_continuous"\n[drive.parameters]'))),
                   plots=False)
-    with pytest.raises(SceneError, match=r"'drive.continuous_limit' = 'rated' is not a Real parameter of "
+    with pytest.raises(SceneError, match=r"'drive.continuous_limit' = 'rated': is not a Real parameter of "
                                          r"rotary_servo.fmu"):
         load_scene(scene_file(tmp_path, low.replace("[drive.parameters]", 'continuous_limit = "rated"\n'
                                                                            "[drive.parameters]")))
@@ -292,13 +291,13 @@ def test_the_scene_says_what_a_users_drive_is_not(fmus, tmp_path):
     section = drive_section(fmus["rotary_servo"], tmp_path, "pmsm")
     cases = {
         section.replace("[drive]\n", '[drive]\nkind = "linear"\n'):
-            "'drive.kind' = 'linear', but drive.fmu rotary_servo.fmu has the rotary drive's ports",
+            "'drive.kind' = 'linear': but drive.fmu rotary_servo.fmu has the rotary drive's ports",
         section.replace("[drive]\n", '[drive]\ntuning = "auto"\n'):
-            "'drive.tuning' = 'auto' designs the loops of our drives",
+            "'drive.tuning' = 'auto': designs the loops of our drives",
         section.replace("kp =", "kpp ="): "drive.parameters.\"kpp\" = ",
         '[drive]\nkind = "linear"\n[drive.leg.2]\nfmu = "rotary_servo.fmu"':
-            "'drive.leg.2.fmu' = rotary_servo.fmu has the rotary drive's ports, the other legs' drives are linear",
-        '[drive.leg.7]\nfmu = "rotary_servo.fmu"': "has a table for leg '7'; the legs are 1..6",
+            "'drive.leg.2.fmu' = 'rotary_servo.fmu': has the rotary drive's ports, the other legs' drives are linear",
+        '[drive.leg.7]\nfmu = "rotary_servo.fmu"': "'drive.leg.7' is not a known key (known here: 1, 2, 3, 4, 5, 6)",
     }
     for drive, message in cases.items():
         with pytest.raises(SceneError) as error:

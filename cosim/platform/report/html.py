@@ -127,9 +127,9 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
     drive = scene.drive + "".join(f", {name} on legs {' '.join(legs)}" for name, legs in own.items())
     scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", drive, scene.drive),
                   ("parameter set", scene.parameter_set, scene.parameter_set),
-                  ("coupling", f"{scene.algorithm}, order {scene.order}"
+                  ("coupling", f"{scene.algorithm.kind}, order {scene.algorithm.order}"
                    + (", the drives' interface Jacobians" if scene.interface_jacobian else ""),
-                   f"{scene.algorithm} {scene.order}"),
+                   f"{scene.algorithm.kind} {scene.algorithm.order}"),
                   ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
                   ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
     view = ""

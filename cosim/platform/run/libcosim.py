@@ -18,7 +18,7 @@ from fmpy import read_model_description
 from ...engine import EnergyControl
 from ..ports import POSE
 from .runner import scene_structure
-from ..scene.reader import Scene
+from ..scene import Scene
 
 
 @dataclass

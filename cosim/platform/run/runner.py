@@ -21,7 +21,8 @@ from ...engine.results import thin, write as write_results, write_log
 from ...engine.settings import output_settings, to_strings
 from ..scene.parameter_sets import drive_set, scene_mechanics
 from ..ports import DRIVES, LEGS, POSE, per_leg
-from ..scene.reader import Scene, SceneError, line_of, load_scene, scene_settings
+from ...engine.schema import line_of
+from ..scene import Scene, SceneError
 from ..scene.signals import scene_trajectory
 from ..core import LayoutImpossible, SingularPose
 from ..report.plots import units
@@ -105,7 +106,6 @@ def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
     a drive cannot hold its leg (sizing: ours always, a user's by its continuous_limit)."""
     mechanics_values, ours = scene_values(scene)
     plants = leg_plants(mechanics_values)
-    text = scene.path.read_text()
     legs = [{**({} if leg in scene.leg_fmus else scene.drive_parameters if scene.drive_fmu else ours),
              **scene.leg_parameters.get(leg, {})} for leg in LEGS]
     own = [k for k, leg in enumerate(LEGS) if scene.leg_fmu(leg) is None]
@@ -113,7 +113,7 @@ def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
         for k in own:
             check_sizing(scene.drive, [plants[k]], legs[k], leg=k + 1)
     except SizingError as error:
-        raise SceneError(f"{scene.path}:{line_of(text, 'drive', 'kind')}: drive.kind = "
+        raise SceneError(f"{scene.path}:{scene.document.line('drive.kind')}: drive.kind = "
                          f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
     notes, unchecked = user_drive_notes(scene), []
     for k, leg in enumerate(LEGS):
@@ -128,8 +128,8 @@ def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
         try:
             check_limit(scene.drive, plants[k], limit, f"{fmu.name}'s {name}", leg)
         except SizingError as error:
-            table = f"drive.leg.{leg}" if "continuous_limit" in text and leg in scene.leg_fmus else "drive"
-            raise SceneError(f"{scene.path}:{line_of(text, table, 'continuous_limit')}: {error}") from None
+            table = f"drive.leg.{leg}" if scene.document.value(f"drive.leg.{leg}", "continuous_limit") else "drive"
+            raise SceneError(f"{scene.path}:{scene.document.line(f'{table}.continuous_limit')}: {error}") from None
     if unchecked:
         notes.append(f"sizing not checked for legs {', '.join(map(str, unchecked))}: name the parameter that holds "
                      "the drive's continuous torque or force with drive.continuous_limit")
@@ -170,7 +170,7 @@ def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemS
     structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
                                    interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene))
-    algorithm, control = scene_settings(scene)
+    algorithm, control = scene.algorithm, scene.control
     structure.settings = {**to_strings(algorithm, control), **output_settings(*scene_record(scene),
                                                                                scene.output_interval)}
     return structure
@@ -194,7 +194,7 @@ def located(scene: Scene, component: str, variable: str) -> str:
     """'file:line: table.key' for a component's parameter (file:0 when the scene does not set it,
     the value then comes from the parameter set or the FMU's default)."""
     table, key = scene_key(component, variable)
-    line = line_of(scene.path.read_text(), table, key)
+    line = line_of(scene.text, table, key)
     if table.endswith(".parameters"):
         shown = f'{table}."{key}"'
     elif table == "load":
@@ -222,15 +222,15 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
         where = located(scene, error.instance, named.group(1)) if known else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):
-        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'scene', 'step')}: scene.step = "
+        return SceneError(f"{scene.path}:{scene.document.line('scene.step')}: scene.step = "
                           f"{scene.step:g} s, duration {scene.duration:g} s: {error}")
     if isinstance(error, (LayoutImpossible, SingularPose)):  # the platform the scene asks for, at its start pose
-        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'mechanics', 'parameters')}: the platform "
+        return SceneError(f"{scene.path}:{scene.document.line('mechanics.parameters')}: the platform "
                           f"of [mechanics] at its start pose: {error}")
     if isinstance(error, KeyError) and "no variable" in str(error):  # a recorded output the FMU lacks
         names = set(scene.outputs_mechanics)
         key = "mechanics" if any(f"'{n}'" in str(error) for n in names) else "drive"
-        return SceneError(f"{scene.path}:{line_of(scene.path.read_text(), 'outputs', key)}: 'outputs.{key}': "
+        return SceneError(f"{scene.path}:{scene.document.line(f'outputs.{key}')}: 'outputs.{key}': "
                           f"{error.args[0]}")
     return None
 
@@ -242,9 +242,8 @@ def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, flo
     own change there."""
     from .accuracy import window_errors, windows
     from .accuracy import efforts
-    twin = load_scene(scene.path, {**scene.overrides, "scene.duration": scene.duration, "scene.step": scene.step / 16,
-                                   "coupling.startup_time": 0.0, "coupling.edge_time": 0.0,
-                                   "coupling.step_control": "fixed"})
+    twin = scene.changed({"scene.step": scene.step / 16, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0,
+                          "coupling.step_control": "fixed"})
     reference, _ = run_scene(twin, progress=False, advice=False)
     effort = DRIVES[scene.drive].effort[0]
     spans = windows(float(min(result["time"][-1], reference["time"][-1])), scene.pulses)
@@ -260,7 +259,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
     FMU fails or the coupling diverges. progress: a bar on a terminal; advice: a diverged run
     probes for a step that holds (both off for a sweep's points); twin: the report judges the run
     against its converged twin, window by window (twin_windows)."""
-    algorithm, control = scene_settings(scene)
+    algorithm, control = scene.algorithm, scene.control
     record = scene_record(scene)
     try:
         designed, tuning, drive_notes = scene_design(scene)

@@ -38,7 +38,7 @@ from ...engine.sweep import SYSTEM, Sweep, Target, statistics
 from ...engine.sweep import load_sweep as engine_load_sweep
 from .accuracy import difference, efforts
 from ..ports import DRIVES, LEGS, POSE, per_leg
-from ..scene.reader import SceneError, load_scene, shipped
+from ..scene import SceneError, load_scene, shipped
 
 SCENE_REPORTS = {  # report name -> what it adds to a row
     "tracking_error": "largest |pose - pose_ref| per DOF after the first tenth of the run [m, rad]",

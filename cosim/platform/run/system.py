@@ -17,11 +17,7 @@ from typing import Mapping, Sequence
 from ...engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
                       StepControl, SystemStructure, fmu_path)
 from ...engine.outcome import Outcome, execute
-from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH  # noqa: F401 (DRIVES, POSE re-exported)
-
-
-def drive_names(drive: str) -> list[str]:
-    return [f"{drive}{i}" for i in LEGS]
+from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH, drive_names, platform_algorithm
 
 
 def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None = None,
@@ -71,12 +67,6 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     return SystemStructure(name, components, connections, bonds, experiment or Experiment())
 
 
-def default_algorithm(drive: str, kind: str = "gauss-seidel", order: int = 1) -> Algorithm:
-    """The platform's coupling: Gauss-Seidel steps the trajectory, the drives, then the mechanics."""
-    sequence = ("trajectory", *drive_names(drive), "mechanics") if kind == "gauss-seidel" else None
-    return Algorithm(kind, order, sequence)
-
-
 def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = (),
             applied: bool = False) -> tuple[list[tuple[str, str]], list[str]]:
     """What a platform run records and how the columns are named: pose_ref.<dof> (trajectory),
@@ -119,5 +109,5 @@ def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mappin
     from ...engine import FixedStep
     structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,
                                    interface_jacobian=interface_jacobian)
-    return run(structure, default_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
+    return run(structure, platform_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
                columns(drive, mechanics_outputs, drive_outputs), divergence_ratio)

@@ -8,7 +8,8 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from .reader import CAPACITY, FRAMES, WRENCH_COMPONENTS, Pulse, Scene, Signal
+from .model import Pulse, Scene, Signal
+from .schema import CAPACITY, FRAMES, WRENCH_COMPONENTS
 from ..ports import POSE
 
 

@@ -28,11 +28,12 @@ import numpy as np
 from ..report import plots
 from ..scene.parameter_sets import load, mechanics_start_values
 from ..core import Core
-from ..scene.reader import Pulse, Ramp, Signal, Step
+from ..scene import Pulse, Ramp, Signal, Step
 from ..scene.signals import trajectory_parameters
 from ...engine import FixedStep, RunFailed
 from ..ports import POSE
-from ..run.system import columns, default_algorithm, platform_structure, run
+from ..ports import platform_algorithm
+from ..run.system import columns, platform_structure, run
 from ..report.rows import Row
 
 STEP = 1e-3
@@ -58,19 +59,23 @@ CASES = {1: "step", 2: "step with step compensation", 3: "10 deg/s ramp", 4: "ra
          5: "ramp with compensation as rates"}
 
 
-def _trajectory(demand: Demand, case: int, neutral: np.ndarray) -> dict[str, Signal]:
-    signals = {dof: Signal(float(neutral[k])) for k, dof in enumerate(POSE)}
-    basic = signals[demand.axis]
+def _trajectory(demand: Demand, case: int, neutral: np.ndarray, angle: float | None = None) -> dict[str, Signal]:
+    """The demand's basic motion (a step or a ramp to `angle`, default the demand's) from the
+    neutral pose, with the strategy's compensation of the coupled DOFs."""
+    angle = demand.angle if angle is None else angle
+    steps: dict[str, list] = {dof: [] for dof in POSE}
+    ramps: dict[str, list] = {dof: [] for dof in POSE}
     if case in (1, 2):
-        basic.steps.append(Step(0.0, demand.angle))
+        steps[demand.axis].append(Step(0.0, angle))
     else:
-        basic.ramps.append(Ramp(0.0, demand.ramp_time, demand.angle / demand.ramp_time))
+        ramps[demand.axis].append(Ramp(0.0, demand.ramp_time, angle / demand.ramp_time))
     for dof, size, rate in zip(demand.coupled, demand.compensation, demand.compensation_rate):
         if case in (2, 4):
-            signals[dof].steps.append(Step(0.0, size))
+            steps[dof].append(Step(0.0, size))
         elif case == 5:
-            signals[dof].ramps.append(Ramp(0.0, demand.ramp_time, rate))
-    return signals
+            ramps[dof].append(Ramp(0.0, demand.ramp_time, rate))
+    return {dof: Signal(float(neutral[k]), steps=tuple(steps[dof]), ramps=tuple(ramps[dof]))
+            for k, dof in enumerate(POSE)}
 
 
 def feedforward(target: np.ndarray) -> np.ndarray:
@@ -89,9 +94,7 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
     c = load("halder2013")
     values = mechanics_start_values("halder2013")
     neutral = np.array([values[f"geometry.neutral.{a}"] for a in POSE])
-    trajectory = _trajectory(demand, case, neutral)
-    if angle is not None:
-        trajectory[demand.axis].steps[0] = Step(0.0, angle)
+    trajectory = _trajectory(demand, case, neutral, angle)
     target = np.array([trajectory[a].offset + sum(s.height for s in trajectory[a].steps)
                        + sum(r.slope * (r.end - r.start) for r in trajectory[a].ramps) for a in POSE])
     weight = values["platform.mass"] * values["environment.gravity_z"]
@@ -102,7 +105,7 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
     legs = [{"force_ff": float(f)} for f in feedforward(target)]
     signals = trajectory_parameters(trajectory, [Pulse("force.z", weight, 0.0, 1e9)])
     structure = platform_structure("linear", values, drive, signals, leg_values=legs)
-    return run(structure, default_algorithm("linear"), FixedStep(step), duration, columns("linear")).result
+    return run(structure, platform_algorithm("linear"), FixedStep(step), duration, columns("linear")).result
 
 
 def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:

@@ -19,7 +19,7 @@ from ..report import plots
 from ...engine.artifacts import ROOT
 from ..core import Core
 from ..run.runner import FIGURES, run_scene
-from ..scene.reader import Scene, Signal, Sine, load_scene
+from ..scene import Scene, Signal, Sine, load_scene, signals_document
 from ..scene.signals import sine_motion
 from ..report.plots import units
 from ..ports import POSE, per_leg
@@ -30,8 +30,9 @@ NEUTRAL_Z = 1.689527733348906
 DOF_NAMES = {"x": "surge", "y": "sway", "z": "heave", "roll": "roll", "pitch": "pitch", "yaw": "yaw"}
 
 
-def meng_scene(name: str = "meng_eq35", **changes) -> Scene:
-    return dataclasses.replace(load_scene(SCENES / f"{name}.toml"), **changes)
+def meng_scene(name: str = "meng_eq35", changes: dict | None = None) -> Scene:
+    """A shipped Meng scene with values at dotted keys of its file (`changes`)."""
+    return load_scene(SCENES / f"{name}.toml", changes)
 
 
 def inverse_torques(scene: Scene, t: np.ndarray, core: Core | None = None) -> np.ndarray:
@@ -59,7 +60,8 @@ def tracking(figures: Path | None = None) -> tuple[list[Row], dict]:
         plots.plot_drives(result, figures / "meng_eq35_drives.png", scene.name, "torque", "speed", units("pmsm"),
                             FIGURES["meng2010"][1], impacts)
     # the same run without the impact: its pulses at zero, so that it takes the same steps
-    quiet, _ = run_scene(meng_scene(pulses=[dataclasses.replace(p, value=0.0) for p in scene.pulses]))
+    quiet, _ = run_scene(scene.changed({"load.pulses": [dataclasses.replace(p, value=0.0).document()
+                                                        for p in scene.pulses]}))
     t = result["time"]
     torque = np.column_stack([result[c] for c in per_leg("torque")])
     speed = np.column_stack([result[c] for c in per_leg("speed")])
@@ -110,12 +112,13 @@ def frequency_response(dof: str, frequency: float, amplitude: float | None = Non
     """Closed-loop response pose/pose_ref of one DOF at one frequency: a small sine about the
     neutral pose (1 mm or 1 mrad), fitted over whole periods after the start transient."""
     amplitude = amplitude or 1e-3
-    trajectory = {"z": Signal(NEUTRAL_Z), dof: Signal(NEUTRAL_Z if dof == "z" else 0.0, [Sine(amplitude, frequency)])}
+    trajectory = {"z": Signal(NEUTRAL_Z), dof: Signal(NEUTRAL_Z if dof == "z" else 0.0, (Sine(amplitude, frequency),))}
     periods = max(3, int(np.ceil(0.3 * frequency)))
     settle = 0.4
     duration = settle + periods / frequency
     step = min(1e-3, 1.0 / (40 * frequency))
-    scene = meng_scene(trajectory=trajectory, pulses=[], duration=round(duration / step) * step, step=step)
+    scene = meng_scene(changes={"trajectory": signals_document(trajectory), "load.pulses": [],
+                                "scene.duration": round(duration / step) * step, "scene.step": step})
     result, _ = run_scene(scene)
     t = result["time"]
     window = t >= t[-1] - periods / frequency - 1e-12
@@ -189,9 +192,10 @@ def _surge_scene(amplitude: float, w: float) -> Scene:
     """A surge sine from the neutral pose: 0.5 s to settle, then two periods (one if longer than 2 s)."""
     period = 2 * np.pi / w
     periods = 1 if period > 2.0 else 2
-    return meng_scene("meng_surge_eq37", trajectory={"x": Signal(0.0, [Sine(amplitude, w / (2 * np.pi))]),
-                                                     "z": Signal(NEUTRAL_Z)},
-                      duration=round((0.5 + periods * period) * 1000) / 1000, pulses=[], step=CLOSED_LOOP_STEP)
+    trajectory = {"x": Signal(0.0, (Sine(amplitude, w / (2 * np.pi)),)), "z": Signal(NEUTRAL_Z)}
+    return meng_scene("meng_surge_eq37", {"trajectory": signals_document(trajectory), "load.pulses": [],
+                                          "scene.duration": round((0.5 + periods * period) * 1000) / 1000,
+                                          "scene.step": CLOSED_LOOP_STEP})
 
 
 def table_5(closed_loop: bool = True, rows: list[int] | None = None) -> tuple[list[Row], dict]:
@@ -208,8 +212,7 @@ def table_5(closed_loop: bool = True, rows: list[int] | None = None) -> tuple[li
         loop = {}
         if closed_loop:
             for name, values in VARIANTS.items():
-                scene.mechanics_parameters = dict(values)
-                result, _ = run_scene(scene)
+                result, _ = run_scene(scene.changed({"mechanics.parameters": dict(values)}))
                 late = result["time"] >= 0.5
                 loop[name] = np.column_stack([result[c][late] for c in per_leg("torque")])
         entry = dict(row=row + 1, amplitude=amplitude, w=w, paper=(paper_1, paper_2))
