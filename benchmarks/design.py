@@ -22,8 +22,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
-from cosim.platform.design import (basic_motions, confirm, design_map, load_study, parallel_map,  # noqa: E402
-                                   platform_values)
+from cosim.platform.design import design_map, load_study, parallel_map, platform_values  # noqa: E402
+from cosim.platform.design.confirm import confirm  # noqa: E402
+from cosim.platform.design.motion import basic_motions  # noqa: E402
 from cosim.platform.core import Core  # noqa: E402
 
 
@@ -59,11 +60,11 @@ def main() -> None:
              f" us per pose all told ({poses} poses per design); the dynamics core's own kinematics and leg Jacobian take "
              f"{1e6 * per_pose:.2f} us of it; the rest is building each design's platform, the Jacobian's singular "
              "values (at every tenth pose) and the Python around them."]
-    actuator = next(a for a in study.actuators if a.name == study.confirm["actuator"])
+    actuator = study.actuator(study.confirm.actuator)
     confirmations = {}
     for workers in (0, 2):
         start = time.perf_counter()
-        runs = confirm(study, study.confirm["point"], actuator, workers=workers)
+        runs = confirm(study, study.confirm.point, actuator, workers=workers)
         confirmations[workers] = (len(runs), time.perf_counter() - start)
     simulated = sum(r["steps"] for r in runs) * 1e-3
     lines += ["", f"Co-simulated confirmations ({confirmations[0][0]} basic motions, {simulated:.0f} s simulated in all): "
@@ -73,8 +74,7 @@ def main() -> None:
     meng = load_study(ROOT / "studies" / "meng_eq35_platform.toml")
     scene_map = design_map(meng)
     start = time.perf_counter()
-    (driven,) = confirm(meng, meng.confirm["point"], next(a for a in meng.actuators if a.name == meng.confirm["actuator"]),
-                        drive=meng.confirm["drive"])
+    (driven,) = confirm(meng, meng.confirm.point, meng.actuator(meng.confirm.actuator), drive=meng.confirm.drive)
     driven_wall = time.perf_counter() - start
     lines += ["", f"A scene's motion as the specification ({meng.path.name}: {scene_map.points} designs of Meng's layout, "
               f"Eq 35 at {len(meng.recorded.times)} poses each, kinematic and dynamic): {scene_map.seconds:.1f} s in one "

@@ -22,6 +22,7 @@ def pages() -> dict[str, str]:
     from cosim.engine.settings import SCHEMA as SETTINGS
     from cosim.engine.sweep.file import schema as sweep_schema
     from cosim.platform.run.sweep import TARGETS
+    from cosim.platform.design.schema import SCHEMA as STUDY
     from cosim.platform.scene.schema import SCHEMA as SCENE
     reports = ["## What a point reports", "", "`[report] values` names these, per target (the row also has "
                "the point's axes, `status` and `message`):", ""]
@@ -32,7 +33,8 @@ def pages() -> dict[str, str]:
                     + (" (by default)" if name in target.default_reports else "") + " |"
                     for name, what in target.reports.items()]
         reports.append("")
-    out = {"scene.md": reference(SCENE, "Scene files"), "settings.md": reference(SETTINGS, "Run settings"),
+    out = {"scene.md": reference(SCENE, "Scene files"), "study.md": reference(STUDY, "Design studies"),
+           "settings.md": reference(SETTINGS, "Run settings"),
            "sweep.md": reference(sweep_schema(TARGETS), "Sweep files") + "\n" + "\n".join(reports).rstrip() + "\n"}
     top = parser()
     lines = ["# The command line", "", "<!-- generated from the parsers by scripts/reference.py; do not edit -->", "",

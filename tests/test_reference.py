@@ -13,7 +13,7 @@ def test_the_reference_pages_are_generated_from_the_schemas_and_the_parsers():
     reference = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(reference)
     pages = reference.pages()
-    assert {"scene.md", "settings.md", "sweep.md", "cli.md"} <= set(pages)
+    assert {"scene.md", "study.md", "settings.md", "sweep.md", "cli.md"} <= set(pages)
     for name, text in pages.items():
         page = ROOT / "docs" / "reference" / name
         assert page.is_file() and page.read_text() == text, \

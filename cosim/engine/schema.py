@@ -256,31 +256,28 @@ class Schema:
 # -- where a key stands in the file's text -----------------------------------------------------------
 
 def line_of(text: str, table: str, key: str, index: int | None = None) -> int:
-    """The line (1-based) on which `key` stands inside [table] (or the index-th [[table]], 0 the
-    first; the table's header itself when key is ""), also inside an inline table there; the
-    first line naming it anywhere else; 0 if none does."""
+    """The line (1-based) on which `key` stands inside [table] (or inside the index-th [[table]], 0
+    the first; the table's header itself when key is ""), also inside an inline table there; the
+    header [table.key] of a table of that name; 0 if the file does not give it there."""
     assignment = re.compile(r'(^|[{,\s])"?' + re.escape(key) + r'"?\s*=')
-    current, count, found, header = "", -1, 0, 0
+    inside, count = table == "", -1
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0].strip()
         if line.startswith("["):
             current = line.strip("[]").strip()
-            inside = current == table and (index is None or (line.startswith("[[") and (count := count + 1) == index))
-            if inside:
-                header = number
-                if not key:
+            if index is None:
+                inside = current == table
+                if current == (f"{table}.{key}" if table else key):
                     return number
-            elif current == table and index is not None:
-                inside = False
-            if index is None and current == (f"{table}.{key}" if table else key):
+            else:
+                count += current == table and line.startswith("[[")
+                inside = current == table and line.startswith("[[") and count == index
+            if inside and not key:
                 return number
-            current = current if inside or index is None else f"\0{current}"
             continue
-        if key and assignment.search(line):
-            if current == table and (index is None or header):
-                return number
-            found = found or number
-    return found
+        if inside and key and assignment.search(line):
+            return number
+    return 0
 
 
 def split_key(full: str) -> list[str]:

@@ -205,8 +205,24 @@ class Core:
         return np.array(inertia[:]), np.array(force[:])
 
     def inverse_dynamics(self, pose, rate, acceleration, wrench=np.zeros(6)) -> np.ndarray:
+        """The motor torques (the legs' forces over the screw's K_FT; forces on force-driven legs)
+        that move the platform along the pose, rate and acceleration under the external wrench."""
+        return self._inverse(self.p, pose, rate, acceleration, wrench)
+
+    def leg_forces(self, pose, rate, acceleration, wrench=np.zeros(6)) -> np.ndarray:
+        """The axial leg forces [N] of inverse_dynamics, before the screw turns them into torques."""
+        return self._inverse(self._forces(), pose, rate, acceleration, wrench)
+
+    def _forces(self) -> Platform:
+        """This platform with the screw's force-torque factor taken as 1: its inverse dynamics give
+        the legs' axial forces."""
+        forces = Platform.from_buffer_copy(self.p)
+        forces.force_torque = 1.0
+        return forces
+
+    def _inverse(self, p: Platform, pose, rate, acceleration, wrench) -> np.ndarray:
         out = (D * LEGS)()
-        if self.dll.platform_inverse_dynamics(ctypes.byref(self.p), arr(pose), arr(rate), arr(acceleration),
+        if self.dll.platform_inverse_dynamics(ctypes.byref(p), arr(pose), arr(rate), arr(acceleration),
                                               arr(wrench), out) != 0:
             raise SingularPose(f"the leg Jacobian is singular at the pose {np.round(np.asarray(pose, float), 6).tolist()}")
         return np.array(out[:])
@@ -240,14 +256,22 @@ class Core:
     def inverse_dynamics_many(self, poses: np.ndarray, rates: np.ndarray, accelerations: np.ndarray,
                               wrench=np.zeros(6)) -> np.ndarray:
         """inverse_dynamics at each of n poses with their rates and accelerations (n x 6 each):
-        n x 6 torques (forces where force_torque is 1), NaN where the legs are singular."""
+        n x 6 motor torques, NaN where the legs are singular."""
+        return self._inverse_many(self.p, poses, rates, accelerations, wrench)
+
+    def leg_forces_many(self, poses: np.ndarray, rates: np.ndarray, accelerations: np.ndarray,
+                        wrench=np.zeros(6)) -> np.ndarray:
+        """leg_forces at each of n poses: n x 6 axial leg forces [N], NaN where singular."""
+        return self._inverse_many(self._forces(), poses, rates, accelerations, wrench)
+
+    def _inverse_many(self, p: Platform, poses, rates, accelerations, wrench) -> np.ndarray:
         arrays = [np.ascontiguousarray(a, dtype=float).reshape(-1, 6) for a in (poses, rates, accelerations)]
         out = np.empty_like(arrays[0])
 
         def ptr(a):
             return a.ctypes.data_as(ctypes.POINTER(D))
-        self.dll.platform_inverse_dynamics_many(ctypes.byref(self.p), len(out), *(ptr(a) for a in arrays),
-                                                arr(wrench), ptr(out))
+        self.dll.platform_inverse_dynamics_many(ctypes.byref(p), len(out), *(ptr(a) for a in arrays), arr(wrench),
+                                                ptr(out))
         return out
 
 

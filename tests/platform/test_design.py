@@ -6,7 +6,6 @@ study files as one-line errors."""
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -14,8 +13,10 @@ import pytest
 
 from cosim.cli import main
 from cosim.engine.artifacts import ROOT
-from cosim.platform.design import (Study, basic_motions, design_map, limit_along, load_study, parallel_map,
-                                   platform_values, shortest_time, stubs)
+from cosim.platform.design import Study, design_map, load_study, parallel_map, platform_values
+from cosim.platform.design.map import limit_along
+from cosim.platform.design.motion import basic_motions, shortest_time
+from cosim.platform.design.study import stubs
 from cosim.platform.scene.parameter_sets import load
 from cosim.platform.core import Core
 
@@ -28,9 +29,7 @@ def study() -> Study:
 
 
 def small(study: Study, rows=(1.0, 1.03, 1.1), columns=(0.9, 1.2, 1.4)) -> Study:
-    part = copy.copy(study)
-    part.axes = {"base_radius": np.array(rows), "disc_height": np.array(columns)}
-    return part
+    return study.with_axes({"base_radius": np.array(rows), "disc_height": np.array(columns)})
 
 
 def halder_legs(r_b: float, z: float, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -100,9 +99,8 @@ def test_the_payload_only_forces_are_newton_euler_on_the_payload(study):
     w x I w at its centre of mass, solved independently; the core's map takes the peak of |F|."""
     point = {"base_radius": 1.1, "disc_height": 1.4}
     core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
-    core.p.force_torque = 1.0
     for dof, (poses, rates, accelerations) in basic_motions(study, core.neutral_pose, timed=True).items():
-        forces = core.inverse_dynamics_many(poses, rates, accelerations)
+        forces = core.leg_forces_many(poses, rates, accelerations)
         for n in range(0, len(poses), 7):
             _, _, _, J = halder_legs(1.1, 1.4, poses[n])
             a, alpha = accelerations[n, :3], accelerations[n, 3:]
@@ -153,23 +151,22 @@ def test_a_map_on_two_dask_workers_is_the_map_of_one_process(study):
 
 
 BAD = {
-    '[study]\nname = "x"\n[axes]\nbase_radius = {from = 1.0, to = 1.1, step = 0.01}\n':
-        "'axes' must name two design values of halder2013",
+    "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = 0.01}\n": "'axes' must name two design values of halder2013",
     "[study]\ncolour = 1\n": "'study.colour' is not a known key",
     "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = 0.01}\nwidth = {from = 1, to = 2, step = 1}\n":
         "'axes.width' is not a design value of halder2013",
     "[axes]\ntop_stub = {from = 0.1, to = 0.2, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
         "'axes.top_stub' is one value per study: set it in [study] fixed",
-    '[study]\nparameter_set = "stewart"\n': "'study.parameter_set' = 'stewart' is not a platform family here",
+    '[study]\nparameter_set = "stewart"\n': "'study.parameter_set' = 'stewart': use 'halder2013', 'meng2010' or 'sumnu2015'",
     "[motion]\nscene = \"meng_eq35\"\ntable = \"x.csv\"\n": "needs one of 'scene'",
     "[motion]\nscene = \"meng_eq35\"\nsurge = 0.3\n": "'motion.surge' belongs to the basic motions",
     "[motion]\nscene = \"no_such_scene\"\n": "'motion.scene' = 'no_such_scene': no such scene",
     "[motion]\ntable = \"motion.csv\"\n": "motion.csv:3",
-    '[confirm]\ndrive = "hydraulic"\n': "'confirm.drive' = 'hydraulic' is not one of 'force'",
+    '[confirm]\ndrive = "hydraulic"\n': "'confirm.drive' = 'hydraulic': use 'force', 'pmsm' or 'linear'",
     "[axes]\nbase_radius = {from = 1.2, to = 1.1, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
-        "'to' must not be below 'from'",
+        ":13: 'axes.base_radius.to' = 1.1: must not be below from = 1.2",
     "[axes]\nbase_radius = {from = 1.0, to = 1.1, step = -0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
-        "'axes.step' = -0.01 must be a positive number",
+        ":13: 'axes.base_radius.step' = -0.01: must be a positive number",
 }
 
 
@@ -196,6 +193,18 @@ def test_a_bad_study_file_is_one_line(text, tmp_path, capsys):
     assert len(err.splitlines()) == 1 and BAD[text] in err and "study.toml" in err, err
 
 
+def test_a_bad_value_in_an_inline_table_is_named_at_its_own_line(tmp_path, capsys):
+    """A negative [workspace] point: its full key at the line that gives it (it was the [study] line)."""
+    given = "point = {base_radius = -1.1, disc_height = 1.4}"
+    body = STUDY.read_text().replace("point = {base_radius = 1.1, disc_height = 1.4}", given, 1)
+    path = tmp_path / "study.toml"
+    path.write_text(body)
+    assert main(["design", str(path), "--out", str(tmp_path / "out")]) == 2
+    line = body.splitlines().index(given) + 1
+    assert capsys.readouterr().err.strip() == \
+        f"error: {path}:{line}: 'workspace.point.base_radius' = -1.1: must be a positive number"
+
+
 def test_the_workspace_is_the_independent_admissibility_of_each_pose(study):
     """At the paper's chosen design with the 0.6 m actuator: a pose is reachable exactly when the
     independent Eqs 1-9 keep every running length within 1.286-1.886 m and both joint angles
@@ -203,7 +212,7 @@ def test_the_workspace_is_the_independent_admissibility_of_each_pose(study):
     grid (20 mm against 40 mm within 10 %); the heave reach agrees with the map's verdict; and
     each singular pose found is singular (the Jacobian's smallest singular value under 1e-6 of the
     neutral's) with none nearer along its DOF."""
-    from cosim.platform.design import reachable, workspace
+    from cosim.platform.design.workspace import reachable, workspace
     point, actuator = {"base_radius": 1.1, "disc_height": 1.4}, study.actuators[1]
     core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
     neutral = core.neutral_pose
@@ -243,10 +252,9 @@ def test_the_optimum_has_the_largest_worst_case_margin_and_runs_on_dask(study):
     """Differential evolution's design: its worst margin is at least the best of a 0.05 m grid over
     the same ranges (brute force), the same seed gives the same design, and its evaluations on two
     Dask workers give the design of one process bit for bit."""
-    from cosim.platform.design import margins, optimise
+    from cosim.platform.design.optimise import margins, optimise
     actuator = study.actuators[1]
-    part = copy.copy(study)
-    part.axes = {"base_radius": np.arange(1.2, 1.501, 0.05), "disc_height": np.arange(0.9, 1.301, 0.05)}
+    part = study.with_axes({"base_radius": np.arange(1.2, 1.501, 0.05), "disc_height": np.arange(0.9, 1.301, 0.05)})
     best = optimise(part, actuator, workers=0, max_iterations=15)
     grid = max(min(margins(part, {"base_radius": r, "disc_height": z}, actuator).values())
                for r in part.axes["base_radius"] for z in part.axes["disc_height"])
@@ -260,10 +268,10 @@ def test_a_scenes_motion_as_the_specification():
     reference motion equals the core's per-pose inverse kinematics (platform_leg_lengths) on the
     same poses; it needs more than Meng's 665 mm stroke at every l_0 tried (the main job's
     out-of-stroke warnings), and a longer l_0 lifts the whole range."""
-    from cosim.platform.design import scene_fit
+    from cosim.platform.design.scene_fit import scene_fit
     from cosim.platform.run.runner import scene_values
     from cosim.platform.scene import load_scene
-    from cosim.platform.report.view3d import reference_motion
+    from cosim.platform.scene.signals import reference_motion
     scene = load_scene("meng_eq35")
     fit = scene_fit(scene, "geometry.middle_leg_length", np.array([1.80, 1.86]), samples=501)
     _, poses, _ = reference_motion(scene, 501)
@@ -281,7 +289,7 @@ def test_a_design_confirmed_by_co_simulation_agrees_with_its_inverse_dynamics(st
     friction): the peak leg force within 1 % of the full inverse dynamics' along the reference (the
     tracking error, under 0.1 mm and 1 mrad, moves it by less), the rms below the peak and within
     the continuous force; on two Dask workers bit for bit as in one process."""
-    from cosim.platform.design import confirm
+    from cosim.platform.design.confirm import confirm
     point, actuator = {"base_radius": 1.1, "disc_height": 1.37}, study.actuators[1]
     here = confirm(study, point, actuator, workers=0, motions=("heave", "roll"))
     for run in here:

@@ -6,7 +6,6 @@ leg speed against differences of the leg lengths."""
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 
@@ -14,8 +13,9 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.design import (FAMILIES, basic_motions, design_map, load_study, map_rows, platform_values,
-                                   shortest_time)
+from cosim.platform.design import FAMILIES, design_map, load_study, platform_values
+from cosim.platform.design.motion import basic_motions, shortest_time
+from cosim.platform.design.report import map_rows
 from cosim.platform.scene.parameter_sets import load, sumnu_mechanics
 from cosim.platform.core import Core
 from cosim.platform.scene import load_scene
@@ -30,10 +30,8 @@ def meng():
 
 
 def grid(study, rows, columns):
-    part = copy.copy(study)
     (row_key, _), (column_key, _) = list(study.axes.items())
-    part.axes = {row_key: np.asarray(rows, float), column_key: np.asarray(columns, float)}
-    return part
+    return study.with_axes({row_key: np.asarray(rows, float), column_key: np.asarray(columns, float)})
 
 
 def test_meng_family_every_leg_is_l0_long_at_the_neutral(meng):
@@ -165,7 +163,8 @@ def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
     error's effect: millimetres on metres of leg), and the currents the drive's own torque or
     force constant away from those forces (the current loop's error and the motor's friction:
     1 %)."""
-    from cosim.platform.design import confirm_motion, confirmation_rows, drive_parameters
+    from cosim.platform.design.confirm import confirm_motion, confirmation_rows, drive_parameters
+    from cosim.platform.design.study import ConfirmSpec
     from cosim.platform.run.tuning import drive_defaults
     point = {"lower_joint_radius": 1.1, "middle_leg_length": 1.86}
     run = confirm_motion(meng, point, meng.actuators[1], "meng_eq35", drive=drive)
@@ -176,7 +175,7 @@ def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
     assert run["peak_current"] * per_ampere == pytest.approx(run["peak_force"], rel=0.01)
     assert run["rms_current"] * per_ampere == pytest.approx(run["rms_force"], rel=0.01)
     assert run["continuous_current"] * per_ampere == pytest.approx(meng.actuators[1].continuous_force, rel=1e-12)
-    confirmed = dataclasses.replace(meng, confirm={"point": point, "actuator": meng.actuators[1].name, "drive": drive})
+    confirmed = dataclasses.replace(meng, confirm=ConfirmSpec(point, meng.actuators[1].name, drive))
     (row,) = confirmation_rows(confirmed, [run])
     assert f"current peak {run['peak_current']:.1f} A" in row.note
 
@@ -221,13 +220,13 @@ def test_a_rotary_actuator_is_given_by_its_motor(meng, tmp_path, capsys):
     assert load_study(tmp_path / "forces.toml").actuators == meng.actuators
     assert "continuous_torque = 20.1  " in text
     for body, expected in ((text.replace("continuous_torque = 20.1  ", "continuous_force = 5025.0\ncontinuous_torque = 20.1  ", 1),
-                            "'actuator.continuous_torque' and 'continuous_force' both given"),
+                            "'actuator[1].continuous_torque' and 'continuous_force' both given"),
                            (text.replace('parameter_set = "meng2010"', 'parameter_set = "sumnu2015"').replace(
                                "[axes]\nlower_joint_radius = {from = 0.60, to = 1.50, step = 0.01}",
                                "[axes]\nbase_scale = {from = 0.9, to = 1.1, step = 0.1}").replace(
                                "middle_leg_length = {from = 1.50, to = 2.40, step = 0.01}",
                                "home_height = {from = 0.9, to = 1.1, step = 0.1}"),
-                            "'actuator.continuous_torque' needs a screw: sumnu2015's legs are driven by force")):
+                            "'actuator[1].continuous_torque' needs a screw: sumnu2015's legs are driven by force")):
         path = tmp_path / "bad.toml"
         path.write_text(body)
         assert main(["design", str(path), "--out", str(tmp_path / "out")]) == 2

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core import build, mechanics_value
 from ..ports import POSE
+from ..scene.signals import reference_motion
 
 MAX_FRAMES = 200
 CAMERAS = {"iso": dict(x=1.6, y=-1.6, z=1.1), "front": dict(x=0.0, y=-2.4, z=0.4),
@@ -250,32 +251,6 @@ SYNC_SCRIPT = """<script>
 </script>"""
 
 
-def reference_motion(scene, frames_most: int = MAX_FRAMES) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The scene's reference pose and base-frame load force over its duration, from its trajectory
-    FMU run alone through the engine (the one evaluation of the scene's signals, tables included):
-    times, poses (n x 6), forces (n x 3)."""
-    from ..scene.signals import scene_trajectory
-    frames_most = max(2, min(frames_most, int(scene.duration / 0.02) + 1))
-    return play(scene_trajectory(scene), scene.duration, scene.duration / (frames_most - 1))
-
-
-def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The trajectory FMU with these start values run alone for `duration` at `step`: times,
-    reference poses (n x 6), base-frame load forces (n x 3). Raises what the FMU refuses (a bad
-    table: its file and line) as the engine's error."""
-    from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
-    from ...engine.outcome import execute
-    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), trajectory_values)], [],
-                            experiment=Experiment(0.0, duration, step))
-    names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
-    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("trajectory", n) for n in names])
-    if outcome.failure is not None:
-        raise outcome.failure
-    result = outcome.result
-    return result["time"], np.column_stack([result[f"trajectory.{n}"] for n in names[:6]]), \
-        np.column_stack([result[f"trajectory.{n}"] for n in names[6:]])
-
-
 def extremes(geometry: Geometry, f: Frames) -> list[str]:
     """Per leg, the shortest and longest it gets against the stroke, and when it leaves the
     stroke or passes the joint-angle limit first."""
@@ -301,7 +276,8 @@ def write_view(scene, values: Mapping[str, object], path) -> tuple[object, list[
     from pathlib import Path
     from plotly.offline import get_plotlyjs
     geometry = Geometry.of(values)
-    time, pose, force = reference_motion(scene)
+    frames_most = max(2, min(MAX_FRAMES, int(scene.duration / 0.02) + 1))
+    time, pose, force = reference_motion(scene, frames_most)
     f = frames(geometry, time, pose, None, force + pulse_forces([p for p in scene.pulses if p.frame == "platform"],
                                                                  time, pose))
     lines = extremes(geometry, f)

@@ -1,5 +1,6 @@
 """The scene's reference pose and external wrench as parameters of the trajectory FMU
-(fmu/trajectory/), which the platform system steps with the other FMUs."""
+(fmu/trajectory/), which the platform system steps with the other FMUs; and the trajectory FMU
+played alone (`play`), the one evaluation of a scene's signals outside a run."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
+from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
+from ...engine.outcome import execute
 from .model import Pulse, Scene, Signal
 from .schema import CAPACITY, FRAMES, WRENCH_COMPONENTS
 from ..ports import POSE
@@ -67,3 +70,25 @@ def sine_motion(trajectory: Mapping[str, Signal], t: np.ndarray) -> tuple[np.nda
             rate[:, k] += s.amplitude * w * np.cos(w * t + s.phase)
             acc[:, k] -= s.amplitude * w * w * np.sin(w * t + s.phase)
     return pose, rate, acc
+
+
+def reference_motion(scene: Scene, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The scene's reference pose and base-frame load force at `samples` evenly spaced times over
+    its duration, from its trajectory FMU run alone (the one evaluation of the scene's signals,
+    tables included): times, poses (n x 6), forces (n x 3)."""
+    return play(scene_trajectory(scene), scene.duration, scene.duration / (samples - 1))
+
+
+def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The trajectory FMU with these start values run alone for `duration` at `step`: times,
+    reference poses (n x 6), base-frame load forces (n x 3). Raises what the FMU refuses (a bad
+    table: its file and line) as the engine's error."""
+    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), trajectory_values)], [],
+                            experiment=Experiment(0.0, duration, step))
+    names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
+    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("trajectory", n) for n in names])
+    if outcome.failure is not None:
+        raise outcome.failure
+    result = outcome.result
+    return result["time"], np.column_stack([result[f"trajectory.{n}"] for n in names[:6]]), \
+        np.column_stack([result[f"trajectory.{n}"] for n in names[6:]])

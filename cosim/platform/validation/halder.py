@@ -83,8 +83,7 @@ def feedforward(target: np.ndarray) -> np.ndarray:
     inverse model, which neglects the legs' weight, inertia and friction."""
     values = mechanics_start_values("halder2013")
     core = Core(actuators=False, motors=False, friction=False).use_start_values(values)
-    core.p.force_torque = 1.0  # forces, not torques
-    return core.inverse_dynamics(target, np.zeros(6), np.zeros(6))
+    return core.leg_forces(target, np.zeros(6), np.zeros(6))
 
 
 def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: float = GAIN_SCALE,

@@ -158,13 +158,19 @@ steady coupled errors need a static mismatch between its inverse and forward mod
 not describe. Consequently its compensating demands (Cases 2, 4, 5), computed to cancel its
 errors, here move the payload by what they demand (51.7 mm sway and 7.1 mm heave for the roll).""",
         rows_h, ["halder_fig6.png"]))
-    from .. import design
-    rows_d, map_d = design.validation(figures)
+    from ...engine.artifacts import data_dir
+    from ..design import design_map, load_study, report_rows
+    from ..design.halder import PAPER, figures as section5_figures
+    from ..design.map import nearest
+    from ..design.study import stubs
+    study = load_study(data_dir("studies") / "halder_section5.toml")
+    map_d = design_map(study)
+    section5_figures(map_d, figures)
+    rows_d = report_rows(map_d)
     progress.advance("Halder Section V")
-    study = map_d.study
     (_, radii), (_, heights) = list(study.axes.items())
-    r, c = design.nearest(study, design.PAPER["chosen"])
-    needed = 1e3 * (map_d.length_max[r, c].max() + design.stubs(study))
+    r, c = nearest(study, PAPER["chosen"])
+    needed = 1e3 * (map_d.length_max[r, c].max() + stubs(study))
     parts.append(_section(
         "Halder et al., Section V: configuration design (Figs 2-4)",
         f"""`cosim design halder_section5` (the study `studies/halder_section5.toml`): Halder's 6-SBU layout

@@ -41,7 +41,7 @@ def driving_forces(trajectory: dict[str, Signal], mass_set: str, lower_part: boo
     core = Core().use_start_values(values)
     t = np.linspace(0.0, 2 * np.pi / W, n)
     pose, rate, acc = sine_motion(trajectory, t)
-    return t, np.array([core.inverse_dynamics(*m) for m in zip(pose, rate, acc)]) * core.p.force_torque
+    return t, np.array([core.leg_forces(*m) for m in zip(pose, rate, acc)])
 
 
 def figures_4(figures: Path | None = None) -> tuple[list[Row], dict]:

@@ -1,0 +1,168 @@
+"""A design confirmed by co-simulation: each motion of the study played closed loop through the
+mechanics FMU with the design's platform (legs, their weight, inertia and friction) and six drives
+(ideal force sources, or our PMSM or linear-motor drive FMUs with the platform's drive set, their
+loops designed for each leg), its leg forces and currents against the actuator's limits and the
+full inverse dynamics' prediction."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...engine import FixedStep
+from ..core import Core
+from ..ports import POSE, platform_algorithm
+from ..report.rows import Row
+from ..run.system import columns, platform_structure, run
+from ..run.tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
+from ..scene import Signal
+from ..scene.parameter_sets import drive_set, drive_set_name
+from ..scene.signals import trajectory_parameters
+from .motion import displacements, motion_profile
+from .schema import DRIVEN
+from .study import DOFS, ROTATIONS, Actuator, Study, platform_values, value
+
+HOLD = 0.5  # [s] at the start pose before a basic motion, and after it
+START_UP = 0.2  # [s] of a motion that starts moving at once, left out of its forces and currents
+
+
+def drive_parameters(study: Study, drive: str) -> tuple[dict, dict, str]:
+    """For a confirmation through our drive FMU of kind `drive`: its parameters and what it changes
+    on the legs (the platform's drive set where the project has one, e.g. meng2010_linear; the
+    FMU's own defaults otherwise: Meng's PMSM, Sumnu's linear motor), and the drive's name."""
+    name = drive_set_name(study.parameter_set, drive)
+    if name is None:
+        return {}, {}, {"pmsm": "pmsm_drive (Meng's PMSM, Table 2)", "linear": "linear_motor (Sumnu's motor)"}[drive]
+    drive_values, mechanics_values = drive_set(name)
+    return drive_values, mechanics_values, f"the drive set {name}"
+
+
+def confirm_motion(study: Study, point: dict[str, float], actuator: Actuator, dof: str, step: float = 1e-3,
+                   folder: Path | None = None, drive: str = "force") -> dict[str, Any]:
+    """One motion of a design, closed loop through the co-simulation: the mechanics FMU with the
+    study's platform (legs, their weight, inertia and friction), six drives (DRIVEN: ideal force
+    sources, or our PMSM or linear-motor drive FMU with the platform's drive set), their loops
+    designed for each leg's plant (tuning "auto"), the trajectory FMU playing the motion from a
+    table after HOLD s at its start. Returns the largest tracking error (m, rad) after the first
+    HOLD; over the motion the peak and rms leg force [N] (a PMSM's torque times K_FT) against the
+    actuator's continuous force, and the full inverse dynamics' peak along the reference [N]; with
+    our drives the peak and rms current [A] against the drive's current limit and the current the
+    actuator's continuous force takes. A drive that cannot hold the start pose returns its
+    reason as "problem"."""
+    import tempfile
+    t, displacement, rates, accelerations = motion_profile(study, dof)
+    values = platform_values(study, point, effects=True)
+    if drive == "force":
+        kind, drive_values, what = "linear", {"effects.electrical": False, "motor.continuous_force": actuator.continuous_force,
+                                              "limit.force": 1e6, "limit.current": 1e6}, DRIVEN["force"]
+    else:
+        kind = drive
+        drive_values, on_legs, what = drive_parameters(study, drive)
+        values.update(on_legs)
+    core = Core().use_start_values(values)
+    force_torque = float(core.p.force_torque) if kind == "pmsm" else 1.0
+    neutral = core.neutral_pose
+    start = neutral + displacement[0]
+    values.update({f"initial.pose.{axis}": float(start[n]) for n, axis in enumerate(POSE)})
+    duration = HOLD + t[-1] + HOLD
+    scratch = tempfile.TemporaryDirectory(prefix="cosim-confirm-") if folder is None else None
+    folder = Path(folder or scratch.name)  # the table lives until the run has read it
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        table = folder / f"{dof}.csv"
+        times = np.r_[0.0, HOLD + t, duration]
+        played = np.vstack([displacement[:1], displacement, displacement[-1:]])
+        np.savetxt(table, np.column_stack([times, played]), delimiter=",", header=",".join(["time", *POSE]),
+                   comments="")
+        trajectory = trajectory_parameters({axis: Signal(offset=float(neutral[n])) for n, axis in enumerate(POSE)},
+                                           table=table, interpolation="cubic")
+        plants = leg_plants(values)
+        try:
+            for leg, plant in enumerate(plants, start=1):
+                check_limit("linear", plant, actuator.continuous_force, f"{actuator.name}'s continuous force", leg)
+            if drive != "force":
+                check_sizing(kind, plants, drive_values)
+        except SizingError as error:
+            return {"motion": dof, "drive": what, "problem": str(error)}
+        legs = [design(kind, [plant], drive_values)[0] for plant in plants]
+        effort, current = ("torque", "current.q") if kind == "pmsm" else ("force", "current")
+        # our drives through the interface Jacobian (their damping integrated implicitly by the
+        # mechanics: stable at the macro step on any geometry), their efforts as the legs felt them
+        jacobian = drive != "force"
+        structure = platform_structure(kind, values, drive_values, trajectory, leg_values=legs,
+                                       interface_jacobian=jacobian)
+        # our drives' start-up shock and the motion's start (a jump of the reference's rate where a
+        # recorded motion starts moving) at a sixteenth of the step, as the shipped scenes take them
+        control = FixedStep(step) if drive == "force" else \
+            FixedStep(step, 0.1, step / 16, ((HOLD - step, HOLD + 0.02),))
+        outcome = run(structure, platform_algorithm(kind), control, duration, columns(kind, drive_outputs=(effort, current),
+                                                                            applied=jacobian))
+    finally:
+        if scratch is not None:
+            scratch.cleanup()
+    result = outcome.result
+    # over the motion; where it starts moving at once (a recorded motion's rate at its start), from
+    # START_UP later: no actuator follows a jump of speed, and its shock is the drive's, not the design's
+    begins = HOLD + (START_UP if np.abs(rates[0]).max() > 0 else 0.0)
+    late = result["time"] >= begins
+    tracking = max(float(np.abs(result[f"pose.{axis}"] - result[f"pose_ref.{axis}"])[late].max()) for axis in POSE)
+    forces = force_torque * np.column_stack([result[f"{effort}{'_applied' if jacobian else ''}[{i}]"]
+                                             for i in range(1, 7)])
+    predicted = float(np.abs(core.leg_forces_many(neutral + displacement, rates, accelerations)).max())
+    moving = late & (result["time"] <= HOLD + t[-1])
+    out = {"motion": dof, "drive": what, "tracking": tracking, "peak_force": float(np.abs(forces[moving]).max()),
+           "rms_force": float(np.sqrt(np.mean(forces[moving] ** 2))), "predicted_peak": predicted,
+           "continuous_force": actuator.continuous_force, "steps": len(result) - 1, "from": begins - HOLD}
+    if drive != "force":
+        given = {**drive_defaults(kind), **drive_values}
+        currents = np.column_stack([result[f"{current}[{i}]"] for i in range(1, 7)])[moving]
+        per_ampere = force_torque * given["motor.torque_constant"] if kind == "pmsm" else given["motor.force_constant"]
+        out.update(peak_current=float(np.abs(currents).max()), rms_current=float(np.sqrt(np.mean(currents ** 2))),
+                   current_limit=float(given["limit.current"]), continuous_current=actuator.continuous_force / per_ampere)
+    return out
+
+
+def confirm(study: Study, point: dict[str, float], actuator: Actuator, workers: int | None = 0,
+            scheduler: str | None = None, motions: tuple[str, ...] | None = None,
+            drive: str = "force") -> list[dict[str, Any]]:
+    """Every basic motion of a design through the co-simulation (confirm_motion), on Dask when
+    workers/scheduler say so (one motion per task), in this process otherwise."""
+    chosen = [m for m in displacements(study, False) if motions is None or m in motions]
+    if workers == 0 and scheduler is None:
+        return [confirm_motion(study, point, actuator, dof, drive=drive) for dof in chosen]
+    from ...engine.sweep.dask_run import dask_client
+    with dask_client(workers, scheduler) as client:
+        return client.gather([client.submit(confirm_motion, study, point, actuator, dof, drive=drive, pure=False)
+                              for dof in chosen])
+
+
+def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | None = None) -> list | None:
+    """The study's [confirm] design through the co-simulation, or None if it names none."""
+    spec = study.confirm
+    if spec is None:
+        return None
+    return confirm(study, spec.point, study.actuator(spec.actuator), workers, scheduler, drive=spec.drive)
+
+
+def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list[Row]:
+    """Each confirmed motion's forces and currents, as rows."""
+    where = ", ".join(value(k, v) for k, v in study.confirm.point.items())
+    out = []
+    for r in runs:
+        quantity = f"co-simulated {r['motion']} ({where}, {study.confirm.actuator}; {r['drive']})"
+        if "problem" in r:
+            out.append(Row(quantity, "", "cannot hold the start pose", "", r["problem"]))
+            continue
+        unit = "rad" if r["motion"] in ROTATIONS else "m" if r["motion"] in DOFS else "m, rad"
+        note = (f"the full inverse dynamics' peak {r['predicted_peak']:.0f} N "
+                f"({100 * (r['peak_force'] / r['predicted_peak'] - 1):+.1f} %); tracking within "
+                f"{r['tracking']:.1e} {unit}; continuous {r['continuous_force']:g} N")
+        if r.get("from"):
+            note += f"; from {r['from']:g} s into the motion (it starts moving at once)"
+        if "peak_current" in r:
+            note += (f"; current peak {r['peak_current']:.1f} A (limit {r['current_limit']:g} A), rms "
+                     f"{r['rms_current']:.1f} A (the continuous force takes {r['continuous_current']:.1f} A)")
+        out.append(Row(quantity, "", f"peak {r['peak_force']:.0f} N, rms {r['rms_force']:.0f} N", "N", note))
+    return out

@@ -1,0 +1,81 @@
+"""Beyond one grid: the design with the largest worst-case margin. Each constraint's margin over
+every motion (stroke at both ends, joint angle, the paper's peak force), the smallest of them
+maximised by scipy's differential evolution over the axes' ranges, its evaluations on Dask."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..report.rows import Row
+from .map import design_map
+from .study import Actuator, Study, stubs, value
+
+
+def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[str, float]:
+    """A design's margins against each constraint over every basic motion, each as a fraction of
+    what it is measured against (negative: violated): the stroke at both ends (of the stroke), the
+    joint angle (of the limit) and the peak force of the paper's model (of the allowed force)."""
+    design = design_map(study.with_axes({key: np.array([number]) for key, number in point.items()}), dynamic=True)
+    s = stubs(study)
+    return {"max stroke": float((actuator.running_length_max - s - design.length_max.max()) / actuator.stroke),
+            "min stroke": float((design.length_min.min() + s - actuator.running_length_min) / actuator.stroke),
+            "joint angle": float(1 - max(design.top_angle.max() / study.joint_limits[0],
+                                         design.bottom_angle.max() / study.joint_limits[1])),
+            "force": float(1 - design.force_paper.max() / study.allowed_force(actuator))}
+
+
+def _negative_margin(x: np.ndarray, study: Study, keys: tuple[str, ...], actuator: Actuator) -> float:
+    return -min(margins(study, dict(zip(keys, map(float, x))), actuator).values())
+
+
+@dataclass
+class Optimum:
+    point: dict[str, float]
+    margins: dict[str, float]
+    evaluations: int
+    seconds: float
+
+
+def optimise(study: Study, actuator: Actuator, workers: int | None = 0, scheduler: str | None = None,
+             seed: int = 1, max_iterations: int = 60) -> Optimum:
+    """The design (within the study's axes' ranges) whose smallest margin over every constraint and
+    basic motion is largest: the most robust admissible design, found by scipy's differential
+    evolution (one objective: the worst margin; a Pareto front would need a second, which the
+    papers' specification does not give). Its evaluations run on Dask when workers/scheduler say
+    so (each a design of the map), in this process otherwise; the same seed gives the same design."""
+    from contextlib import nullcontext
+    from functools import partial
+    from scipy.optimize import differential_evolution
+    from ...engine.sweep.dask_run import dask_client
+    keys = tuple(study.axes)
+    bounds = [(float(v[0]), float(v[-1])) for v in study.axes.values()]
+    start = time.perf_counter()
+    objective = partial(_negative_margin, study=study, keys=keys, actuator=actuator)
+    with (dask_client(workers, scheduler) if workers != 0 or scheduler else nullcontext()) as client:
+
+        def mapper(function, points):  # what differential_evolution evaluates its population through
+            return client.gather(client.map(function, list(points), pure=False)) if client else list(map(function, points))
+        result = differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, tol=1e-6, polish=False,
+                                        updating="deferred", workers=mapper)
+    point = dict(zip(keys, map(float, result.x)))
+    return Optimum(point, margins(study, point, actuator), int(result.nfev), time.perf_counter() - start)
+
+
+def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None = None) -> Optimum | None:
+    """The most robust design for the study's [optimise] actuator, or None if it names none."""
+    spec = study.optimise
+    if spec is None:
+        return None
+    return optimise(study, study.actuator(spec.actuator), workers, scheduler, spec.seed, spec.iterations)
+
+
+def optimum_rows(study: Study, best: Optimum) -> list[Row]:
+    """The optimum's design and margins as a row."""
+    where = ", ".join(value(k, v, ".3f") for k, v in best.point.items())
+    worst = min(best.margins, key=best.margins.get)
+    return [Row(f"the most robust design for {study.optimise.actuator} (largest worst-case margin)", "", where, "",
+                f"differential evolution, {best.evaluations} designs; margins: " + ", ".join(
+                    f"{k} {v:.1%}" for k, v in best.margins.items()) + f" (the least: {worst})")]

@@ -1,0 +1,232 @@
+"""Reads a design study file into a `Study`: the schema checks every key's type and range
+(cosim.platform.design.schema), this module what depends on the platform family and on other
+keys; a motion given as a time series (a scene's reference, or a table) is played by the
+trajectory FMU here. Every mistake is one line naming the file, the line and the full key."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...engine.schema import Document, read
+from ..ports import POSE
+from .schema import RECORDED, SCHEMA, StudyError
+from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, OptimiseSpec, Recorded, Study,
+                    WorkspaceSpec, parameter_set)
+
+MOST_PER_AXIS = 2000
+
+
+def load_study(path: str | Path) -> Study:
+    """Reads and checks a study file (studies/*.toml); every mistake is a StudyError naming the
+    file, the line and the key."""
+    doc = read(SCHEMA, path)
+    family_name = doc.value("study", "parameter_set")
+    family = FAMILIES[family_name]
+    config = parameter_set(family_name)
+    design_values = family.design_values(config)
+    fixed = _fixed(doc, design_values)
+    axes = _axes(doc, design_values, family.fixed_only)
+    motion, recorded = _motion(doc)
+    actuators = [_actuator(doc, k, family.mechanics(config, design_values)) for k in range(len(doc.entries("actuator")))]
+    payload_mass, payload_inertia = family.payload(config)
+    names = [a.name for a in actuators]
+    limits = {key: math.radians(doc.value("study", key)) for key in
+              ("joint_angle_limit_deg", "top_joint_angle_limit_deg", "bottom_joint_angle_limit_deg")
+              if doc.value("study", key) is not None}
+    return Study(doc.path, str(doc.value("study", "name", doc.path.stem)), family_name, axes, motion, actuators,
+                 limits["joint_angle_limit_deg"], float(doc.value("study", "payload_mass", payload_mass)),
+                 tuple(float(v) for v in doc.value("study", "payload_inertia", payload_inertia)),
+                 tuple(float(v) for v in doc.value("study", "force_margins")), int(doc.value("study", "samples")),
+                 fixed=fixed, workspace=_workspace(doc, axes, names), optimise=_optimise(doc, names),
+                 confirm=_confirm(doc, axes, names), recorded=recorded,
+                 top_joint_limit=limits.get("top_joint_angle_limit_deg"),
+                 bottom_joint_limit=limits.get("bottom_joint_angle_limit_deg"))
+
+
+def _fixed(doc: Document, design_values: dict[str, float]) -> dict[str, float]:
+    """[study] fixed: design values held at their own values (non-negative numbers)."""
+    fixed = doc.value("study", "fixed", {})
+    for key, number in fixed.items():
+        if key not in design_values:
+            raise doc.fail(f"study.fixed.{key}", f"is not a design value of {doc.value('study', 'parameter_set')} "
+                           f"({', '.join(sorted(design_values))})")
+        if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number) or number < 0:
+            raise doc.fail(f"study.fixed.{key}", "must be a non-negative number", number)
+    return {k: float(v) for k, v in fixed.items()}
+
+
+def _axes(doc: Document, design_values: dict[str, float], fixed_only: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """[axes]: two design values of the family, each from, to, step."""
+    given = doc.family("axes.<value>")
+    known = ", ".join(sorted(design_values))
+    if len(given) != 2:
+        raise doc.fail("axes", f"must name two design values of {doc.value('study', 'parameter_set')}, each "
+                       f"{{from, to, step}} ({known})")
+    axes = {}
+    for key, spec in given.items():
+        if key not in design_values:
+            raise doc.fail(f"axes.{key}", f"is not a design value of {doc.value('study', 'parameter_set')} ({known})")
+        if key in fixed_only:
+            raise doc.fail(f"axes.{key}", "is one value per study: set it in [study] fixed")
+        low, high, step = (float(spec[k]) for k in ("from", "to", "step"))
+        if not high >= low:
+            raise doc.fail(f"axes.{key}.to", f"must not be below from = {low:g}", spec["to"])
+        count = int(round((high - low) / step)) + 1
+        if count > MOST_PER_AXIS:
+            raise doc.fail(f"axes.{key}", f"has {count} values; at most {MOST_PER_AXIS} per axis")
+        axes[key] = np.round(low + step * np.arange(count), 10)
+    return axes
+
+
+def _motion(doc: Document) -> tuple[Motion | None, Recorded | None]:
+    """[motion]: the basic motions (half ranges and limits), or one motion as a time series."""
+    motion = doc.table("motion")
+    if set(RECORDED) & set(motion):
+        sources = [k for k in ("scene", "table") if k in motion]
+        if len(sources) != 1:
+            raise doc.fail(f"motion.{'samples' if not sources else sources[1]}", "needs one of 'scene' (a scene's "
+                           "reference motion) or 'table' (a recorded motion), not " + ("neither" if not sources else
+                                                                                      "both"))
+        others = sorted(set(motion) - set(RECORDED))
+        if others:
+            raise doc.fail(f"motion.{others[0]}", f"belongs to the basic motions; the motion here is the "
+                           f"{sources[0]}'s")
+        source = motion[sources[0]]
+        try:
+            return None, recorded_motion(doc.path, sources[0], source, int(doc.value("motion", "samples")))
+        except StudyError as error:
+            raise doc.fail(f"motion.{sources[0]}", str(error), source) from None
+    ranges = {d: float(doc.value("motion", d)) for d in DOFS if d not in ROTATIONS}
+    ranges.update({d: math.radians(doc.value("motion", f"{d}_deg")) for d in ROTATIONS})
+    if not any(ranges.values()):
+        raise doc.fail("motion", "gives no range: name at least one of surge, sway, heave, roll_deg, pitch_deg, "
+                       "yaw_deg (or a scene or table)")
+    limits = {}
+    for key in ("velocity", "acceleration", "angular_velocity_deg", "angular_acceleration_deg"):
+        if doc.value("motion", key) is None:
+            raise doc.fail(f"motion.{key}", "is missing: the basic motions need their speed and acceleration limits")
+        limits[key] = float(doc.value("motion", key))
+    return Motion(ranges, limits["velocity"], limits["acceleration"], math.radians(limits["angular_velocity_deg"]),
+                  math.radians(limits["angular_acceleration_deg"])), None
+
+
+def _actuator(doc: Document, k: int, transmission: dict[str, float]) -> Actuator:
+    """The k-th [[actuator]] (0 the first); a motor's torques and speed through the family's screw
+    (K_FT, i_theta)."""
+    entry, where = doc.entries("actuator")[k], f"actuator[{k + 1}]"
+    force_torque, screw_ratio = transmission["transmission.force_torque"], transmission["transmission.screw_ratio"]
+    limits = {}
+    for force, torque, factor in (("continuous_force", "continuous_torque", force_torque),
+                                  ("peak_force", "peak_torque", force_torque),
+                                  ("speed", "motor_speed", 1.0 / screw_ratio)):
+        if force in entry and torque in entry:
+            raise doc.fail(f"{where}.{torque}", f"and '{force}' both given: one of them")
+        if torque in entry:  # the motor's side, through the family's screw (K_FT, i_theta)
+            if force_torque == 1.0 and screw_ratio == 1.0:
+                raise doc.fail(f"{where}.{torque}", f"needs a screw: {doc.value('study', 'parameter_set')}'s legs are "
+                               f"driven by force (give '{force}')")
+            limits[force] = float(entry[torque]) * factor
+        elif force in entry:
+            limits[force] = float(entry[force])
+    if "continuous_force" not in limits:
+        raise doc.fail(f"{where}.continuous_force", "is missing (or give continuous_torque)")
+    return Actuator(entry["name"], float(entry["stroke"]), float(entry["running_length_min"]),
+                    limits["continuous_force"], limits.get("peak_force"), limits.get("speed"))
+
+
+def _point(doc: Document, table: str, axes: dict[str, np.ndarray], actuators: list[str]) -> dict[str, float]:
+    """[workspace] or [confirm]: a design (a positive value of each axis) and one of the actuators."""
+    point = doc.value(table, "point")
+    if set(point) != set(axes):
+        raise doc.fail(f"{table}.point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
+    for key, number in point.items():
+        if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number) \
+                or not number > 0:
+            raise doc.fail(f"{table}.point.{key}", "must be a positive number", number)
+    if doc.value(table, "actuator") not in actuators:
+        raise doc.fail(f"{table}.actuator", f"is not one of the study's actuators ({', '.join(actuators)})",
+                       doc.value(table, "actuator"))
+    return {k: float(v) for k, v in point.items()}
+
+
+def _workspace(doc: Document, axes: dict[str, np.ndarray], actuators: list[str]) -> WorkspaceSpec | None:
+    if "workspace" not in doc.data:
+        return None
+    return WorkspaceSpec(_point(doc, "workspace", axes, actuators), doc.value("workspace", "actuator"),
+                         float(doc.value("workspace", "spacing")), math.radians(doc.value("workspace", "angle_step_deg")))
+
+
+def _optimise(doc: Document, actuators: list[str]) -> OptimiseSpec | None:
+    if "optimise" not in doc.data:
+        return None
+    if doc.value("optimise", "actuator") not in actuators:
+        raise doc.fail("optimise.actuator", f"is not one of the study's actuators ({', '.join(actuators)})",
+                       doc.value("optimise", "actuator"))
+    return OptimiseSpec(doc.value("optimise", "actuator"), int(doc.value("optimise", "seed")),
+                        int(doc.value("optimise", "iterations")))
+
+
+def _confirm(doc: Document, axes: dict[str, np.ndarray], actuators: list[str]) -> ConfirmSpec | None:
+    if "confirm" not in doc.data:
+        return None
+    return ConfirmSpec(_point(doc, "confirm", axes, actuators), doc.value("confirm", "actuator"),
+                       doc.value("confirm", "drive"))
+
+
+def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> Recorded:
+    """[motion] scene = "<name or path>": the scene's reference motion less its platform's neutral
+    pose; [motion] table = "<csv>": a recorded motion (columns time and any of x, y, z, roll, pitch,
+    yaw: displacements from the neutral pose, m and rad), played by the trajectory FMU (cubic
+    interpolation), the one reader of tables. Either sampled `samples` times evenly over its
+    duration (at least 4); the rates and accelerations are the samples' second-order differences.
+    Raises StudyError with the reason (the caller adds the file and line)."""
+    from ..core import neutral_pose
+    from ..run.runner import scene_values
+    from ..scene import SceneError, Signal, load_scene, shipped
+    from ..scene.signals import play, scene_trajectory, trajectory_parameters
+    given = study_path.parent / source
+    if kind == "scene":
+        found = given if given.is_file() else shipped(source, "scenes")
+        if found is None:
+            raise StudyError("no such scene (relative to the study's folder, or a shipped scene's name)")
+        try:
+            scene = load_scene(found)
+            neutral = neutral_pose(scene_values(scene)[0])
+            values, duration, name = scene_trajectory(scene), scene.duration, found.stem
+        except (SceneError, ValueError) as error:
+            raise StudyError(str(error)) from None
+    else:
+        if not given.is_file():
+            raise StudyError("no such file (relative to the study's folder)")
+        lines = [line for line in given.read_text(errors="replace").splitlines() if line.strip()]
+        try:
+            duration = float(lines[-1].split(",")[0])
+        except (IndexError, ValueError):
+            raise StudyError(f"its last line gives no time (a CSV with columns time and any of "
+                             f"{', '.join(POSE)})") from None
+        values = trajectory_parameters({axis: Signal(offset=0.0) for axis in POSE}, table=given, interpolation="cubic")
+        neutral, name = np.zeros(6), given.stem
+    if not duration > 0:
+        raise StudyError(f"lasts {duration:g} s; a motion needs a positive duration")
+    step = duration / (samples - 1)
+    try:
+        times, poses, _ = play(values, duration, step)
+    except Exception as error:  # the trajectory FMU's refusal (a bad table: its file and line)
+        raise StudyError(str(error)) from None
+    displacement = poses - neutral
+    return Recorded(name, times, displacement, np.gradient(displacement, step, axis=0, edge_order=2),
+                    second_difference(displacement, step))
+
+
+def second_difference(x: np.ndarray, step: float) -> np.ndarray:
+    """The second derivative of evenly sampled rows, to second order: central differences inside,
+    the one-sided four-point formula (2, -5, 4, -1) at both ends."""
+    out = np.empty_like(x)
+    out[1:-1] = x[2:] - 2 * x[1:-1] + x[:-2]
+    out[0] = 2 * x[0] - 5 * x[1] + 4 * x[2] - x[3]
+    out[-1] = 2 * x[-1] - 5 * x[-2] + 4 * x[-3] - x[-4]
+    return out / step ** 2

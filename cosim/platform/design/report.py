@@ -1,0 +1,104 @@
+"""A study's answer: per actuator the admissible designs and their extent, the smallest stroke
+that carries every motion, beside the paper's numbers where the study is Halder's Section V, and
+the rows of the designs it looks at more closely (workspace, optimum, confirmation); as a
+summary, figures and the map as a table (Parquet, CSV)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..report.rows import Row, table
+from .confirm import confirmation_rows, study_confirmation
+from .figures import plot_dynamic, plot_kinematic
+from .halder import is_section5, longest, marks, paper_rows, shortest
+from .map import DesignMap
+from .optimise import optimum_rows, study_optimum
+from .study import span, stubs, value
+from .workspace import study_workspace, workspace_rows
+
+
+def map_rows(design: DesignMap) -> list[Row]:
+    """Any study's answer: per actuator the admissible designs (kinematic, then with its forces and
+    speed) and their extent along each axis; the smallest stroke that carries every motion within
+    the joint limit, where, and the running lengths it needs there."""
+    study = design.study
+    (row_key, rows), (column_key, columns) = list(study.axes.items())
+    out = []
+    for actuator in study.actuators:
+        kinematic, both = design.admissible(actuator), design.admissible(actuator, dynamic=True)
+        failing = {name: float(np.mean(~holds.all(axis=2))) for name, holds in
+                   {**design.kinematic_admissible(actuator), **design.dynamic_admissible(actuator)}.items()}
+        r, c = np.nonzero(both)
+        extent = f"{span(row_key, rows[r])}, {span(column_key, columns[c])}" if both.any() else "none"
+        out.append(Row(f"admissible designs, {actuator.name}", "", f"{kinematic.sum()} / {both.sum()} of {design.points}",
+                       "points", f"kinematic / with forces and speed; {extent}; each limit fails at: " + ", ".join(
+                           f"{name} {share:.0%}" for name, share in failing.items())))
+    joints = study.joints_within(design.top_angle, design.bottom_angle).all(axis=2)
+    needed = np.where(joints, design.length_max.max(axis=2) - design.length_min.min(axis=2), np.inf)
+    if np.isfinite(needed).any():
+        r, c = np.unravel_index(np.argmin(needed), needed.shape)
+        s = stubs(study)
+        out.append(Row("the smallest stroke that carries every motion, over the grid (joint limit held)", "", float(needed[r, c]), "m",
+                       f"at {value(row_key, rows[r])}, {value(column_key, columns[c])}: running length "
+                       f"{design.length_min[r, c].min() + s:.3f} to {design.length_max[r, c].max() + s:.3f} m"
+                       + ("; on the grid's edge: a wider grid may need less" if r in (0, len(rows) - 1)
+                          or c in (0, len(columns) - 1) else "")))
+    else:
+        out.append(Row("the smallest stroke that carries every motion", "", "none", "",
+                       "the joint limit fails at every design of the grid"))
+    return out
+
+
+def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None) -> list[Row]:
+    """The map's rows (beside the paper's numbers for Halder's Section V plane), then the
+    [workspace] design's and the [optimise] optimum's, where the study names them (the
+    optimiser's designs on Dask as workers/scheduler say)."""
+    space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
+    runs = study_confirmation(design.study, workers, scheduler)
+    return (paper_rows(design) if is_section5(design.study) else []) + map_rows(design) + \
+        (workspace_rows(design.study, space) if space else []) + \
+        (optimum_rows(design.study, best) if best else []) + (confirmation_rows(design.study, runs) if runs else [])
+
+
+def summary(design: DesignMap, rows: list | None = None) -> list[str]:
+    """Markdown lines: the grid, the rows (report_rows unless given), the map's speed."""
+    (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
+    return [f"Grid: {span(row_key, grid_rows)} x {span(column_key, columns)}, {design.points} points, " + (f"the motion of {design.study.recorded.name} "
+                                             f"({len(design.study.recorded.times)} samples)." if design.study.recorded else
+                                             f"{len(design.motions)} basic motions ({', '.join(design.motions)})."), "",
+            table(rows if rows is not None else report_rows(design)), "",
+            f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
+            + ("over the motion)." if design.study.recorded else "over every basic motion).")]
+
+
+def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
+    """The figures (Halder's Figs 2 and 3 per actuator, Fig 4 for the longest stroke), the summary
+    and the map as a table (one row per grid point and basic motion) into `out`."""
+    import pyarrow as pa
+    import pyarrow.csv
+    import pyarrow.parquet as pq
+    out.mkdir(parents=True, exist_ok=True)
+    stem = design.study.path.stem
+    (row_key, radii), (column_key, columns) = list(design.study.axes.items())
+    written = []
+    points, chosen = marks(design)
+    for k, actuator in enumerate(design.study.actuators):
+        own = points if actuator is shortest(design.study) else chosen
+        written.append(plot_kinematic(design, actuator, out / f"{stem}_kinematic_{k + 1}.png", own))
+    if design.force_paper is not None:
+        written.append(plot_dynamic(design, longest(design.study), out / f"{stem}_dynamic.png", chosen))
+    r, c, m = np.meshgrid(np.arange(len(radii)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
+    values = {row_key: radii[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
+              "length_min": design.length_min.ravel(), "length_max": design.length_max.ravel(),
+              "top_angle": design.top_angle.ravel(), "bottom_angle": design.bottom_angle.ravel(),
+              "smallest_singular": design.smallest_singular.ravel(), "condition": design.condition.ravel()}
+    if design.force_paper is not None:
+        values.update(force_paper=design.force_paper.ravel(), force_full=design.force_full.ravel(),
+                      leg_speed=design.leg_speed.ravel())
+    arrow = pa.table(values)
+    pq.write_table(arrow, out / f"{stem}.parquet")
+    pa.csv.write_csv(arrow, out / f"{stem}.csv")
+    (out / f"{stem}.md").write_text("\n".join([f"# {design.study.name}", "", *summary(design, rows), ""]))
+    return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", out / f"{stem}.md"]

@@ -1,0 +1,90 @@
+"""The design study file's keys (docs/reference/study.md is generated from here): every table and
+key with its type, range, unit, default and what it does. What depends on the platform family
+(which design values exist) and on other keys the reader checks (cosim.platform.design.reader)."""
+
+from __future__ import annotations
+
+from ...engine.errors import InputError
+from ...engine.schema import REQUIRED, Choice, Free, Key, Number, Row, Schema, Table, Text
+from .study import DOFS, FAMILIES, ROTATIONS
+
+
+class StudyError(InputError):
+    """A study file that cannot run: one line naming the file, the line and the reason."""
+
+
+DRIVEN = {"force": "ideal force sources (linear-motor FMUs, electrical model off)",
+          "pmsm": "our PMSM drive FMU (current, speed and position loops)",
+          "linear": "our linear-motor drive FMU (its current loop and electrical model)"}
+POSITIVE = Number(low=0, above=True)
+NON_NEGATIVE = Number(low=0)
+FRACTION = Number(low=0, high=1, below=True)
+RECORDED = ("scene", "table", "samples")  # [motion] keys of a motion given as a time series
+
+SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY`): which platform of a family "
+                "carries a motion, after Halder et al. Section V (docs/guide/design.md). Paths are relative to the "
+                "study's folder.", (
+    Table("", "The file holds the tables below; [axes], [motion] and at least one [[actuator]] are required."),
+    Table("study", "The platform family, its payload and the limits.", (
+        Key("name", Text(), "the name the summary shows (default: the file's name)"),
+        Key("parameter_set", Choice(tuple(FAMILIES)), "the platform family: "
+            + "; ".join(f"{name}: {family.describe}" for name, family in FAMILIES.items()), "halder2013"),
+        Key("payload_mass", Number("kg", 0, above=True), "the payload (default: the parameter set's)"),
+        Key("payload_inertia", Row((POSITIVE,) * 3), "its inertia diagonal [kg m^2] (default: the parameter set's)"),
+        Key("joint_angle_limit_deg", Number("deg", 0, above=True), "both joints' largest tilt from the neutral", 20.0),
+        Key("top_joint_angle_limit_deg", Number("deg", 0, above=True), "the top (universal) joint's own limit"),
+        Key("bottom_joint_angle_limit_deg", Number("deg", 0, above=True), "the bottom (spherical) joint's own "
+            "limit"),
+        Key("force_margins", Row((FRACTION, FRACTION)), "[friction, other]: the force the demand may reach is the "
+            "continuous force / ((1 + friction)(1 + other))", [0.07, 0.20]),
+        Key("samples", Number(low=3, high=10001, whole=True), "poses per basic motion along its path", 121),
+        Key("fixed", Free("design value = number"), "design values of the family held at other values than the "
+            "parameter set's (a stub, which cannot be an axis)"))),
+    Table("axes.<value>", "The two design values the map sweeps (each a design value of the family, e.g. "
+          "base_radius, disc_height for Halder's).", (
+        Key("from", NON_NEGATIVE, "the first value", REQUIRED),
+        Key("to", NON_NEGATIVE, "the last value (not below from)", REQUIRED),
+        Key("step", POSITIVE, "the spacing (at most 2000 values an axis)", REQUIRED))),
+    Table("motion", "What the platform must carry: each DOF from -range to +range in the shortest time its limits "
+          "allow (the basic motions), or a time series (scene or table).", (
+        *(Key(dof, NON_NEGATIVE, f"the {dof} half range [m]", 0.0) for dof in DOFS if dof not in ROTATIONS),
+        *(Key(f"{dof}_deg", NON_NEGATIVE, f"the {dof} half range [deg]", 0.0) for dof in ROTATIONS),
+        Key("velocity", POSITIVE, "the translations' largest speed [m/s]"),
+        Key("acceleration", POSITIVE, "their largest acceleration [m/s^2]"),
+        Key("angular_velocity_deg", POSITIVE, "the rotations' largest speed [deg/s]"),
+        Key("angular_acceleration_deg", POSITIVE, "their largest acceleration [deg/s^2]"),
+        Key("scene", Text(path=True), "a scene whose reference motion (less its neutral pose) is the motion (a path, "
+            "or a shipped scene's name)"),
+        Key("table", Text(path=True), "a CSV of displacements from the neutral pose: a time column and any of x, y, "
+            "z, roll, pitch, yaw [m, rad]"),
+        Key("samples", Number(low=4, high=100001, whole=True), "samples of the time series over its duration", 1001)),
+          required=True),
+    Table("actuator", "An actuator the designs are judged with; a rotary one may be given by its motor (torques and "
+          "speed through the family's screw).", (
+        Key("name", Text(), "its name", REQUIRED),
+        Key("stroke", POSITIVE, "[m]", REQUIRED),
+        Key("running_length_min", POSITIVE, "the leg system's length at the shortest stroke, stubs included [m]",
+            REQUIRED),
+        Key("continuous_force", POSITIVE, "at 100 % duty cycle [N] (or continuous_torque)"),
+        Key("peak_force", POSITIVE, "what it gives for a moment, against the full model's peak [N]"),
+        Key("speed", POSITIVE, "the largest extension rate [m/s]"),
+        Key("continuous_torque", POSITIVE, "the motor's continuous torque [N m], times the screw's K_FT"),
+        Key("peak_torque", POSITIVE, "the motor's peak torque [N m]"),
+        Key("motor_speed", POSITIVE, "the motor's largest speed [rad/s], over the screw ratio")), many=True,
+          required=True),
+    Table("workspace", "The reach of one design: the positions and orientations it reaches within the actuator's "
+          "running lengths and the joint limits, and how far it is from a singular pose.", (
+        Key("point", Free("axis = value"), "the design: a value of each axis", REQUIRED),
+        Key("actuator", Text(), "one of the study's actuators, by name", REQUIRED),
+        Key("spacing", Number("m", 0, above=True), "the positions' grid", 0.02),
+        Key("angle_step_deg", Number("deg", 0, above=True), "the orientations' grid", 1.0))),
+    Table("optimise", "Within the axes' ranges, the design whose smallest margin over every constraint and motion is "
+          "largest (differential evolution).", (
+        Key("actuator", Text(), "one of the study's actuators, by name", REQUIRED),
+        Key("seed", Number(low=0, whole=True), "the search's seed (the same seed, the same design)", 1),
+        Key("iterations", Number(low=1, whole=True), "its generations at most", 60))),
+    Table("confirm", "One design through the co-simulation, every motion, closed loop.", (
+        Key("point", Free("axis = value"), "the design: a value of each axis", REQUIRED),
+        Key("actuator", Text(), "one of the study's actuators, by name", REQUIRED),
+        Key("drive", Choice(tuple(DRIVEN)), "; ".join(f"{k}: {v}" for k, v in DRIVEN.items()), "force"))),
+), StudyError)

@@ -1,0 +1,233 @@
+"""A design study as the program holds it: the platform family it sweeps, its two design axes, the
+motion (basic motions, or a recorded time series), the actuators, the limits and margins, and
+the designs it looks at more closely (workspace, optimum, co-simulated confirmation).
+
+A family is a platform layout with its design values (Halder's 6-SBU, Meng's, Sumnu's), the
+mechanics FMU's start values at a design (the one mapping, cosim.platform.scene.parameter_sets)
+and the payload; `platform_values` gives the mechanics values of a design point.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..scene.parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
+
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+ROTATIONS = ("roll", "pitch", "yaw")
+
+
+@dataclass(frozen=True)
+class Actuator:
+    name: str
+    stroke: float              # [m]
+    running_length_min: float  # L_min [m]: the leg system, stubs included, at the shortest stroke
+    continuous_force: float    # [N], 100 % duty cycle (a study may give the motor's torque: times K_FT)
+    peak_force: float | None = None  # [N], what it gives for a moment (checked against the full model)
+    speed: float | None = None       # [m/s], the largest extension rate (or the motor's speed / i_theta)
+
+    @property
+    def running_length_max(self) -> float:
+        return self.running_length_min + self.stroke
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Per DOF the half range (m, rad); the limits of speed and acceleration (m/s, m/s^2 for the
+    translations, rad/s, rad/s^2 for the rotations)."""
+    ranges: dict[str, float]
+    velocity: float
+    acceleration: float
+    angular_velocity: float
+    angular_acceleration: float
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """A motion given as a time series (a scene's reference or a recorded table): displacements
+    from the design's neutral pose (n x 6, m and rad), their rates and accelerations."""
+    name: str
+    times: np.ndarray
+    displacement: np.ndarray
+    rates: np.ndarray
+    accelerations: np.ndarray
+
+
+@dataclass(frozen=True)
+class Family:
+    """A platform layout a study sweeps: its design values (name -> value, from its parameter set),
+    the mechanics start values at a design, the stubs between the actuated length and the
+    actuator's running length, the payload (mass, inertia diagonal), and the values a map must
+    not vary (one per study: [study] fixed)."""
+    describe: str
+    design_values: Callable[[dict], dict[str, float]]
+    mechanics: Callable[[dict, dict[str, float]], dict[str, float]]
+    stubs: Callable[[dict[str, float]], float]
+    payload: Callable[[dict], tuple[float, list[float]]]
+    fixed_only: tuple[str, ...] = ()
+
+
+def _scalars(table: dict) -> dict[str, float]:
+    return {k: float(v) for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+
+
+def _with_geometry(config: dict, geometry: dict[str, float]) -> dict:
+    return {**config, "geometry": {**config["geometry"], **geometry}}
+
+
+def _sumnu_values(config: dict) -> dict[str, float]:
+    return {"base_scale": 1.0, "platform_scale": 1.0, "home_height": float(config["geometry"]["home_pose"][2])}
+
+
+def _sumnu_mechanics(config: dict, design: dict[str, float]) -> dict[str, float]:
+    """Sumnu's joints (irregular, given point by point) scaled in the plane about each frame's
+    origin (base joints by base_scale, platform joints by platform_scale; their heights kept), the
+    home pose at home_height."""
+    g = config["geometry"]
+    scaled = {"base_joints": [[design["base_scale"] * x, design["base_scale"] * y, z] for x, y, z in g["base_joints"]],
+              "platform_joints": [[design["platform_scale"] * x, design["platform_scale"] * y, z]
+                                  for x, y, z in g["platform_joints"]],
+              "home_pose": [*g["home_pose"][:2], design["home_height"], *g["home_pose"][3:]]}
+    return sumnu_mechanics(_with_geometry(config, scaled))
+
+
+FAMILIES = {
+    "halder2013": Family("Halder's 6-SBU layout (Eqs 1-4): joint pairs on the base circle and the disc, stubs",
+                         lambda c: _scalars(c["geometry"]), lambda c, g: halder_mechanics(_with_geometry(c, g)),
+                         lambda g: g["top_stub"] + g["bottom_stub"],
+                         lambda c: (c["payload"]["mass"], c["payload"]["inertia_diag"]), ("top_stub", "bottom_stub")),
+    "meng2010": Family("Meng's layout (Table 1): joint pairs on two circles, the neutral height from the middle leg "
+                       "length", lambda c: _scalars(c["geometry"]), lambda c, g: meng_mechanics(_with_geometry(c, g)),
+                       lambda g: 0.0, lambda c: (c["platform"]["mass"], c["platform"]["inertia_diag"])),
+    "sumnu2015": Family("Sumnu's motion-simulator layout (Section 4.2): joints point by point, scaled in the plane",
+                        _sumnu_values, _sumnu_mechanics, lambda g: 0.0,
+                        lambda c: (c["mass_sets"]["heavy"]["platform_mass"],
+                                   c["mass_sets"]["heavy"]["platform_inertia_diag"])),
+}
+
+
+@dataclass(frozen=True)
+class WorkspaceSpec:
+    """[workspace]: the design whose reach is mapped, with which actuator, on which grids."""
+    point: dict[str, float]
+    actuator: str
+    spacing: float     # [m] the positions' grid
+    angle_step: float  # [rad] the orientations' grid
+
+
+@dataclass(frozen=True)
+class OptimiseSpec:
+    """[optimise]: the actuator the most robust design is sought for, and the search's seed and
+    iterations."""
+    actuator: str
+    seed: int
+    iterations: int
+
+
+@dataclass(frozen=True)
+class ConfirmSpec:
+    """[confirm]: the design run through the co-simulation, its actuator and its drives."""
+    point: dict[str, float]
+    actuator: str
+    drive: str  # "force" (ideal force sources), "pmsm" or "linear" (our drive FMUs)
+
+
+@dataclass
+class Study:
+    path: Path
+    name: str
+    parameter_set: str               # the platform family (FAMILIES) and the parameter set it starts from
+    axes: dict[str, np.ndarray]      # design value -> values (two axes: the map's rows and columns)
+    motion: Motion | None            # the basic motions, or None where `recorded` is the motion
+    actuators: list[Actuator]
+    joint_angle_limit: float         # [rad], both joints unless one has its own below
+    payload_mass: float
+    payload_inertia: tuple[float, float, float]
+    force_margins: tuple[float, float] = (0.07, 0.20)
+    samples: int = 121               # poses per basic motion along its path
+    phase_samples: int = 11          # poses per phase (accelerate, cruise, decelerate) of a timed motion
+    fixed: dict[str, float] = field(default_factory=dict)  # geometry values over the parameter set's
+    workspace: WorkspaceSpec | None = None
+    optimise: OptimiseSpec | None = None
+    confirm: ConfirmSpec | None = None
+    recorded: Recorded | None = None  # [motion] scene or table: one motion, the time series
+    top_joint_limit: float | None = None     # [rad] the top (universal) joint's own limit
+    bottom_joint_limit: float | None = None  # [rad] the bottom (spherical) joint's own limit
+
+    @property
+    def joint_limits(self) -> tuple[float, float]:
+        """(top, bottom) joint-angle limits [rad]."""
+        return (self.top_joint_limit or self.joint_angle_limit, self.bottom_joint_limit or self.joint_angle_limit)
+
+    def joints_within(self, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+        """Where the top and bottom joint angles are within their limits (Eq 21)."""
+        top_limit, bottom_limit = self.joint_limits
+        return (top < top_limit) & (bottom < bottom_limit)
+
+    @property
+    def family(self) -> Family:
+        return FAMILIES[self.parameter_set]
+
+    def actuator(self, name: str) -> Actuator:
+        return next(a for a in self.actuators if a.name == name)
+
+    def allowed_force(self, actuator: Actuator) -> float:
+        friction, other = self.force_margins
+        return actuator.continuous_force / ((1 + friction) * (1 + other))
+
+    def with_axes(self, axes: dict[str, np.ndarray]) -> "Study":
+        """The study over other values of its axes (a part of its grid, one design)."""
+        part = copy.copy(self)
+        part.axes = axes
+        return part
+
+
+def unit(key: str) -> str:
+    """A design value's unit as the parameter sets name them: *_deg in degrees, *_scale a factor,
+    the rest lengths."""
+    return "deg" if key.endswith("_deg") else "" if key.endswith("_scale") else "m"
+
+
+def value(key: str, number: float, digits: str = "g") -> str:
+    """`key = number unit`, e.g. 'base_radius = 1.1 m'."""
+    return f"{key} = {number:{digits}}" + (f" {unit(key)}" if unit(key) else "")
+
+
+def span(key: str, values: np.ndarray) -> str:
+    """`key low-high unit`, e.g. 'base_radius 0.8-1.5 m'."""
+    return f"{key} {np.min(values):g}-{np.max(values):g}" + (f" {unit(key)}" if unit(key) else "")
+
+
+_SETS: dict[str, dict] = {}
+
+
+def parameter_set(name: str) -> dict:
+    """The parameter set, read once per process (a map reads it at every grid point)."""
+    if name not in _SETS:
+        _SETS[name] = copy.deepcopy(load(name))
+    return _SETS[name]
+
+
+def platform_values(study: Study, point: dict[str, float], effects: bool = False) -> dict[str, Any]:
+    """The mechanics start values of the study's platform at a design point (geometry keys of the
+    parameter set's [geometry] table); the payload is the study's. effects: the legs' inertia and
+    friction as the parameter set gives them (the full model), or off (the paper's inverse model)."""
+    config = parameter_set(study.parameter_set)
+    family = study.family
+    values = family.mechanics(config, {**family.design_values(config), **study.fixed, **point})
+    values["platform.mass"] = study.payload_mass
+    for axis, inertia in zip(("xx", "yy", "zz"), study.payload_inertia):
+        values[f"platform.inertia_{axis}"] = inertia
+    values.update({"effects.actuator_inertia": effects, "effects.motor_inertia": effects, "effects.friction": effects})
+    return values
+
+
+def stubs(study: Study) -> float:
+    """What the actuator's running length adds to the joint-to-joint (actuated) length [m]."""
+    config = parameter_set(study.parameter_set)
+    return study.family.stubs({**study.family.design_values(config), **study.fixed})
