@@ -24,7 +24,8 @@ from common import publish  # noqa: E402
 from cosim.engine import Algorithm, Execution, FixedStep  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.ports import POSE, per_leg  # noqa: E402
-from cosim.platform.run.runner import SceneFailed, run_scene  # noqa: E402
+from cosim.engine.outcome import RunStopped  # noqa: E402
+from cosim.platform.run.runner import run_scene  # noqa: E402
 from cosim.platform.scene import load_scene  # noqa: E402
 from test_coupling import exact_position_1, oscillator  # noqa: E402
 
@@ -44,7 +45,7 @@ def meng(overrides: dict) -> np.ndarray | None:
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0, **overrides})
     try:
         return run_scene(scene, plots=False, progress=False, advice=False)[0]
-    except SceneFailed:
+    except RunStopped:
         return None
 
 

@@ -62,7 +62,8 @@ from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.engine.results import write  # noqa: E402
 from cosim.platform.run.libcosim import run_in_libcosim  # noqa: E402
 from cosim.engine.settings import FixedStep  # noqa: E402
-from cosim.platform.run.runner import run_scene, scene_structure  # noqa: E402
+from cosim.platform.run.compile import scene_structure  # noqa: E402
+from cosim.platform.run.runner import run_scene  # noqa: E402
 from cosim.platform.scene import load_scene, shipped_scenes  # noqa: E402
 from cosim.platform.run.accuracy import AFTER, START_UP, difference, window_errors, windows  # noqa: E402
 from cosim.platform.ports import DRIVES, POSE, per_leg  # noqa: E402

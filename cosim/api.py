@@ -19,6 +19,7 @@ up to then (`.result`) and the report that says why (`.report`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -81,6 +82,9 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
         SceneError, SspError: one line naming the file, line, key and reason.
     """
     if Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES:
+        if overrides:
+            raise UsageError("load: overrides are a scene's keys; an SSP system's run settings and parameter values "
+                             "go to simulate(..., settings=...) or its components' parameters")
         from .engine.ssp import read_ssp
         return read_ssp(Path(model))
     return load_scene(model, dict(overrides or {}))
@@ -121,11 +125,11 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         if given:
             raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
                              "settings)")
-        from .engine.command import run_ssp, run_structure
-        if isinstance(model, SystemStructure):
-            values, report = run_structure(model, dict(settings or {}), duration, progress=progress)
-        else:
-            values, report = run_ssp(Path(model), target, dict(settings or {}), duration)
+        from .engine.run import run_system
+        from .engine.ssp import read_ssp
+        structure = model if isinstance(model, SystemStructure) else read_ssp(Path(model))
+        source = None if isinstance(model, SystemStructure) else str(model)
+        values, report = run_system(structure, dict(settings or {}), duration, target, source=source, progress=progress)
         return Run(values, report)
     if settings:
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "
@@ -142,7 +146,7 @@ def export_ssp(scene: str | Path | Scene, path: str | Path) -> Path:
     """Writes a scene as an SSP 1.0 archive: its FMUs, parameter values (SSV), connections, and
     our run settings in an annotation that other tools ignore. Returns the archive's path."""
     from .engine.ssp import write_ssp
-    from .platform.run.runner import scene_structure
+    from .platform.run.compile import scene_structure
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
     return write_ssp(scene_structure(loaded), Path(path))
 
@@ -161,12 +165,11 @@ def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None
     Raises:
         SweepError: a bad sweep file (one line naming the file and line).
     """
-    from .engine.sweep import run_sweep
     from .platform.run.sweep import load_sweep
-    loaded = load_sweep(file)
-    return run_sweep(loaded.name, loaded.points, loaded.evaluate, loaded.columns, Path(out), loaded.signature,
-                     workers=workers, scheduler=scheduler, points_per_task=loaded.points_per_task,
-                     retries=loaded.retries, progress=progress)
+    if workers is not None and scheduler is not None:
+        raise UsageError("sweep: workers start a local cluster, scheduler names a running one: give one of them")
+    _whole("sweep", "workers", workers)
+    return load_sweep(file).run(Path(out), workers, scheduler, progress)
 
 
 def advise(scene: str | Path | Scene, tolerance: float, *, effort_tolerance: float = 0.01, probe: float | None = None,
@@ -177,7 +180,17 @@ def advise(scene: str | Path | Scene, tolerance: float, *, effort_tolerance: flo
     it, steady tracking) against a converged reference, as `cosim advise` finds them; probes of
     `probe` seconds (default 2, and past the first load pulse)."""
     from .platform.advise import advise as find, recommend, text
+    for name, number in (("tolerance", tolerance), ("effort_tolerance", effort_tolerance), ("probe", probe)):
+        if number is not None and not (isinstance(number, (int, float)) and math.isfinite(number) and number > 0):
+            raise UsageError(f"advise: {name} = {number!r} must be a positive number")
+    _whole("advise", "workers", workers)
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
     candidates, info = find(loaded, tolerance, probe, effort_tolerance, workers)
     return Advice(candidates, recommend(candidates, tolerance, effort_tolerance),
                   text(loaded, tolerance, candidates, info))
+
+
+def _whole(function: str, name: str, count: int | None) -> None:
+    """A number of worker processes: None (one per core), 0 (in this process) or more."""
+    if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 0):
+        raise UsageError(f"{function}: {name} = {count!r} must be a whole number >= 0 (0: in this process)")

@@ -85,3 +85,25 @@ def paper_scene(name: str = "meng_eq35", overrides: dict | None = None):
                 overrides[key] = {"Real": float, "Integer": int, "Boolean": lambda v: v in (True, "true", 1)}[
                     own[setting].type](start)
     return load_scene(path, overrides)
+
+
+def platform_run(drive: str, stop_time: float, step: float, mechanics_values=None, drive_values=None,
+                 trajectory_values=None, mechanics_outputs=(), drive_outputs=(), order: int = 1,
+                 algorithm: str = "gauss-seidel", divergence_ratio: float | None = 0.05, leg_values=None,
+                 interface_jacobian: bool = False):
+    """The platform wired from parameter values alone (no scene) at a fixed step, through the
+    engine's run loop: its Outcome (energy residuals, steps, results), the pose and reference and
+    the chosen outputs recorded; RunFailed where an FMU failed or the coupling diverged (watched
+    by the divergence monitor unless divergence_ratio is None)."""
+    from cosim.engine import DivergenceMonitor, FixedStep, RunFailed
+    from cosim.engine.outcome import execute
+    from cosim.platform.ports import platform_algorithm
+    from cosim.platform.run.system import columns, platform_structure
+    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,
+                                   interface_jacobian=interface_jacobian)
+    outcome = execute(structure, platform_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
+                      *columns(drive, mechanics_outputs, drive_outputs), clock="mechanics",
+                      observers=[DivergenceMonitor(ratio=divergence_ratio)] if divergence_ratio else [])
+    if outcome.failure is not None:
+        raise RunFailed(outcome.failure.error, outcome.result, outcome)
+    return outcome

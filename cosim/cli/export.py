@@ -26,7 +26,8 @@ def main(args: argparse.Namespace) -> int:
     from ..engine.checks import check_parameters
     from ..engine.osp import write_osp
     from ..engine.ssp import not_portable, write_ssp
-    from ..platform.run.runner import scene_error, scene_structure
+    from ..platform.run.compile import scene_structure
+    from ..platform.run.errors import scene_error
     from ..platform.scene import load_scene
     if args.ssp is None and args.osp is None:
         raise UsageError("export: give --ssp FILE.ssp, --osp DIR or both")

@@ -21,14 +21,12 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..engine.sweep import column_name, plot_sweep, run_sweep
+    from ..engine.sweep import column_name, plot_sweep
     from ..platform.run.sweep import load_sweep
     count = workers("--workers", args.workers, "no Dask")
     sweep = load_sweep(args.sweep)
     try:
-        outcome = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, args.out, sweep.signature,
-                            workers=count, scheduler=args.scheduler, points_per_task=sweep.points_per_task,
-                            retries=sweep.retries)
+        outcome = sweep.run(args.out, count, args.scheduler)
     except KeyboardInterrupt:
         print(f"interrupted: the points finished so far are in {args.out}/{args.sweep.stem}.parts; run the same "
               "command again to run only the others", file=sys.stderr)

@@ -16,7 +16,8 @@ def add(commands) -> argparse.ArgumentParser:
 
 def main(args: argparse.Namespace) -> int:
     from ..platform.report.view3d import write_view
-    from ..platform.run.runner import scene_error, scene_values
+    from ..platform.run.compile import scene_values
+    from ..platform.run.errors import scene_error
     from ..platform.scene import load_scene
     scene = load_scene(args.scene)
     try:

@@ -12,7 +12,8 @@ from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Mapping, Sequence
 
 from .errors import InputError
-from .schema import REQUIRED, Choice, Flag, Key, Number, Schema, Table, Text
+from .schema import Key, Schema, Table
+from .values import REQUIRED, Choice, Flag, Number, Text
 
 ALGORITHMS = ("jacobi", "gauss-seidel")
 

@@ -179,6 +179,10 @@ class Core:
         self.dll.platform_legs(ctypes.byref(self.p), arr(x), legs)
         return np.array([np.array(x[:3]) + np.array(leg.arm[:]) for leg in legs])
 
+    def upper_joints_at(self, poses: np.ndarray) -> np.ndarray:
+        """Upper joint positions in the base frame (n x 6 x 3) at each of n poses (n x 6)."""
+        return np.array([self.upper_joints(self.state(pose)) for pose in np.asarray(poses, float).reshape(-1, 6)])
+
     def state(self, pose, rate=np.zeros(6)) -> np.ndarray:
         out = (D * 13)()
         self.dll.platform_state_from_pose(arr(pose), arr(rate), out)

@@ -17,7 +17,7 @@ from cosim.engine import Algorithm, Component, Connection, EnergyControl, Execut
 from cosim.engine.coupling import FeedthroughLoop
 from cosim.engine.structure import SystemStructure
 from cosim.engine.artifacts import ROOT, fmu_path
-from cosim.platform.run.runner import scene_record, scene_structure
+from cosim.platform.run.compile import scene_record, scene_structure
 from cosim.platform.scene import load_scene
 from cosim.platform.ports import platform_algorithm
 from test_coupling import oscillator
@@ -66,7 +66,7 @@ def test_at_order_0_the_references_arrive_at_the_same_communication_point():
     late = run(structure, plain, FixedStep(1e-3), 0.3, record)
     resolved = run(structure, dataclasses.replace(plain, feedthrough=True), FixedStep(1e-3), 0.3, record)
     from cosim.platform.core import Core
-    from cosim.platform.run.runner import scene_values
+    from cosim.platform.run.compile import scene_values
     from cosim.platform.scene.signals import sine_motion
     core = Core().use_start_values(scene_values(scene)[0])
     t = resolved["time"][1:]

@@ -12,7 +12,7 @@ import oracle
 from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RecordFull, RunFailed,
                           StepDoubling, SystemStructure)
 from cosim.engine.artifacts import ROOT
-from cosim.platform.run.runner import scene_record, scene_structure
+from cosim.platform.run.compile import scene_record, scene_structure
 from cosim.platform.scene import load_scene
 from cosim.platform.scene.parameter_sets import mechanics_start_values
 from cosim.platform.scene.signals import scene_trajectory

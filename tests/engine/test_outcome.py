@@ -8,12 +8,14 @@ import numpy as np
 import pytest
 
 from cosim.engine import Algorithm, FixedStep, NoStep
-from cosim.engine.command import run_ssp
+from cosim.engine.run import run_system
+from cosim.engine.ssp import read_ssp
 from cosim.engine.fmi import FmuInstance
 from cosim.engine.outcome import Report, execute
 from cosim.engine.ssp import write_ssp
 from cosim.engine.artifacts import ROOT
-from cosim.platform.run.runner import run_scene, scene_structure
+from cosim.platform.run.compile import scene_structure
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 from test_coupling import oscillator
 
@@ -55,7 +57,7 @@ def test_a_scene_and_its_ssp_are_reported_alike(tmp_path):
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 0.15})
     _, scene_report = run_scene(scene, plots=False, progress=False)
     path = write_ssp(scene_structure(scene), tmp_path / "meng.ssp")
-    _, ssp_report = run_ssp(path, None)
+    _, ssp_report = run_system(read_ssp(path), source=str(path))
     assert isinstance(scene_report, Report) and type(ssp_report) is Report
     for key in ("macro_steps", "rejected_steps", "step_control", "largest_energy_residual", "warnings", "failure"):
         assert getattr(scene_report, key) == getattr(ssp_report, key), key

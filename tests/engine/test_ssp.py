@@ -10,7 +10,7 @@ import pytest
 from lxml import etree
 
 from cosim.engine import Algorithm, Execution, FixedStep
-from cosim.engine.command import run_ssp
+from cosim.engine.run import run_system
 from cosim.engine.settings import to_strings
 from cosim.engine.ssp import SspError, read_ssp, validate, write_ssp
 from test_coupling import oscillator
@@ -48,7 +48,7 @@ def test_ssp_run_equals_the_system_run_bit_for_bit(archive, tmp_path):
         direct = execution.run(0.5)
     finally:
         execution.free()
-    result, report = run_ssp(path, tmp_path / "out")
+    result, report = run_system(read_ssp(path), out=tmp_path / "out", source=str(path))
     assert np.array_equal(result["mass.position"], direct["mass.position"])
     assert np.array_equal(result["coupling.force"], direct["coupling.force"])
     assert (tmp_path / "out" / "oscillator.csv").exists() and report.macro_steps == 500
@@ -126,13 +126,13 @@ def test_a_step_only_in_the_osp_annotation_is_the_step_taken_and_said(archive, t
            'xmlns:osp="http://opensimulationplatform.com/SSP/OSPAnnotations"><osp:FixedStepAlgorithm '
            'baseStepSize="2e-3"/></osp:Algorithm></ssc:Annotation></ssd:Annotations>')
     ssd = _without_our_annotation(path, tmp_path / "osp", osp)
-    _, report = run_ssp(ssd, None)
+    _, report = run_system(read_ssp(ssd), source=str(ssd))
     assert report.macro_steps == 250  # 0.5 s at 2 ms
     assert "macro step 0.002 s: the OSP annotation's FixedStepAlgorithm baseStepSize" in report.text()
     bare = _without_our_annotation(path, tmp_path / "bare")
-    _, report = run_ssp(bare, None)
+    _, report = run_system(read_ssp(bare), source=str(bare))
     assert report.macro_steps == 500 and "macro step 0.001 s: no step in the SSD" in report.text()
-    _, ours = run_ssp(path, None)
+    _, ours = run_system(read_ssp(path), source=str(path))
     assert "macro step" not in ours.text().split("\n", 2)[-1]  # our own annotation's step needs no word
 
 

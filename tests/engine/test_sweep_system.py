@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from cosim.engine import Algorithm, FixedStep
-from cosim.engine.command import run_structure
+from cosim.engine.run import run_system
 from cosim.engine.settings import to_strings
 from cosim.engine.ssp import read_ssp, write_ssp
 from cosim.engine.structure import with_parameters
@@ -30,7 +30,7 @@ def test_a_sweep_of_an_ssp_system_reports_what_each_run_gives(tmp_path):
             continue
         assert row["status"] == "ok", row["message"]
         alone = with_parameters(read_ssp(path), {"mass": {"mass": row["mass.mass"]}})
-        result, report = run_structure(alone, {"order": str(row["order"])}, progress=False)
+        result, report = run_system(alone, {"order": str(row["order"])})
         position = result["mass.position"]
         assert row["max.mass.position"] == position.max() and row["final.mass.position"] == position[-1]
         assert row["rms.mass.position"] == np.sqrt(np.mean(position ** 2))

@@ -19,7 +19,8 @@ from cosim.platform.scene.parameter_sets import mechanics_start_values
 from cosim.platform.scene.parameter_sets import load as load_parameter_set
 from cosim.platform.scene import Signal, Sine
 from cosim.platform.scene.signals import trajectory_parameters
-from cosim.platform.run.system import POSE, simulate
+from cosim.platform.ports import POSE
+from conftest import platform_run
 
 MOTOR = load_parameter_set("sumnu2015")["linear_motor"]
 
@@ -282,7 +283,7 @@ def test_sumnu_case_studies_with_linear_motors(case):
       III: x 2.2e-4 [1e-5], y 4.5e-4 [4e-4], z 2.8e-4 [1e-3], roll 2.5e-3 [1e-3], pitch 7.6e-4 [1e-3], yaw 6.7e-5 [1e-3]
     within a factor 1 to 30 of the thesis, whose PID constants are not published."""
     (values, reference), bounds = CASES[case]
-    r = simulate("linear", 4.0, 1e-3, values, trajectory_values=reference).result
+    r = platform_run("linear", 4.0, 1e-3, values, trajectory_values=reference).result
     error = np.array([np.abs(r[f"pose.{a}"] - r[f"pose_ref.{a}"]) for a in POSE]).T[r["time"] > 2.0].max(axis=0)
     assert np.all(error < 3e-3), error
     assert np.all(error < 30 * np.array(bounds) + 1e-6), error
@@ -304,7 +305,7 @@ def test_swapping_the_drive_changes_one_setting():
               "linear": (values, None, 3e-3)}
     reference = sines({"x": -1.5, "z": 1}, {"x": 0.01, "y": 0.02, "z": 0.02})
     for drive, (mechanics, legs, bound) in setups.items():
-        r = simulate(drive, 3.0, 1e-3, mechanics, trajectory_values=reference, leg_values=legs).result
+        r = platform_run(drive, 3.0, 1e-3, mechanics, trajectory_values=reference, leg_values=legs).result
         error = np.array([np.abs(r[f"pose.{a}"] - r[f"pose_ref.{a}"]) for a in POSE]).T[r["time"] > 1.5].max(axis=0)
         assert np.all(error < bound), (drive, error)
 

@@ -269,7 +269,7 @@ def test_a_scenes_motion_as_the_specification():
     same poses; it needs more than Meng's 665 mm stroke at every l_0 tried (the main job's
     out-of-stroke warnings), and a longer l_0 lifts the whole range."""
     from cosim.platform.design.scene_fit import scene_fit
-    from cosim.platform.run.runner import scene_values
+    from cosim.platform.run.compile import scene_values
     from cosim.platform.scene import load_scene
     from cosim.platform.scene.signals import reference_motion
     scene = load_scene("meng_eq35")

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from cosim.platform.scene.parameter_sets import mechanics_start_values
-from cosim.platform.run.runner import SceneFailed, run_scene
-from conftest import paper_scene
+from cosim.engine.outcome import RunStopped
+from cosim.platform.run.runner import run_scene
+from conftest import paper_scene, platform_run
 from cosim.platform.scene import Pulse
 from cosim.platform.scene.signals import scene_trajectory
 from cosim.platform.ports import POSE
-from cosim.platform.run.system import simulate
 
 BASE = paper_scene("meng_eq35", {"scene.duration": 3.0})
 NOMINAL_ERROR = 3.5e-3  # the scene's largest tracking error after 0.3 s, m or rad, with margin (measured 3.0e-3)
@@ -39,7 +39,7 @@ def test_a_tenth_of_the_inductance_on_the_l_stable_drive_solver_runs_at_the_macr
     here (the faster current loop's poles leave its stability region; the coupling monitor stops
     it), the L-stable method does not, and tracking is the nominal scene's."""
     faster = {**BASE.drive_parameters, "motor.inductance_d": 6.9e-4, "motor.inductance_q": 6.9e-4}
-    with pytest.raises(SceneFailed, match="diverged"):
+    with pytest.raises(RunStopped, match="diverged"):
         run_scene(BASE.changed({"drive.parameters": {**faster, "solver.step": 2e-4}}), advice=False)
     _, report = run_scene(BASE.changed({"drive.parameters": {**faster, "solver.method": 3, "solver.step": 1e-3}}))
     assert report.largest_error.max() < NOMINAL_ERROR
@@ -51,7 +51,7 @@ def test_ten_times_the_loop_gains_is_diagnosed_and_runs_at_the_suggested_step():
     gains = {"control.position_kp": 600.0, "control.position_ki": 3000.0, "control.speed_kp": 69.7,
              "control.speed_ki": 5805.0}
     scene = BASE.changed({"drive.parameters": {**BASE.drive_parameters, **gains}, "scene.duration": 2.0})
-    with pytest.raises(SceneFailed) as failed:
+    with pytest.raises(RunStopped) as failed:
         run_scene(scene)
     assert "the coupling diverged" in failed.value.report.failure and "a probe at 0.25 ms ran stable" in failed.value.report.failure
     assert failed.value.result["time"][-1] < 1.0
@@ -67,7 +67,7 @@ def test_the_workspace_edge_warns_and_the_hard_stop_stops():
     _, report = run_scene(scene)
     assert any("is outside the stroke [1.535, 2.2] m" in w for w in report.warnings)
     hard = scene.changed({"mechanics.parameters": {"limit.hard_stop": True}})
-    with pytest.raises(SceneFailed) as failed:
+    with pytest.raises(RunStopped) as failed:
         run_scene(hard)
     assert "outside the stroke [1.535, 2.2] m" in failed.value.report.failure
     assert "mechanics: fmi2DoStep failed at t = " in failed.value.report.failure
@@ -98,7 +98,7 @@ def test_ten_minutes_keep_their_energy_books():
     values = {**mechanics_start_values(scene.parameter_set, scene.mass_set)}
     accounts = ["energy.kinetic", "energy.potential", "energy.drive", "energy.transmission_loss",
                 "energy.friction_loss", "energy.load"]
-    outcome = simulate(scene.drive, scene.duration, scene.step, values, scene.drive_parameters,
+    outcome = platform_run(scene.drive, scene.duration, scene.step, values, scene.drive_parameters,
                        scene_trajectory(scene), accounts, order=scene.algorithm.order, algorithm=scene.algorithm.kind)
     rows, residuals = outcome.result, outcome.energy_residuals
     kinetic, potential, drive, transmission, friction, load = (rows[name] for name in accounts)

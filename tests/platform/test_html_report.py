@@ -84,10 +84,10 @@ def test_the_numbers_on_the_page_are_the_runs(page):
 
 
 def test_a_failed_run_says_where_and_why_it_stopped(tmp_path):
-    from cosim.platform.run.runner import SceneFailed
+    from cosim.engine.outcome import RunStopped
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0,
                                                            'mechanics.parameters."limit.hard_stop"': True})
-    with pytest.raises(SceneFailed):
+    with pytest.raises(RunStopped):
         run_scene(scene, tmp_path / "out")
     page = (tmp_path / "out" / "meng_eq35.html").read_text()
     assert '<div class="failure" data-name="failure"><h2>The run stopped</h2>' in page

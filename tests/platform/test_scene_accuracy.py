@@ -17,7 +17,8 @@ import pytest
 from cosim.platform.run.accuracy import (POSE_FROM, POSE_TOLERANCE, efforts, steady_bound, tolerance_ratio,
                                      window_errors, windows)
 from cosim.platform.ports import DRIVES, POSE, per_leg
-from cosim.platform.run.runner import run_scene, scene_values
+from cosim.platform.run.compile import scene_values
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene, shipped_scenes
 from cosim.platform.run.tuning import leg_plants
 

@@ -9,9 +9,10 @@ from scipy.io import loadmat
 
 from cosim.cli import main
 from cosim.engine.artifacts import ROOT, fmu_path
-from cosim.platform.run.runner import SceneFailed, run_scene
+from cosim.engine.outcome import RunStopped
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import SceneError, load_scene
-from cosim.platform.run.runner import scene_structure
+from cosim.platform.run.compile import scene_structure
 from cosim.platform.ports import DRIVES
 
 SCENES = sorted((ROOT / "scenes").glob("*.toml"))
@@ -131,7 +132,7 @@ def test_a_run_that_fails_names_the_fmu_and_keeps_its_results(tmp_path, capsys):
     assert saved["time"][-1] == pytest.approx(stopped, abs=1e-9)  # the last good communication point
     mat = loadmat(out / "scene.mat")
     assert mat["pose_z"].size == saved.size
-    with pytest.raises(SceneFailed) as failed:
+    with pytest.raises(RunStopped) as failed:
         run_scene(load_scene(scene_file))
     assert failed.value.report.failure.startswith("mechanics: fmi2DoStep failed at t = ")
 
@@ -157,8 +158,9 @@ def test_a_scene_table_drives_the_platform_like_the_signal_it_samples(tmp_path):
     # the table travels in the SSP archive: exported, its source deleted, the archive runs the same
     assert main(["export", str(path), "--ssp", str(tmp_path / "tabled.ssp")]) == 0
     (tmp_path / "heave.csv").unlink()
-    from cosim.engine.command import run_ssp
-    from_archive, _ = run_ssp(tmp_path / "tabled.ssp", None)
+    from cosim.engine.run import run_system
+    from cosim.engine.ssp import read_ssp
+    from_archive, _ = run_system(read_ssp(tmp_path / "tabled.ssp"), source=str(tmp_path / "tabled.ssp"))
     assert np.array_equal(from_archive["pose.z"], with_table["pose.z"])
 
 

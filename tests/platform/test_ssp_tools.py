@@ -161,7 +161,7 @@ def test_libcosim_runs_the_osp_configuration_like_our_master_to_round_off(tmp_pa
     """The Meng scene as OspSystemStructure.xml (python -m cosim export --osp), fixed step: the same
     agreement as the SSP run in libcosim."""
     from cosim.engine.osp import write_osp
-    from cosim.platform.run.runner import scene_structure
+    from cosim.platform.run.compile import scene_structure
     structure = scene_structure(paper_scene("meng_eq35"))  # the 1 ms numerics libcosim's fixed step compares at
     theirs = run_osp(write_osp(structure, tmp_path, power_bonds=False), STOP)
     execution = Execution(structure, Algorithm("jacobi", 0, None, 0), FixedStep(STEP),

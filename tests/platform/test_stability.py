@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from cosim.platform.scene.parameter_sets import mechanics_start_values
-from cosim.platform.run.runner import SceneFailed, run_scene
-from conftest import paper_scene
+from cosim.engine.outcome import RunStopped
+from cosim.platform.run.runner import run_scene
+from conftest import paper_scene, platform_run
 from cosim.platform.scene.signals import scene_trajectory
 from cosim.engine import RunFailed
-from cosim.platform.run.system import simulate
 
 STEPS = (0.25e-3, 0.5e-3, 1e-3, 1.5e-3, 2e-3)
 
@@ -28,7 +28,7 @@ def chatter(torque: np.ndarray) -> float:
 
 def run(scene, step: float, monitor: bool):
     values = {**mechanics_start_values(scene.parameter_set, scene.mass_set), **scene.mechanics_parameters}
-    return simulate(scene.drive, scene.duration, step, values, scene.drive_parameters, scene_trajectory(scene),
+    return platform_run(scene.drive, scene.duration, step, values, scene.drive_parameters, scene_trajectory(scene),
                     drive_outputs=["torque"], order=scene.algorithm.order, algorithm=scene.algorithm.kind,
                     divergence_ratio=0.05 if monitor else None, interface_jacobian=scene.interface_jacobian).result
 
@@ -93,7 +93,7 @@ def test_a_diverging_run_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
     and keeps the results up to there; at the suggested 0.25 ms it runs through."""
     scene = paper_scene("meng_eq35", {"scene.duration": 1.0, "load.pulses": [],
                                       "mechanics.parameters": {"effects.motor_inertia": False}})
-    with pytest.raises(SceneFailed) as failed:
+    with pytest.raises(RunStopped) as failed:
         run_scene(scene, out=tmp_path, plots=False)
     message = failed.value.report.failure
     assert "the coupling diverged" in message and "-> mechanics.leg[" in message and "a probe at 0.25 ms ran stable" in message and "try a step of 0.25 ms" in message
@@ -143,7 +143,7 @@ def test_under_the_interface_jacobian_the_mechanics_needs_rk4_at_2ms():
     numerics = {**INTERFACE_JACOBIAN_2MS, "scene.duration": 0.4}
     heun = load_scene("meng_eq35", numerics)
     assert heun.mechanics_parameters["solver.method"] == 5
-    with pytest.raises(SceneFailed, match="diverged"):
+    with pytest.raises(RunStopped, match="diverged"):
         run_scene(heun, plots=False)
     _, report = run_scene(load_scene("meng_eq35", {**numerics, 'mechanics.parameters."solver.method"': 1}), plots=False)
     assert report.macro_steps > 0

@@ -7,11 +7,13 @@ import numpy as np
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.platform.run.runner import run_scene, scene_record, scene_structure
+from cosim.platform.run.compile import scene_record, scene_structure
+from cosim.platform.run.runner import run_scene
 from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.ports import POSE
-from cosim.platform.run.system import run
+from cosim.engine import DivergenceMonitor
+from cosim.engine.outcome import execute
 
 
 def pose_difference(result, reference) -> float:
@@ -49,7 +51,8 @@ def test_energy_control_tightens_the_energy_error_with_its_tolerance(sumnu_scene
     totals, steps = [], []
     for rtol in (1e-2, 1e-3, 1e-4):
         scene = sumnu_scene.changed({"coupling.step_control": "energy", "coupling.rtol": rtol, "coupling.atol": rtol / 10})
-        outcome = run(scene_structure(scene), scene.algorithm, scene.control, scene.duration, scene_record(scene))
+        outcome = execute(scene_structure(scene), scene.algorithm, scene.control, scene.duration, *scene_record(scene),
+                          clock="mechanics", observers=[DivergenceMonitor()])
         totals.append(outcome.energy_residuals.sum())
         steps.append(len(outcome.steps))
     assert totals[0] > totals[1] > totals[2], totals

@@ -13,7 +13,8 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.scene.parameter_sets import mechanics_start_values
-from cosim.platform.run.runner import run_scene, scene_structure
+from cosim.platform.run.compile import scene_structure
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 
 SWAPPED = {"meng_eq35_linear": ("meng_eq35", "SWAPPED_MENG", "Meng on linear motors"),

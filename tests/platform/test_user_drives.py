@@ -23,10 +23,12 @@ import numpy as np
 import pytest
 
 from cosim.cli import main
-from cosim.engine.command import run_ssp
+from cosim.engine.run import run_system
+from cosim.engine.ssp import read_ssp
 from cosim.engine.ssp import write_ssp
 from cosim.platform.ports import LEGS
-from cosim.platform.run.runner import run_scene, scene_structure, scene_values
+from cosim.platform.run.compile import scene_structure, scene_values
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.run.tuning import leg_plants
 
@@ -154,7 +156,7 @@ def test_the_ssp_export_carries_the_users_fmu_and_runs_bit_for_bit(fmus, tmp_pat
     path = write_ssp(scene_structure(scene), tmp_path / "user.ssp")
     with zipfile.ZipFile(path) as archive:
         assert "resources/rotary_servo.fmu" in archive.namelist()
-    again, _ = run_ssp(path, None)
+    again, _ = run_system(read_ssp(path), source=str(path))
     assert again.dtype.names == result.dtype.names
     assert all(np.array_equal(again[n], result[n]) for n in result.dtype.names)
     # the engine reads the capability flags of any system's FMUs: no state, no step doubling

@@ -17,21 +17,26 @@ from cosim.platform.report import view3d
 from cosim.platform.scene.parameter_sets import mechanics_start_values, scene_mechanics
 from cosim.platform.core import Core
 from cosim.platform.ports import POSE
-from cosim.platform.run.runner import run_scene, scene_values
+from cosim.platform.run.compile import scene_values
+from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 from test_html_report import CHROMIUM, chromium
 
 
 @pytest.mark.parametrize("parameter_set", ["meng2010", "sumnu2015", "halder2013"])
 def test_every_layout_draws_the_platform_the_fmu_simulates(parameter_set):
-    """The drawn legs' lengths at random poses around the neutral one are the dynamics core's
-    (the FMU's own mapping): Meng's radii and spacings, Sumnu's and Halder's explicit joints."""
+    """The drawn legs (lower joint to the drawn upper joint) at random poses around the neutral
+    one are as long as the dynamics core's legs there (the FMU's own mapping; its lengths and the
+    drawn joints come from two of its functions): Meng's radii and spacings, Sumnu's and Halder's
+    explicit joints."""
     values = scene_mechanics(parameter_set) if parameter_set != "halder2013" else mechanics_start_values(parameter_set)
     geometry, core = view3d.Geometry.of(values), Core().use_start_values(values)
     rng = np.random.default_rng(3)
     poses = core.neutral_pose + rng.uniform(-1, 1, (20, 6)) * [0.05, 0.05, 0.05, 0.05, 0.05, 0.05]
-    drawn = np.linalg.norm(view3d.legs_at(geometry.lower, geometry.upper, poses) - geometry.lower, axis=2)
-    np.testing.assert_allclose(drawn, [core.leg_lengths(p) for p in poses], rtol=1e-12)
+    drawn = view3d.frames(geometry, np.arange(20.0), poses, None)
+    np.testing.assert_allclose(np.linalg.norm(drawn.top - geometry.lower, axis=2), [core.leg_lengths(p) for p in poses],
+                               rtol=1e-12)
+    np.testing.assert_allclose(drawn.length, [core.leg_lengths(p) for p in poses], rtol=1e-12)
 
 
 @pytest.fixture(scope="module")

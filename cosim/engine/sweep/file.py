@@ -8,6 +8,7 @@ reports its points give and makes the evaluator of a point.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import re
 from dataclasses import dataclass, field
@@ -16,7 +17,8 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..schema import REQUIRED, Anything, Choice, Document, Flag, Free, Key, ListOf, Number, Row, Schema, Table, Text, read
+from ..schema import Document, Key, Schema, Table, read
+from ..values import REQUIRED, Anything, Choice, Flag, Free, ListOf, Number, Row, Text
 from .points import Axis, SweepError, column_name, grid, latin_hypercube, zipped
 from .table import STATISTICS
 
@@ -99,6 +101,13 @@ class Sweep:
     def columns(self) -> list[str]:
         return self.evaluate.columns()
 
+    def run(self, out: Path, workers: int | None = None, scheduler: str | None = None, progress: bool = True):
+        """Runs every point not yet in `out` (cosim.engine.sweep.run_sweep) and returns the outcome."""
+        from .dask_run import run_sweep
+        return run_sweep(self.name, self.points, self.evaluate, self.columns, Path(out), self.signature,
+                         workers=workers, scheduler=scheduler, points_per_task=self.points_per_task,
+                         retries=self.retries, progress=progress)
+
 
 def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
     """Reads and checks a sweep file whose [sweep] names one of `targets` (kind -> Target: the SSP
@@ -135,29 +144,17 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
             raise doc.fail("sweep.sample", str(error), sample) from None
 
     target_kind = targets[kind]
-    wanted = doc.value("report", "values", list(target_kind.default_reports))
-    known = [k for k in target_kind.reports if k not in target_kind.internal]
-    for name in wanted:
-        if name not in known:
-            raise doc.fail("report.values", f"has {name!r}: known reports are {', '.join(known)}", wanted)
-    outputs = doc.value("report", "outputs", {})
-    for column, stats in outputs.items():
-        if not isinstance(stats, list) or not stats or not all(s in STATISTICS for s in stats):
-            raise doc.fail("report.outputs", f"has {column!r} = {stats!r}: statistics are {', '.join(STATISTICS)}")
-    output_spec = tuple((c, tuple(s)) for c, s in outputs.items())
-
+    wanted, outputs = _reports(doc, target_kind)
     duration, fixed = doc.value("sweep", "duration"), doc.value("sweep", "set", {})
-    evaluate = target_kind.point(target, tuple(wanted), output_spec, float(duration) if duration is not None else None,
-                                 tuple(fixed.items()))
+    evaluate = target_kind.point(target, tuple(wanted), tuple((c, tuple(s)) for c, s in outputs.items()),
+                                 float(duration) if duration is not None else None, tuple(fixed.items()))
     _check_points(doc, evaluate, axes, points, target_kind.errors)
     recorded = evaluate.recorded()
     for column in outputs:
         if column not in recorded:
-            import difflib
             near = difflib.get_close_matches(column, recorded, 1)
             raise doc.fail("report.outputs", f"names {column!r}, which the run does not record"
                            + (f" (did you mean {near[0]!r}?)" if near else f" (recorded: {', '.join(recorded[:12])}, ...)"))
-
     plot = doc.table("plot") or None
     columns = {column_name(n) for n in names} | set(evaluate.columns())
     for key in ("report", "x", "y"):
@@ -170,6 +167,21 @@ def load_sweep(path: str | Path, targets: Mapping[str, Target]) -> Sweep:
                         evaluate.columns())).encode())
     return Sweep(path, path.stem, evaluate, axes, points, digest.hexdigest(), doc.value("sweep", "points_per_task"),
                  doc.value("sweep", "retries"), plot, dict(target_kind.units))
+
+
+def _reports(doc: Document, target: Target) -> tuple[list[str], dict[str, list[str]]]:
+    """[report]: the target's reports by name (its default ones where none are named) and the
+    statistics of recorded columns."""
+    wanted = doc.value("report", "values", list(target.default_reports))
+    known = [k for k in target.reports if k not in target.internal]
+    for name in wanted:
+        if name not in known:
+            raise doc.fail("report.values", f"has {name!r}: known reports are {', '.join(known)}", wanted)
+    outputs = doc.value("report", "outputs", {})
+    for column, stats in outputs.items():
+        if not isinstance(stats, list) or not stats or not all(s in STATISTICS for s in stats):
+            raise doc.fail("report.outputs", f"has {column!r} = {stats!r}: statistics are {', '.join(STATISTICS)}")
+    return wanted, outputs
 
 
 def _axis(doc: Document, k: int, sample: str) -> Axis:

@@ -1,5 +1,6 @@
 """The SSP target of a sweep: a point of any SSP system, its names without a dot the engine's run
-settings and `component.parameter` a parameter value, run through the one run path."""
+settings and `component.parameter` a parameter value, run through the one run path
+(cosim.engine.run.run_system)."""
 
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ class SystemPoint:
 
     def recorded(self) -> list[str]:
         """The columns a run records (what `outputs` may name)."""
-        from ..command import recording
+        from ..run import recording
         return ["time", *recording(self.structure())[1]]
 
     def files(self, points=()) -> list[Path]:
@@ -69,13 +70,13 @@ class SystemPoint:
         return with_parameters(structure, parameters)
 
     def __call__(self, values: Mapping[str, Value]) -> dict[str, Value]:
-        from ..command import run_structure
         from ..outcome import RunStopped
+        from ..run import run_system
         values = {**dict(self.fixed), **values}
         structure = self._with(self.structure(), values)
         try:
-            result, report = run_structure(structure, self._settings(values), self.stop_time, progress=False,
-                                           advice=False)
+            result, report = run_system(structure, self._settings(values), self.stop_time, source=self.path,
+                                        advice=False)
             status, message = "ok", ""
         except RunStopped as failed:
             result, report = failed.result, failed.report

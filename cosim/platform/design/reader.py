@@ -185,7 +185,7 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> R
     duration (at least 4); the rates and accelerations are the samples' second-order differences.
     Raises StudyError with the reason (the caller adds the file and line)."""
     from ..core import neutral_pose
-    from ..run.runner import scene_values
+    from ..run.compile import scene_values
     from ..scene import SceneError, Signal, load_scene, shipped
     from ..scene.signals import play, scene_trajectory, trajectory_parameters
     given = study_path.parent / source

@@ -5,7 +5,8 @@ key with its type, range, unit, default and what it does. What depends on the pl
 from __future__ import annotations
 
 from ...engine.errors import InputError
-from ...engine.schema import REQUIRED, Choice, Free, Key, Number, Row, Schema, Table, Text
+from ...engine.schema import Key, Schema, Table
+from ...engine.values import REQUIRED, Choice, Free, Number, Row, Text
 from .study import DOFS, FAMILIES, ROTATIONS
 
 

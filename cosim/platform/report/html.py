@@ -96,22 +96,6 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
     LogMessage) of everything the FMUs logged; `mechanics_values`: the platform's, for the 3D view)."""
     import plotly.io as pio
     from plotly.offline import get_plotlyjs
-    summary = [
-        ("macro steps", f"{report.macro_steps}", repr(report.macro_steps)),
-        ("rejected steps", f"{report.rejected_steps}", repr(report.rejected_steps)),
-        ("step control", report.step_control, report.step_control),
-        ("simulated [s]", f"{report.simulated:g}", repr(report.simulated)),
-        ("wall time [s]", f"{report.wall:.3f}", repr(report.wall)),
-        ("real-time factor", f"{report.real_time_factor:.1f}", repr(report.real_time_factor)),
-        ("master share of wall time", f"{100 * report.master_share:.0f} %", repr(report.master_share)),
-        ("largest energy residual of a bond in one step [J]", f"{report.largest_energy_residual:.3e}",
-         repr(report.largest_energy_residual)),
-    ]
-    summary += [(f"largest tracking error {a} [{'m' if a in 'xyz' else 'rad'}]", f"{e:.3e}", repr(float(e)))
-                for a, e in zip(POSE, report.largest_error)]
-    summary += [(f"against the converged twin, {name}: pose [m, rad] / efforts / of their change",
-                 f"{pose:.1e} / {effort:.1e} / {100 * relative:.2f} %", repr(relative))
-                for name, pose, effort, relative in report.windows]
     bonds = [(f"bond {name} [J]", f"{value:.3e}", repr(value)) for name, value in bond_residuals.items()]
     warnings = [(m.time, instance, m.text) for instance, m in messages if m.status in ("warning", "error", "fatal")]
     figures = _figures(result, units(scene.drive))
@@ -120,28 +104,7 @@ def write_report(path: Path, scene, result: np.ndarray, report, messages, bond_r
                       f'</section>' for title, fig in figures)
     failure = (f'<div class="failure" data-name="failure"><h2>The run stopped</h2><p>{html.escape(report.failure)}</p>'
                f'</div>') if report.failure else ""
-    own: dict[str, list[str]] = {}  # a user's drive FMU: the legs it drives
-    for leg in range(1, 7):
-        if scene.leg_fmu(leg):
-            own.setdefault(scene.leg_fmu(leg).name, []).append(str(leg))
-    drive = scene.drive + "".join(f", {name} on legs {' '.join(legs)}" for name, legs in own.items())
-    scene_rows = [("scene file", str(scene.path), str(scene.path)), ("drive", drive, scene.drive),
-                  ("parameter set", scene.parameter_set, scene.parameter_set),
-                  ("coupling", f"{scene.algorithm.kind}, order {scene.algorithm.order}"
-                   + (", the drives' interface Jacobians" if scene.interface_jacobian else ""),
-                   f"{scene.algorithm.kind} {scene.algorithm.order}"),
-                  ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
-                  ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
-    view = ""
-    if mechanics_values is not None and len(result) > 1:
-        from . import view3d
-        geometry, frames = view3d.run_frames(mechanics_values, result, scene.pulses)
-        out = frames.out_of_stroke.any(axis=0)
-        view = (f'<h2>The platform ({len(frames.time)} frames; play, drag the slider, or click a plot to go to its '
-                f'time)</h2><p>Legs coloured by the stroke they use, red where they leave it'
-                f'{" (legs " + ", ".join(str(i + 1) for i in np.flatnonzero(out)) + ")" if out.any() else ""}, dashed '
-                f'where a joint passes its angle limit; the reference pose in grey.</p>'
-                f'<section class="view">{view3d.html_div(view3d.figure(geometry, frames, report.scene))}</section>')
+    view = _view(scene, result, report, mechanics_values) if mechanics_values is not None and len(result) > 1 else ""
     warning_rows = "".join(f"<tr><td>{t:.6g}</td><td>{html.escape(i)}</td><td>{html.escape(text)}</td></tr>"
                            for t, i, text in warnings)
     page = f"""<!DOCTYPE html>
@@ -154,8 +117,8 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 <h1>{html.escape(report.scene)}</h1>
 {failure}
 {view}
-<h2>Scene</h2>{_table(scene_rows)}
-<h2>Run</h2>{_table(summary)}
+<h2>Scene</h2>{_table(_scene_rows(scene))}
+<h2>Run</h2>{_table(_summary_rows(report))}
 <h2>Power bonds: largest energy residual in one step</h2>{_table(bonds)}
 <h2>Warnings and errors from the FMUs ({len(warnings)})</h2>
 <table class="warnings"><tr><th>step start [s]</th><th>instance</th><th>message</th></tr>{warning_rows}</table>
@@ -167,3 +130,52 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
     return path
+
+
+def _summary_rows(report) -> list[tuple[str, str, str]]:
+    """The run's numbers: steps, times, energy residual, tracking error, the twin's windows."""
+    rows = [
+        ("macro steps", f"{report.macro_steps}", repr(report.macro_steps)),
+        ("rejected steps", f"{report.rejected_steps}", repr(report.rejected_steps)),
+        ("step control", report.step_control, report.step_control),
+        ("simulated [s]", f"{report.simulated:g}", repr(report.simulated)),
+        ("wall time [s]", f"{report.wall:.3f}", repr(report.wall)),
+        ("real-time factor", f"{report.real_time_factor:.1f}", repr(report.real_time_factor)),
+        ("master share of wall time", f"{100 * report.master_share:.0f} %", repr(report.master_share)),
+        ("largest energy residual of a bond in one step [J]", f"{report.largest_energy_residual:.3e}",
+         repr(report.largest_energy_residual)),
+    ]
+    rows += [(f"largest tracking error {a} [{'m' if a in 'xyz' else 'rad'}]", f"{e:.3e}", repr(float(e)))
+             for a, e in zip(POSE, report.largest_error)]
+    rows += [(f"against the converged twin, {name}: pose [m, rad] / efforts / of their change",
+              f"{pose:.1e} / {effort:.1e} / {100 * relative:.2f} %", repr(relative))
+             for name, pose, effort, relative in report.windows]
+    return rows
+
+
+def _scene_rows(scene) -> list[tuple[str, str, str]]:
+    """The scene: its file, drives (a user's FMU on its legs), platform, coupling, step, duration."""
+    own: dict[str, list[str]] = {}  # a user's drive FMU: the legs it drives
+    for leg in range(1, 7):
+        if scene.leg_fmu(leg):
+            own.setdefault(scene.leg_fmu(leg).name, []).append(str(leg))
+    drive = scene.drive + "".join(f", {name} on legs {' '.join(legs)}" for name, legs in own.items())
+    return [("scene file", str(scene.path), str(scene.path)), ("drive", drive, scene.drive),
+            ("parameter set", scene.parameter_set, scene.parameter_set),
+            ("coupling", f"{scene.algorithm.kind}, order {scene.algorithm.order}"
+             + (", the drives' interface Jacobians" if scene.interface_jacobian else ""),
+             f"{scene.algorithm.kind} {scene.algorithm.order}"),
+            ("macro step [s]", f"{scene.step:g}", repr(scene.step)),
+            ("duration [s]", f"{scene.duration:g}", repr(scene.duration))]
+
+
+def _view(scene, result: np.ndarray, report, mechanics_values: dict) -> str:
+    """The platform in 3D over the run, with what its legs did."""
+    from . import view3d
+    geometry, frames = view3d.run_frames(mechanics_values, result, scene.pulses)
+    out = frames.out_of_stroke.any(axis=0)
+    return (f'<h2>The platform ({len(frames.time)} frames; play, drag the slider, or click a plot to go to its '
+            f'time)</h2><p>Legs coloured by the stroke they use, red where they leave it'
+            f'{" (legs " + ", ".join(str(i + 1) for i in np.flatnonzero(out)) + ")" if out.any() else ""}, dashed '
+            f'where a joint passes its angle limit; the reference pose in grey.</p>'
+            f'<section class="view">{view3d.html_div(view3d.figure(geometry, frames, report.scene))}</section>')

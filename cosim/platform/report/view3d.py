@@ -19,8 +19,9 @@ from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from ..core import build, mechanics_value
+from ..core import Core, mechanics_value
 from ..ports import POSE
 from ..scene.signals import reference_motion
 
@@ -32,9 +33,11 @@ GHOST, BASE, PLATFORM, LOAD = "#9a9a9a", "#34495e", "#2e86c1", "#c0392b"
 
 @dataclass(frozen=True)
 class Geometry:
+    """The platform drawn: the dynamics core's platform (the mechanics FMU's own mapping of the
+    values), its joints, stroke and joint-angle limit, and the parts that swing about each lower
+    joint."""
+    core: Core
     lower: np.ndarray         # 6 x 3, base frame [m]
-    upper: np.ndarray         # 6 x 3, platform frame [m]
-    neutral_axis: np.ndarray  # 6 x 3, each leg's direction at the neutral pose
     stroke: tuple[float, float]
     joint_limit: float        # [rad]
     housing: float = 0.0      # length of the part that swings about the lower joint (twice its centre of mass) [m]
@@ -43,30 +46,14 @@ class Geometry:
     @classmethod
     def of(cls, values: Mapping[str, object]) -> "Geometry":
         """The platform of these mechanics values (over the FMU's defaults), as the FMU builds it."""
-        p = build(values)
-        lower, upper = np.array(p.lower_joint[:]).reshape(6, 3), np.array(p.upper_joint[:]).reshape(6, 3)
-        neutral = legs_at(lower, upper, np.array(p.neutral_pose[:])[None, :])[0]
-        axis = neutral - lower
+        core = Core(values=values)
+        p = core.p
         carries_motor = bool(p.motor_inertia_on) and p.motor_mass > 0
-        return cls(lower, upper, axis / np.linalg.norm(axis, axis=1, keepdims=True),
+        return cls(core, np.array(p.lower_joint[:]).reshape(6, 3),
                    (float(mechanics_value(values, "limit.leg_length_min")),
                     float(mechanics_value(values, "limit.leg_length_max"))),
                    float(mechanics_value(values, "limit.joint_angle")),
                    2 * p.rotating_com if p.rotating_mass > 0 else 0.0, p.motor_com if carries_motor else None)
-
-
-def rotations(poses: np.ndarray) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) of each pose (n x 6) as n x 3 x 3 (the mechanics' convention)."""
-    roll, pitch, yaw = poses[:, 3], poses[:, 4], poses[:, 5]
-    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    return np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
-                     np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
-                     np.stack([-sp, cp * sr, cp * cr], -1)], -2)
-
-
-def legs_at(lower: np.ndarray, upper: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """The upper joints in the base frame (n x 6 x 3) for poses (n x 6): t + R a_i."""
-    return poses[:, None, :3] + np.einsum("nij,kj->nki", rotations(poses), upper)
 
 
 @dataclass
@@ -85,17 +72,15 @@ class Frames:
 
 def frames(geometry: Geometry, time: np.ndarray, pose: np.ndarray, pose_ref: np.ndarray | None,
            force: np.ndarray | None = None) -> Frames:
-    top = legs_at(geometry.lower, geometry.upper, pose)
-    legs = top - geometry.lower
-    length = np.linalg.norm(legs, axis=2)
+    """The frames at these poses (n x 6): the upper joints, the legs' lengths and both joints'
+    tilts from the dynamics core (the same kinematics the mechanics FMU integrates)."""
+    kinematics = geometry.core.pose_kinematics(pose)
+    length = kinematics["length"]
     low, high = geometry.stroke
-    axis = legs / length[..., None]
-    lower_angle = np.arccos(np.clip(np.einsum("nki,ki->nk", axis, geometry.neutral_axis), -1, 1))
-    in_platform = np.einsum("nji,nkj->nki", rotations(pose), axis)  # R' n: the leg seen from the platform
-    upper_angle = np.arccos(np.clip(np.einsum("nki,ki->nk", in_platform, geometry.neutral_axis), -1, 1))
-    return Frames(time, top, None if pose_ref is None else legs_at(geometry.lower, geometry.upper, pose_ref), length,
+    return Frames(time, geometry.core.upper_joints_at(pose),
+                  None if pose_ref is None else geometry.core.upper_joints_at(pose_ref), length,
                   (length - low) / (high - low), (length < low) | (length > high),
-                  np.maximum(lower_angle, upper_angle) > geometry.joint_limit,
+                  np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]) > geometry.joint_limit,
                   np.zeros((len(time), 3)) if force is None else force)
 
 
@@ -212,7 +197,7 @@ def pulse_forces(pulses: Sequence, time: np.ndarray, pose: np.ndarray) -> np.nda
     """The force of the load pulses acting at each time, base frame (a platform-frame pulse turned
     by the pose's orientation)."""
     force = np.zeros((len(time), 3))
-    turn = rotations(pose)
+    turn = Rotation.from_euler("ZYX", pose[:, [5, 4, 3]])  # R = Rz(yaw) Ry(pitch) Rx(roll), as the mechanics
     for p in pulses:
         if not p.component.startswith("force."):
             continue
@@ -220,7 +205,7 @@ def pulse_forces(pulses: Sequence, time: np.ndarray, pose: np.ndarray) -> np.nda
         acting = (time >= p.start) & (time <= p.end)
         local = np.zeros((len(time), 3))
         local[:, axis] = p.value * acting
-        force += np.einsum("nij,nj->ni", turn, local) if p.frame == "platform" else local
+        force += turn.apply(local) if p.frame == "platform" else local
     return force
 
 

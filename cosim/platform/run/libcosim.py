@@ -17,7 +17,7 @@ from fmpy import read_model_description
 
 from ...engine import EnergyControl
 from ..ports import POSE
-from .runner import scene_structure
+from .compile import scene_structure
 from ..scene import Scene
 
 
@@ -42,10 +42,10 @@ def run_in_libcosim(scene: Scene, duration: float | None = None, checkpoints: np
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
 
     log_output_level(CosimLogLevel.ERROR)
     algorithm = None
+    structure = scene_structure(scene)
     if ecco is None:
         execution = CosimExecution.from_step_size(step_size=int(round(scene.step * 1e9)))
     else:
@@ -56,26 +56,7 @@ def run_in_libcosim(scene: Scene, duration: float | None = None, checkpoints: np
         execution = CosimExecution.from_algorithm(algorithm)
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
-
-    structure = scene_structure(scene)
-    instances: dict[str, tuple[int, dict]] = {}
-    for component in structure.components:
-        variables = {v.name: v for v in read_model_description(str(component.fmu)).modelVariables}
-        index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(component.fmu), instance_name=component.name))
-        instances[component.name] = (index, variables)
-        for name, value in component.parameters.items():
-            v = variables[name]
-            setter, cast = {"Real": (execution.real_initial_value, float),
-                            "Boolean": (execution.boolean_initial_value, bool),
-                            "String": (execution.string_initial_value, str)}.get(
-                v.type, (execution.integer_initial_value, int))
-            if not setter(index, v.valueReference, cast(value)):
-                raise RuntimeError(f"libcosim: cannot set {component.name}.{name} = {value!r}")
-    for c in structure.connections:
-        (source, outputs), (target, inputs) = instances[c.source[0]], instances[c.target[0]]
-        if not execution.connect_real_variables(source, outputs[c.source[1]].valueReference, target,
-                                                inputs[c.target[1]].valueReference) == 0:
-            raise RuntimeError(f"libcosim: cannot connect {c}")
+    instances = _wired(execution, structure)
     if algorithm is not None:
         for bond in structure.bonds:  # effort source -> flow side, as libcosim's power bond wants it
             (effort_side, a_vars), (flow_side, b_vars) = instances[bond.effort.source[0]], instances[bond.flow.source[0]]
@@ -98,3 +79,28 @@ def run_in_libcosim(scene: Scene, duration: float | None = None, checkpoints: np
         poses.append(final(mechanics, [f"pose.{a}" for a in POSE]))
     return LibcosimRun(wall, poses[-1], final(trajectory, [f"pose_ref.{a}" for a in POSE]),
                        np.array(stops), np.array(poses))
+
+
+def _wired(execution, structure) -> dict[str, tuple[int, dict]]:
+    """The system's components added to the libcosim execution with their parameter values, and its
+    connections made; per component its slave index and its variables by name."""
+    from libcosimpy.CosimSlave import CosimLocalSlave
+    instances: dict[str, tuple[int, dict]] = {}
+    for component in structure.components:
+        variables = {v.name: v for v in read_model_description(str(component.fmu)).modelVariables}
+        index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(component.fmu), instance_name=component.name))
+        instances[component.name] = (index, variables)
+        for name, value in component.parameters.items():
+            v = variables[name]
+            setter, cast = {"Real": (execution.real_initial_value, float),
+                            "Boolean": (execution.boolean_initial_value, bool),
+                            "String": (execution.string_initial_value, str)}.get(
+                v.type, (execution.integer_initial_value, int))
+            if not setter(index, v.valueReference, cast(value)):
+                raise RuntimeError(f"libcosim: cannot set {component.name}.{name} = {value!r}")
+    for c in structure.connections:
+        (source, outputs), (target, inputs) = instances[c.source[0]], instances[c.target[0]]
+        if not execution.connect_real_variables(source, outputs[c.source[1]].valueReference, target,
+                                                inputs[c.target[1]].valueReference) == 0:
+            raise RuntimeError(f"libcosim: cannot connect {c}")
+    return instances

@@ -85,7 +85,7 @@ class ScenePoint:
 
     def recorded(self) -> list[str]:
         """The columns a run of the scene records (what `outputs` may name)."""
-        from .runner import scene_record
+        from .compile import scene_record
         return ["time", *scene_record(self.scene({}))[1]]
 
     def scene(self, values: Mapping[str, Any]):
@@ -107,7 +107,8 @@ class ScenePoint:
         FMUs' modelDescriptions (nothing is instantiated)."""
         from ...engine import ParameterError
         from ...engine.checks import check_parameters
-        from .runner import scene_error, scene_structure
+        from .compile import scene_structure
+        from .errors import scene_error
         scene = self.scene(values)
         try:
             check_parameters(scene_structure(scene))
@@ -115,12 +116,13 @@ class ScenePoint:
             raise scene_error(scene, error) from None
 
     def __call__(self, values: Mapping[str, Any]) -> dict[str, Any]:
-        from .runner import SceneFailed, run_scene
+        from ...engine.outcome import RunStopped
+        from .runner import run_scene
         scene = self.scene(values)
         try:
             result, report = run_scene(scene, plots=False, progress=False, advice=False)
             status, message = "ok", ""
-        except SceneFailed as failed:
+        except RunStopped as failed:
             result, report = failed.result, failed.report
             status, message = ("diverged" if report.diverged else "failed"), report.failure or ""
         effort = DRIVES[scene.drive].outputs[0]
@@ -164,7 +166,7 @@ class ScenePoint:
                     worst = max(found, key=lambda e: e.relative)
                     row.update(window_error=worst.relative, window_error_at=worst.window)
                 else:
-                    from .runner import scene_values
+                    from .compile import scene_values
                     from .tuning import leg_plants
                     bound = steady_bound(scene.drive, [p.static_force for p in leg_plants(scene_values(scene)[0])])
                     row.update(zip(("tolerance_ratio", "tolerance_ratio_at"), tolerance_ratio(found, bound)))

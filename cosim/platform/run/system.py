@@ -14,10 +14,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
-from ...engine import (Algorithm, Bond, Component, Connection, DivergenceMonitor, Experiment, Observer, RunFailed,
-                      StepControl, SystemStructure, fmu_path)
-from ...engine.outcome import Outcome, execute
-from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH, drive_names, platform_algorithm
+from ...engine import Bond, Component, Connection, Experiment, SystemStructure, fmu_path
+from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH, drive_names
 
 
 def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None = None,
@@ -81,33 +79,3 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
     names = [*[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *mechanics_outputs,
              *[f"{n}[{i}]" for n in drive_outputs for i in LEGS], *[f"{effort}_applied[{i}]" for i in LEGS if applied]]
     return record, names
-
-
-def run(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
-        record: tuple[list[tuple[str, str]], list[str]], divergence_ratio: float | None = 0.05,
-        observers: Sequence[Observer] = (), advice: bool = False) -> Outcome:
-    """Runs the platform system through the engine's one run path (time of the mechanics); returns
-    the Outcome. A fixed-step run is watched by a divergence monitor (threshold divergence_ratio;
-    None: off). Raises RunFailed (its outcome with the partial results) when an FMU fails or the
-    coupling diverges."""
-    monitor = [DivergenceMonitor(ratio=divergence_ratio)] if divergence_ratio else []
-    outcome = execute(structure, algorithm, control, stop_time, record[0], record[1], clock="mechanics",
-                      observers=[*monitor, *observers], advice=advice)
-    if outcome.failure is not None:
-        raise RunFailed(outcome.failure.error, outcome.result, outcome)
-    return outcome
-
-
-def simulate(drive: str, stop_time: float, step: float, mechanics_values: Mapping[str, object] | None = None,
-             drive_values: Mapping[str, object] | None = None,
-             trajectory_values: Mapping[str, object] | None = None, mechanics_outputs: Sequence[str] = (),
-             drive_outputs: Sequence[str] = (), order: int = 1, algorithm: str = "gauss-seidel",
-             divergence_ratio: float | None = 0.05, leg_values: Sequence[Mapping[str, object]] | None = None,
-             interface_jacobian: bool = False) -> Outcome:
-    """A platform run at a fixed step in one call (for studies and tests): the pose and reference
-    and the chosen outputs recorded. leg_values: per drive, on top of drive_values."""
-    from ...engine import FixedStep
-    structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,
-                                   interface_jacobian=interface_jacobian)
-    return run(structure, platform_algorithm(drive, algorithm, order), FixedStep(step), stop_time,
-               columns(drive, mechanics_outputs, drive_outputs), divergence_ratio)

@@ -6,8 +6,8 @@ checks (cosim.platform.scene.reader)."""
 from __future__ import annotations
 
 from ...engine.errors import InputError
-from ...engine.schema import (REQUIRED, Choice, Either, Flag, Free, Items, Key, ListOf, Number, Schema, Table,
-                              Text)
+from ...engine.schema import Key, Schema, Table
+from ...engine.values import REQUIRED, Choice, Either, Flag, Free, Items, ListOf, Number, Text
 from ...engine.settings import COUPLING_KEYS
 from ..ports import DRIVES, LEGS, POSE
 

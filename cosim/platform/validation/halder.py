@@ -30,10 +30,12 @@ from ..scene.parameter_sets import load, mechanics_start_values
 from ..core import Core
 from ..scene import Pulse, Ramp, Signal, Step
 from ..scene.signals import trajectory_parameters
-from ...engine import FixedStep, RunFailed
+from ...engine import FixedStep
+from ...engine.outcome import RunStopped
+from ...engine.run import Plan, run
 from ..ports import POSE
 from ..ports import platform_algorithm
-from ..run.system import columns, platform_structure, run
+from ..run.system import columns, platform_structure
 from ..report.rows import Row
 
 STEP = 1e-3
@@ -89,7 +91,7 @@ def feedforward(target: np.ndarray) -> np.ndarray:
 def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: float = GAIN_SCALE,
              angle: float | None = None, step: float = STEP) -> np.ndarray:
     """Results (time, pose_ref.*, pose.*) for one demand and strategy (angle: another basic angle,
-    for the stability search). Raises RunFailed if the platform leaves its workspace."""
+    for the stability search). Raises RunStopped if the platform leaves its workspace."""
     c = load("halder2013")
     values = mechanics_start_values("halder2013")
     neutral = np.array([values[f"geometry.neutral.{a}"] for a in POSE])
@@ -104,7 +106,8 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
     legs = [{"force_ff": float(f)} for f in feedforward(target)]
     signals = trajectory_parameters(trajectory, [Pulse("force.z", weight, 0.0, 1e9)])
     structure = platform_structure("linear", values, drive, signals, leg_values=legs)
-    return run(structure, platform_algorithm("linear"), FixedStep(step), duration, columns("linear")).result
+    return run(Plan(structure, platform_algorithm("linear"), FixedStep(step), duration, *columns("linear"),
+                    clock="mechanics"), advice=False)[0]
 
 
 def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:
@@ -113,7 +116,7 @@ def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:
     for scale in gain_scales:
         try:
             rows = run_case(ROLL, 1, duration=4.0, gain_scale=scale, angle=np.radians(1.0))
-        except RunFailed:
+        except RunStopped:
             continue
         error, t = np.abs(rows["pose.roll"] - rows["pose_ref.roll"]), rows["time"]
         late, later = error[(t > 3.0) & (t <= 3.5)].max(), error[t > 3.5].max()

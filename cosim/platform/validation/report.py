@@ -29,16 +29,9 @@ def _section(title: str, text: str, rows, figures: list[str] = ()) -> str:
     return "\n".join(out) + "\n"
 
 
-def build(out: Path) -> Path:
-    figures = out / "figures"
-    figures.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
-    parts = [INTRO]
-    progress = TaskProgress("validate", 8)
-
+def _meng_tracking(figures: Path) -> str:
     rows, data = meng.tracking(figures)
-    progress.advance("Meng Figs 7-8")
-    parts.append(_section(
+    return _section(
         "Meng et al. 2010: Figs 7 and 8 (Eq 35 with the impact of Eq 36)",
         f"""Scene `scenes/meng_eq35.toml`: six PMSM drives (averaged inverter), 1 ms Gauss-Seidel coupling of
 order 1, 10 s. {data['report'].text().splitlines()[0]}. The paper shows Fig 7 and 8 as plots; our
@@ -47,11 +40,12 @@ torque shocks are measured against the torques the inverse model needs along the
 impact's effect against the same run without the impact. The paper's text says the impact lasts
 2.5-2.7 s, its Eq 36 says 2.5-2.52 s: we follow the equation. Eq 35 takes legs past the 2.2 m
 stroke for moments (the paper's own motion): the mechanics warns and goes on.""",
-        rows, ["meng_eq35_tracking.png", "meng_eq35_drives.png"]))
+        rows, ["meng_eq35_tracking.png", "meng_eq35_drives.png"])
 
+
+def _meng_bandwidths(figures: Path) -> str:
     rows, data = meng.bandwidths(figures)
-    progress.advance("Meng Fig 6 bandwidths")
-    parts.append(_section(
+    return _section(
         "Meng et al. 2010: Fig 6, closed-loop bandwidth of each DOF",
         """The paper linearises its Simulink model ('linear analysis' in Matlab). We simulate instead: per DOF
 and frequency, a 1 mm (1 mrad) sine about the neutral pose through the whole co-simulation (drives
@@ -60,17 +54,18 @@ response fitted over whole periods after 0.4 s; frequencies 1-40 Hz, the couplin
 1/40 of the period. Five of six DOFs land within 0.3 Hz of the paper's band. Yaw is 11.6 Hz against
 the paper's 14-15 Hz: in our model yaw moves the legs' motor-side inertia as much as roll and
 pitch do (the legs are inclined about 45 degrees); the paper gives no reason for yaw to be faster.""",
-        rows, ["meng_fig6_bode.png"]))
+        rows, ["meng_fig6_bode.png"])
 
+
+def _meng_table_5(figures: Path) -> str:
     rows, data = meng.table_5()
-    progress.advance("Meng Table 5")
     arrays = meng.surge_rows(data["entries"])
     mean_gap = {reading: float(np.abs(arrays[("inverse", reading)] - arrays["paper"]).mean())
                 for reading in ("peak", "peak-to-peak")}
     loop_gap = float(np.abs(arrays[("closed loop", "peak")] - arrays[("inverse", "peak")]).max())
     ratio_1_gap = np.abs(arrays[("inverse", "peak")][:, 0] - arrays["paper"][:, 0])[[0, 1, 2, 5, 6, 7]].max()
     ratio_2_diff = arrays[("inverse", "peak")][:, 1] - arrays["paper"][:, 1]
-    parts.append(_section(
+    return _section(
         "Meng et al. 2010: Table 5, influence of the motor systems and the actuators",
         f"""Ratio_1 / Ratio_2 by Eq 40 for the eight surge commands: "ours" is the inverse model (the torques
 the motors must give along the command, from the mechanics' dynamics core with the effect
@@ -92,11 +87,12 @@ the paper's 4.0 and 8.2 % are not, and no reading of Eq 40 or choice of effect s
 (friction included) gives them: we suspect the paper's rows 4 and 5. Ratio_2 differs from the
 paper's by {ratio_2_diff.min():+.1f} to {ratio_2_diff.max():+.1f} points: it depends on how the actuator's 30 kg and 50 kg are distributed along the leg,
 which the paper does not give (our centres of mass: `params/meng2010.toml`).""",
-        rows))
+        rows)
 
+
+def _sumnu_forces(figures: Path) -> str:
     rows_f, data_f = sumnu.figures_4(figures)
-    progress.advance("Sumnu Figs 4.3-4.6")
-    parts.append(_section(
+    return _section(
         "Sumnu 2015: Figs 4.3-4.6, driving forces with and without the lower leg's inertia",
         """Inverse model of the mechanics on Sumnu's platform (explicit joints of Section 4.2), over one period
 of each trajectory; "without" sets the lower (rotating) part's mass and inertia to zero. The thesis
@@ -105,11 +101,12 @@ the reader to compare with them. Fig 4.4 uses the light mass set (m_p 1.5, m_r 0
 with the inertias of case study I, which the thesis does not restate for that figure. The lower
 part's inertia changes the light set's peak force by about 10 % and doubles the heavy set's, whose
 lower part carries the motor's stator: the contrast the thesis raises the masses to show.""",
-        rows_f, ["sumnu_fig4_forces.png"]))
+        rows_f, ["sumnu_fig4_forces.png"])
 
+
+def _sumnu_cases(figures: Path) -> str:
     rows_c, data_c = sumnu.case_studies()
-    progress.advance("Sumnu case studies")
-    parts.append(_section(
+    return _section(
         "Sumnu 2015: PID case studies, Sections 5.2 and 5.3",
         f"""Section 5.2 drives the legs with rigid force actuators: the linear-motor FMU with
 `effects.electrical = false` (an ideal force source under its PID); Section 5.3 with the full linear
@@ -121,11 +118,12 @@ translations and rolls mostly do, and the yaw of the 0.35 rad, 3 rad/s yaw cases
 thesis' 1e-6 rad by three orders of magnitude (ours 1.1e-3 rad, a phase lag of 0.3 % of the
 motion): that bound needs a far stiffer loop than a 10 Hz design, which the thesis' unpublished
 constants may be. The case IV yaw is printed as "1"; we read 0.""",
-        rows_c))
+        rows_c)
 
+
+def _halder_section_7(figures: Path) -> str:
     rows_h, data_h = halder.study(figures)
-    progress.advance("Halder")
-    parts.append(_section(
+    return _section(
         "Halder et al.: 6-SBU platform, feedforward plus PD, coupled motion of roll and pitch demands",
         f"""The platform of `params/halder2013.toml` (Eqs 1-4; every value the paper does not give chosen there
 with its reason; its neutral running length is the paper's 1647 mm): 200 kg payload, ball-screw
@@ -157,7 +155,10 @@ model and the forward model's extra terms (leg inertia, friction) vanish at rest
 steady coupled errors need a static mismatch between its inverse and forward models that it does
 not describe. Consequently its compensating demands (Cases 2, 4, 5), computed to cancel its
 errors, here move the payload by what they demand (51.7 mm sway and 7.1 mm heave for the roll).""",
-        rows_h, ["halder_fig6.png"]))
+        rows_h, ["halder_fig6.png"])
+
+
+def _halder_section_5(figures: Path) -> str:
     from ...engine.artifacts import data_dir
     from ..design import design_map, load_study, report_rows
     from ..design.halder import PAPER, figures as section5_figures
@@ -167,11 +168,10 @@ errors, here move the payload by what they demand (51.7 mm sway and 7.1 mm heave
     map_d = design_map(study)
     section5_figures(map_d, figures)
     rows_d = report_rows(map_d)
-    progress.advance("Halder Section V")
     (_, radii), (_, heights) = list(study.axes.items())
     r, c = nearest(study, PAPER["chosen"])
     needed = 1e3 * (map_d.length_max[r, c].max() + stubs(study))
-    parts.append(_section(
+    return _section(
         "Halder et al., Section V: configuration design (Figs 2-4)",
         f"""`cosim design halder_section5` (the study `studies/halder_section5.toml`): Halder's 6-SBU layout
 (Eqs 1-4, `params/halder2013.toml`) over base radius r_b {radii[0]:g}-{radii[-1]:g} m and the disc's neutral height
@@ -191,17 +191,43 @@ mm at 1.4 m gives the same, since heave moves the disc straight up. The figures 
 the paper does (solid: max stroke, dashed: min stroke, dash-dot: joint angle; Fig 4: the force
 limit of the paper's model, solid, and of the full model with the legs' weight, inertia and
 friction, dotted). The map took {map_d.seconds:.0f} s in one process.""",
-        rows_d, ["halder_fig2.png", "halder_fig3.png", "halder_fig4.png"]))
+        rows_d, ["halder_fig2.png", "halder_fig3.png", "halder_fig4.png"])
+
+
+def _meng_stroke(figures: Path) -> str:
     rows_s, data_s = meng.stroke_study()
-    progress.advance("Meng Eq 35 stroke")
-    parts.append(_section(
+    return _section(
         "Meng et al. 2010: which stroke carries Eq 35 (a design study)",
         """The paper's motion is beyond its platform: the main job warns that legs leave the 2.2 m stroke.
 Here Eq 35's reference poses (the scene's trajectory FMU stepped alone) go through the dynamics core
 on Meng's platform with the middle leg length l_0 (which sets the neutral height) from 1.70 to 2.02 m
 in 10 mm steps (`cosim.platform.design.scene_fit`): every leg's shortest and longest length and the
 largest joint angle over the motion, against the 665 mm stroke and the joint limit.""",
-        rows_s))
+        rows_s)
+
+
+SECTIONS = [  # (what the progress bar names, the section)
+    ("Meng Figs 7-8", _meng_tracking),
+    ("Meng Fig 6 bandwidths", _meng_bandwidths),
+    ("Meng Table 5", _meng_table_5),
+    ("Sumnu Figs 4.3-4.6", _sumnu_forces),
+    ("Sumnu case studies", _sumnu_cases),
+    ("Halder", _halder_section_7),
+    ("Halder Section V", _halder_section_5),
+    ("Meng Eq 35 stroke", _meng_stroke),
+]
+
+
+def build(out: Path) -> Path:
+    """Runs every study and writes out/validation.md with its figures in out/figures."""
+    figures = out / "figures"
+    figures.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    parts = [INTRO]
+    progress = TaskProgress("validate", len(SECTIONS))
+    for label, section in SECTIONS:
+        parts.append(section(figures))
+        progress.advance(label)
     parts.append(f"\n_Rebuilt in {time.perf_counter() - started:.0f} s._\n")
     path = out / "validation.md"
     path.write_text("\n".join(parts))

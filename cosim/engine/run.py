@@ -1,0 +1,116 @@
+"""The one way a system is run: a `Plan` (the system, its coupling and step control, how long, what is
+recorded and how often) goes through `run`, which executes it (cosim.engine.outcome.execute: a
+divergence monitor watching it, a progress bar on a terminal), thins its results to the output
+interval, makes its report, writes its files (the results as CSV and .mat, the FMUs' log, and what
+the application adds: a scene's plots) on every path, and raises `RunStopped`, with the results up
+to then, for a run that stopped part way.
+
+`run_system` runs any SSP system by its own settings (the SSP annotation's, the command line's over
+them): `cosim run FILE.ssp`, `cosim.simulate(system)` and a sweep's points of a system; the
+platform application makes a Plan of a scene the same way (cosim.platform.run.runner).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from .observers import DivergenceMonitor, Progress
+from .outcome import Outcome, Report, RunStopped, execute
+from .results import thin, write, write_log
+from .settings import Algorithm, StepControl, output_interval, recorded, system_settings
+from .structure import SystemStructure
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One run of a system: its coupling and step control, its stop time, the recorded variables
+    (component, variable) and their column names, the interval results are kept at (None: every
+    macro step), whose time the results carry (None: the run's own) and the divergence monitor's
+    threshold (None: unwatched)."""
+    structure: SystemStructure
+    algorithm: Algorithm
+    control: StepControl
+    stop_time: float
+    record: Sequence[tuple[str, str]]
+    names: Sequence[str]
+    output_interval: float | None = None
+    clock: str | None = None
+    divergence: float | None = 0.05
+
+
+def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progress: bool = False,
+        advice: bool = True, report: Callable[[Outcome, np.ndarray], Report] = Report.of,
+        files: Callable[[np.ndarray, Report, Outcome, Path], None] | None = None) -> tuple[np.ndarray, Report]:
+    """Runs the plan; returns its results and its report (`report(outcome, results)`). With `out`,
+    writes <stem>.csv, .mat and .log there and then what `files` writes (results, report, outcome,
+    folder), also for a run that stops. progress: a bar on a terminal; advice: a diverged run
+    probes for a step that holds. Raises RunStopped (its report and the results up to then) when
+    an FMU failed or the coupling diverged; before a step, what makes the run impossible
+    (ParameterError, NoStep, an FmuError at set-up)."""
+    observers = [*([DivergenceMonitor(ratio=plan.divergence)] if plan.divergence else []),
+                 *([Progress(plan.structure.name)] if progress else [])]
+    outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
+                      clock=plan.clock, observers=observers, advice=advice)
+    result = thin(outcome.result, plan.output_interval)
+    made = report(outcome, result)
+    if out is not None:
+        stem = stem or plan.structure.name
+        write(result, out, stem)
+        made.log = out / f"{stem}.log"
+        write_log(outcome.messages, made.log)
+        if files is not None:
+            files(result, made, outcome, out)
+    if outcome.failure is not None:
+        raise RunStopped(made, result, outcome.diverged)
+    return result, made
+
+
+def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[str]]:
+    """What a run of `structure` records: its `record` setting, else every connected output."""
+    chosen = recorded(structure.settings)
+    if chosen is not None:
+        return chosen
+    outputs = list(dict.fromkeys(c.source for c in structure.connections))
+    return outputs, [f"{c}.{v}" for c, v in outputs]
+
+
+def system_plan(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
+                stop_time: float | None = None) -> Plan:
+    """The plan of any system by its settings (the overrides over them, names as in
+    cosim.engine.settings), until its DefaultExperiment's stop unless `stop_time` says."""
+    algorithm, control = system_settings(structure.settings, structure.experiment.step, overrides)
+    record, names = recording(structure)
+    return Plan(structure, algorithm, control, structure.experiment.stop if stop_time is None else stop_time, record,
+                names, output_interval(structure.settings))
+
+
+def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
+               stop_time: float | None = None, out: Path | None = None, *, source: str | None = None,
+               progress: bool = False, advice: bool = True) -> tuple[np.ndarray, Report]:
+    """Runs a system by its own settings (system_plan) and writes its results to `out` as
+    <name>.csv, .mat and .log. What cannot start (a setting, a parameter value, a time that fits no
+    step, an FMU that refuses its values) is an SspError naming `source` (the file the system came
+    from; default its name), one line; a run that stopped part way raises RunStopped."""
+    from .checks import ParameterError
+    from .execution import NoStep
+    from .fmi import FmuError
+    from .settings import SettingsError
+    from .ssp import SspError
+    where = source or structure.name
+    try:
+        plan = system_plan(structure, overrides, stop_time)
+
+        def report(outcome: Outcome, result: np.ndarray) -> Report:
+            made = Report.of(outcome)
+            if structure.experiment.step_source not in ("", "this project's annotation") and \
+                    not (overrides or {}).get("step"):
+                made.remarks.append(f"macro step {structure.experiment.step:g} s: {structure.experiment.step_source}")
+            return made
+        return run(plan, out, Path(where).stem if source else structure.name, progress=progress, advice=advice,
+                   report=report)
+    except (ParameterError, NoStep, SettingsError, FmuError) as error:  # the values, settings or times, before a step
+        raise SspError(f"{where}: {error}") from None

@@ -1,0 +1,129 @@
+"""A scene compiled into the platform's system: per leg the drive FMU (ours or the user's) and its
+parameters (designed for the leg's plant where the scene asks, checked against its static load),
+the mechanics' values, the wiring (cosim.platform.run.system), what is recorded, and the engine's
+plan of the run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...engine import Experiment, SystemStructure
+from ...engine.artifacts import fmu_path
+from ...engine.checks import variables
+from ...engine.run import Plan
+from ...engine.settings import output_settings, to_strings
+from ..ports import DRIVES, LEGS
+from ..scene import Scene, SceneError
+from ..scene.parameter_sets import drive_set, scene_mechanics
+from ..scene.signals import scene_trajectory
+from .system import columns, platform_structure
+from .tuning import SizingError, check_limit, check_sizing, design, hold_currents, leg_plants, summary
+
+
+def drive_fmus(scene: Scene) -> list[Path]:
+    """Per leg, the drive FMU: the user's where the scene names one, ours for its kind otherwise."""
+    return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu) for leg in LEGS]
+
+
+def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
+    """What the scene records: its [outputs], or by default the drive kind's effort, flow and
+    current (the current where every leg's drive FMU has it)."""
+    if scene.outputs_drive is not None:
+        drive_outputs = scene.outputs_drive
+    else:
+        has = [variables(fmu) for fmu in set(drive_fmus(scene))]
+        drive_outputs = [n for n in DRIVES[scene.drive].outputs if all(n in found for found in has)]
+    return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian)
+
+
+def scene_values(scene: Scene) -> tuple[dict, dict]:
+    """The mechanics' and our drives' parameter values: the platform's set, the drive set (a
+    drive sized for this platform), then the scene's own, which win."""
+    drive_values = drive_set(scene.drive_set)[0] if scene.drive_set else {}
+    mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, scene.drive_set, scene.mechanics_parameters)
+    return mechanics_values, {**drive_values, **(scene.drive_parameters if scene.drive_fmu is None else {})}
+
+
+def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
+    """Per leg, the drive parameters, with a summary of the designed gains and notes on the
+    drives of the user's own. Our drives: designed for the platform (tuning = "auto"), or the
+    defaults with the PMSM starting to hold its leg (initial.current_q from the static load,
+    unless the scene gives it). A drive FMU of the user's own keeps its own parameters (the
+    scene's [drive.parameters] where it is the [drive] FMU, and its leg's). Raises SceneError when
+    a drive cannot hold its leg (sizing: ours always, a user's by its continuous_limit)."""
+    mechanics_values, ours = scene_values(scene)
+    plants = leg_plants(mechanics_values)
+    legs = [{**({} if leg in scene.leg_fmus else scene.drive_parameters if scene.drive_fmu else ours),
+             **scene.leg_parameters.get(leg, {})} for leg in LEGS]
+    own = [k for k, leg in enumerate(LEGS) if scene.leg_fmu(leg) is None]
+    try:
+        for k in own:
+            check_sizing(scene.drive, [plants[k]], legs[k], leg=k + 1)
+    except SizingError as error:
+        raise SceneError(f"{scene.path}:{scene.document.line('drive.kind')}: drive.kind = "
+                         f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
+    notes, unchecked = user_drive_notes(scene), []
+    for k, leg in enumerate(LEGS):
+        fmu = scene.leg_fmu(leg)
+        if fmu is None:
+            continue
+        if leg not in scene.continuous_limit:
+            unchecked.append(leg)
+            continue
+        name = scene.continuous_limit[leg]
+        limit = float(legs[k].get(name, variables(fmu)[name].start))
+        try:
+            check_limit(scene.drive, plants[k], limit, f"{fmu.name}'s {name}", leg)
+        except SizingError as error:
+            table = f"drive.leg.{leg}" if scene.document.value(f"drive.leg.{leg}", "continuous_limit") else "drive"
+            raise SceneError(f"{scene.path}:{scene.document.line(f'{table}.continuous_limit')}: {error}") from None
+    if unchecked:
+        notes.append(f"sizing not checked for legs {', '.join(map(str, unchecked))}: name the parameter that holds "
+                     "the drive's continuous torque or force with drive.continuous_limit")
+    if scene.tuning != "auto" or not own:
+        if scene.drive == "pmsm":
+            for k in own:
+                if "initial.current_q" not in legs[k]:
+                    legs[k]["initial.current_q"] = hold_currents([plants[k]], legs[k])[0]
+        return legs, None, notes
+    designed = [design(scene.drive, [plants[k]], legs[k])[0] for k in own]
+    for k, values in zip(own, designed):
+        legs[k] = values
+    return legs, summary(scene.drive, designed), notes
+
+
+def user_drive_notes(scene: Scene) -> list[str]:
+    """For the run report: each drive FMU of the user's own, its tool, legs, what fmpy's
+    validation says of it and what the master does not do with it."""
+    from ..scene.drive_fmu import inspect
+    notes = []
+    for fmu in dict.fromkeys(f for f in (scene.leg_fmu(leg) for leg in LEGS) if f is not None):
+        drive = inspect(fmu)
+        legs = [leg for leg in LEGS if scene.leg_fmu(leg) == fmu]
+        limits = drive.limits(scene.interface_jacobian)
+        notes.append(f"drive FMU {drive.name} ({drive.model}, {drive.tool}) on legs {', '.join(map(str, legs))}"
+                     + (f"; switched off: {'; '.join(limits)}" if limits else ""))
+        notes += [f"{drive.name}: fmpy's validation: {problem}" for problem in drive.problems]
+    return notes
+
+
+def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemStructure:
+    """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
+    the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them.
+    designed: the drives' parameters per leg if scene_design was already called."""
+    mechanics_values, _ = scene_values(scene)
+    if designed is None:
+        designed = scene_design(scene)[0]
+    structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
+                                   name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
+                                   interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene))
+    structure.settings = {**to_strings(scene.algorithm, scene.control),
+                          **output_settings(*scene_record(scene), scene.output_interval)}
+    return structure
+
+
+def scene_plan(scene: Scene, structure: SystemStructure) -> Plan:
+    """The engine's plan of the scene's run: its coupling, step control, duration and recording,
+    the results carrying the mechanics' time."""
+    return Plan(structure, scene.algorithm, scene.control, scene.duration, *scene_record(scene), scene.output_interval,
+                clock="mechanics")
