@@ -107,7 +107,7 @@ def _renamed(result: np.ndarray, names: list[str], under: list[str] = TORQUES) -
 
 def fine_time(scene) -> tuple[float, float]:
     """The scene's finer step and the simulated time it is taken at (its start and its windows)."""
-    _, control = scene.algorithm, scene.control
+    control = scene.control
     if not isinstance(control, FixedStep) or control.startup_time == 0.0:
         return scene.step, 0.0
     return control.startup_step, control.startup_time + sum(end - start for start, end in control.windows)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import workers
+from .common import add_cluster, workers
 
 
 def add(commands) -> argparse.ArgumentParser:
@@ -19,8 +19,7 @@ def add(commands) -> argparse.ArgumentParser:
                         "the 0.2 s after it)")
     advise.add_argument("--keep-gains", action="store_true",
                         help="run reduced models with the scene's drive gains (default: loops designed for each)")
-    advise.add_argument("--workers", type=int, help="Dask worker processes for the probes (default: one per core; "
-                        "0: in this process)")
+    add_cluster(advise, "the probes", None, scheduler=False)
     advise.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_advice.csv (every candidate)")
     return advise
 
@@ -30,7 +29,7 @@ def main(args: argparse.Namespace) -> int:
     from ..platform.scene import load_scene
     scene = load_scene(args.scene)
     candidates, info = advise(scene, args.tolerance, args.probe, args.effort_tolerance,
-                              workers("--workers", args.workers, "in this process"), redesign=not args.keep_gains)
+                              workers(args), redesign=not args.keep_gains)
     print(text(scene, args.tolerance, candidates, info))
     print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
     return 0

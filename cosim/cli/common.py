@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -38,11 +39,20 @@ def seconds(option: str, text: str | None) -> float | None:
     return value
 
 
-def workers(option: str, count: int | None, what: str) -> int | None:
-    """A command line's number of Dask worker processes (0: `what`)."""
-    if count is not None and count < 0:
-        raise UsageError(f"{option} {count}: must be 0 ({what}) or more")
-    return count
+def add_cluster(parser: argparse.ArgumentParser, what: str, default: int | None, scheduler: bool = True) -> None:
+    """--workers (Dask worker processes of a local cluster for `what`; default None: one per core)
+    and, with `scheduler`, --scheduler (a running one's address instead)."""
+    parser.add_argument("--workers", type=int, default=default, help=f"Dask worker processes for {what} (default: "
+                        + ("one per core" if default is None else f"{default}") + "; 0: in this process)")
+    if scheduler:
+        parser.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+
+
+def workers(args: argparse.Namespace) -> int | None:
+    """The command line's number of Dask worker processes (None: one per core, 0: in this process)."""
+    if args.workers is not None and args.workers < 0:
+        raise UsageError(f"--workers {args.workers}: must be 0 (in this process) or more")
+    return args.workers
 
 
 def report(run: Callable[[], Report], written: str, out: Path) -> int:

@@ -6,16 +6,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import workers
+from .common import add_cluster, workers
 
 
 def add(commands) -> argparse.ArgumentParser:
     design = commands.add_parser("design", help="which platform carries a motion: a configuration design study "
                                  "(studies/, Halder et al. Section V)")
     design.add_argument("study", help="a study file (TOML) or a shipped study's name, e.g. halder_section5")
-    design.add_argument("--workers", type=int, default=0, help="Dask worker processes for the map (default 0: in "
-                        "this process)")
-    design.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    add_cluster(design, "the map", 0)
     design.add_argument("--out", type=Path, default=Path("out"), help="folder for the figures, the map and the summary")
     return design
 
@@ -23,7 +21,7 @@ def add(commands) -> argparse.ArgumentParser:
 def main(args: argparse.Namespace) -> int:
     from ..platform.design import load_study, parallel_map, report_rows, summary, write
     from ..platform.scene import shipped
-    count = workers("--workers", args.workers, "in this process")
+    count = workers(args)
     study = load_study(shipped(args.study, "studies") or args.study if not Path(args.study).exists() else args.study)
     design = parallel_map(study, workers=count, scheduler=args.scheduler)
     rows = report_rows(design, count, args.scheduler)

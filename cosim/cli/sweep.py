@@ -7,15 +7,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import workers
+from .common import add_cluster, workers
 
 
 def add(commands) -> argparse.ArgumentParser:
     sweep = commands.add_parser("sweep", help="run a scene or SSP system at many points, on Dask (docs/guide/sweeps.md)")
     sweep.add_argument("sweep", type=Path, help="the sweep file (TOML)")
-    sweep.add_argument("--workers", type=int, help="worker processes of a local Dask cluster (default: one per core; "
-                       "0: no Dask, in this process)")
-    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    add_cluster(sweep, "the points", None)
     sweep.add_argument("--out", type=Path, default=Path("out"), help="folder for <sweep>.parquet, .csv and .png")
     return sweep
 
@@ -23,7 +21,7 @@ def add(commands) -> argparse.ArgumentParser:
 def main(args: argparse.Namespace) -> int:
     from ..engine.sweep import column_name, plot_sweep
     from ..platform.run.sweep import load_sweep
-    count = workers("--workers", args.workers, "no Dask")
+    count = workers(args)
     sweep = load_sweep(args.sweep)
     try:
         outcome = sweep.run(args.out, count, args.scheduler)
