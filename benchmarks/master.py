@@ -59,7 +59,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish, run_stepping  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
-from cosim.engine.results import write  # noqa: E402
+from cosim.engine.results import write_csv, write_mat  # noqa: E402
 from cosim.platform.run.libcosim import run_in_libcosim  # noqa: E402
 from cosim.engine.settings import FixedStep  # noqa: E402
 from cosim.platform.run.compile import scene_structure  # noqa: E402
@@ -231,7 +231,8 @@ def main() -> None:
             imports.append(time.perf_counter() - began)
         ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}), plots=False)[0]
         began = time.perf_counter()
-        write(ours, Path(out), "timing")
+        write_csv(ours, Path(out) / "timing.csv")
+        write_mat(ours, Path(out) / "timing.mat")
         writing = time.perf_counter() - began
     final = np.array([ours[f"pose.{a}"][-1] for a in POSE])
     lines += ["", "The drive torques' error per window (cosim.platform.run.accuracy: the start-up's first "

@@ -5,11 +5,15 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 # Ecos (ecospy, one of the tools the SSP tests run the exported system in) links against Intel
-# TBB: Debian's libtbb12.
-if ! ldconfig -p 2>/dev/null | grep -q "libtbb.so.12"; then
+# TBB: Debian's libtbb12; the TLS sweep test makes its certificates with openssl.
+missing=""
+ldconfig -p 2>/dev/null | grep -q "libtbb.so.12" || missing="$missing libtbb12"
+command -v openssl > /dev/null 2>&1 || missing="$missing openssl"
+if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq libtbb12 >> apt.log 2>&1 \
-    || { cat apt.log; echo "could not install libtbb12 (needed by ecospy)" >&2; exit 1; }
+  # shellcheck disable=SC2086
+  $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq $missing >> apt.log 2>&1 \
+    || { cat apt.log; echo "could not install$missing (needed by ecospy and the tests)" >&2; exit 1; }
 fi
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv

@@ -107,3 +107,42 @@ def platform_run(drive: str, stop_time: float, step: float, mechanics_values=Non
     if outcome.failure is not None:
         raise RunFailed(outcome.failure.error, outcome.result, outcome)
     return outcome
+
+
+def mounted_tmpfs(folder, options: str):
+    """A tmpfs mounted at `folder` (made) with these mount options; pytest.skip where this machine
+    cannot mount one (not root)."""
+    import subprocess
+    folder.mkdir(parents=True, exist_ok=True)
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)], capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({mounted.stderr.decode().strip()})")
+    return folder
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A folder on a file system of 3 MB (a tmpfs mounted for the test), to fill a disk in a test."""
+    import subprocess
+    folder = mounted_tmpfs(tmp_path / "small_disk", "size=3m")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", str(folder)], capture_output=True)
+
+
+@pytest.fixture
+def read_only_disk(tmp_path):
+    """A folder on a file system mounted read-only (which refuses root's writes too)."""
+    import subprocess
+    folder = mounted_tmpfs(tmp_path / "read_only", "size=1m,ro")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", str(folder)], capture_output=True)
+
+
+def fill(folder, leave: int) -> None:
+    """Fills the disk that holds `folder` but for `leave` bytes."""
+    import shutil
+    (folder / "filler").write_bytes(bytes(max(0, shutil.disk_usage(folder).free - leave)))

@@ -11,6 +11,7 @@ code:
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -49,7 +50,12 @@ def main(argv: list[str] | None = None) -> int:
         out = getattr(args, "out", None)
         if out is not None and (problem := unwritable(out)):
             raise UsageError(f"--out {out}: {problem}")
-        return args.main(args)
+        code = args.main(args)
+        sys.stdout.flush()  # here, where a closed pipe can still be told apart
+        return code
+    except BrokenPipeError:  # the reader of the output went away (`cosim run ... | head -1`): as `cat` does
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except (InputError, ArtifactMissing) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -6,8 +6,9 @@ import argparse
 import math
 import os
 import sys
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 from ..engine.errors import UsageError
 from ..engine.outcome import Report, RunStopped
@@ -45,7 +46,31 @@ def add_cluster(parser: argparse.ArgumentParser, what: str, default: int | None,
     parser.add_argument("--workers", type=int, default=default, help=f"Dask worker processes for {what} (default: "
                         + ("one per core" if default is None else f"{default}") + "; 0: in this process)")
     if scheduler:
-        parser.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+        parser.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tls://host:8786 (tcp:// "
+                            "for one on this machine: unencrypted)")
+        for option, what in (("--tls-ca-file", "the certificate authority that signed the scheduler's and the "
+                              "workers' certificates"), ("--tls-cert", "this client's certificate"),
+                             ("--tls-key", "this client's private key")):
+            parser.add_argument(option, type=Path, help=f"for a tls:// scheduler: {what} (default: Dask's "
+                                "distributed.comm.tls configuration)")
+
+
+@contextmanager
+def security(args: argparse.Namespace) -> Iterator[None]:
+    """Dask's TLS settings as the command line gives them (over Dask's own configuration), for
+    the command's connections to a scheduler."""
+    given = {key: str(value) for key, value in (("distributed.comm.tls.ca-file", args.tls_ca_file),
+                                                ("distributed.comm.tls.client.cert", args.tls_cert),
+                                                ("distributed.comm.tls.client.key", args.tls_key)) if value}
+    for option, value in (("--tls-ca-file", args.tls_ca_file), ("--tls-cert", args.tls_cert),
+                          ("--tls-key", args.tls_key)):
+        if value is not None and not value.is_file():
+            raise UsageError(f"{option} {value}: no such file")
+    if given and not str(args.scheduler or "").startswith("tls://"):
+        raise UsageError("--tls-ca-file, --tls-cert and --tls-key are for a tls:// scheduler (--scheduler tls://...)")
+    import dask
+    with dask.config.set(given):
+        yield
 
 
 def workers(args: argparse.Namespace) -> int | None:

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import shutil
 from pathlib import Path
 
 from ..engine.errors import UsageError
+from ..engine.files import write_bytes
 from .common import unwritable
 
 
@@ -38,8 +38,7 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError(f"{target} exists; copy elsewhere with --to")
     if problem := unwritable(args.to):
         raise UsageError(f"--to {args.to}: {problem}")
-    args.to.mkdir(parents=True, exist_ok=True)
-    shutil.copy(source, target)
+    write_bytes(target, source.read_bytes(), "the copy")
     command = {"sweeps": "sweep", "studies": "design"}.get(source.parent.name, "run")
     print(f"copied: {target} (from {source}); run it with `cosim {command} {target}`")
     return 0

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import add_cluster, workers
+from .common import add_cluster, security, workers
 
 
 def add(commands) -> argparse.ArgumentParser:
@@ -23,8 +23,9 @@ def main(args: argparse.Namespace) -> int:
     from ..platform.scene import shipped
     count = workers(args)
     study = load_study(shipped(args.study, "studies") or args.study if not Path(args.study).exists() else args.study)
-    design = parallel_map(study, workers=count, scheduler=args.scheduler)
-    rows = report_rows(design, count, args.scheduler)
+    with security(args):
+        design = parallel_map(study, workers=count, scheduler=args.scheduler)
+        rows = report_rows(design, count, args.scheduler)
     print("\n".join(summary(design, rows)))
     files = write(design, args.out, rows)
     print("written: " + ", ".join(str(f) for f in files))

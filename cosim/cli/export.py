@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..engine.errors import UsageError
 from ..engine.ssp import ANNOTATION
+from .common import unwritable
 
 
 def add(commands) -> argparse.ArgumentParser:
@@ -31,6 +32,9 @@ def main(args: argparse.Namespace) -> int:
     from ..platform.scene import load_scene
     if args.ssp is None and args.osp is None:
         raise UsageError("export: give --ssp FILE.ssp, --osp DIR or both")
+    for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp)):
+        if folder is not None and (problem := unwritable(folder)):
+            raise UsageError(f"{option} {folder}: {problem}")
     scene = load_scene(args.scene)
     structure = scene_structure(scene)
     if args.warnings_as_ok:

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ..api import SYSTEM_SUFFIXES, simulate
-from ..engine.errors import UsageError
+from ..engine.errors import InputError, UsageError
 from .common import report, seconds
 
 
@@ -15,7 +15,9 @@ def add(commands) -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
     run.add_argument("scene", type=Path)
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                     help="an SSP system's run setting (algorithm, order, step_control, step, rtol, atol, ...)")
+                     help="a run setting (step, algorithm, order, step_control, rtol, atol, ...) or, for a scene, any of "
+                     "its keys as table.key (scene.duration, 'mechanics.parameters.\"platform.mass\"'), its value "
+                     "as TOML writes it")
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=str, help="override the scene's duration [s]")
@@ -35,12 +37,30 @@ def settings(items: list[str]) -> dict[str, str]:
     return out
 
 
+def scene_values(items: list[str]) -> dict[str, object]:
+    """--set NAME=VALUE for a scene: the scene keys they set (a run setting's name to its key), each
+    value read as TOML writes it (text that is not a TOML value as text)."""
+    import tomllib
+    from ..platform.scene.schema import setting_key
+    out = {}
+    for name, text in settings(items).items():
+        try:
+            value = tomllib.loads(f"value = {text}")["value"]
+        except tomllib.TOMLDecodeError:
+            value = text
+        try:
+            out[setting_key(name)] = value
+        except InputError as error:
+            raise UsageError(f"--set {name}={text}: {error}") from None
+    return out
+
+
 def main(args: argparse.Namespace) -> int:
     duration = seconds("--duration", args.duration)
     system = args.scene.suffix.lower() in SYSTEM_SUFFIXES
     stem = args.scene.stem
-    written = f"{args.out}/{stem}.csv and .mat" if system else \
-        f"{args.out}/{stem}.csv, .mat, .log" + ("" if args.no_plots else f", plots and the report {stem}.html")
-    return report(lambda: simulate(args.scene, duration=duration, settings=settings(args.set) or None, out=args.out,
-                                   plots=not args.no_plots and not system, twin=args.twin, progress=True).report,
-                  written, args.out)
+    written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if system or args.no_plots else
+                                                     f", plots and the report {stem}.html")
+    given = {"settings": settings(args.set) or None} if system else {"overrides": scene_values(args.set) or None}
+    return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
+                                   twin=args.twin, progress=True, **given).report, written, args.out)

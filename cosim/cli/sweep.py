@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import add_cluster, workers
+from .common import add_cluster, security, workers
 
 
 def add(commands) -> argparse.ArgumentParser:
@@ -24,7 +24,8 @@ def main(args: argparse.Namespace) -> int:
     count = workers(args)
     sweep = load_sweep(args.sweep)
     try:
-        outcome = sweep.run(args.out, count, args.scheduler)
+        with security(args):
+            outcome = sweep.run(args.out, count, args.scheduler)
     except KeyboardInterrupt:
         print(f"interrupted: the points finished so far are in {args.out}/{args.sweep.stem}.parts; run the same "
               "command again to run only the others", file=sys.stderr)

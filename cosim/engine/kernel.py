@@ -7,6 +7,7 @@ in these buffers, so the kernel is the only code that advances a system.
 from __future__ import annotations
 
 import ctypes
+import os
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -86,14 +87,15 @@ def write_csv(path: str, header: str, table: np.ndarray) -> None:
     flat = table.reshape(-1) if table.size else np.zeros(1)
     if _load().table_write_csv(str(path).encode(), header.encode(), _ptr(flat, _DOUBLES), table.shape[0],
                                table.shape[1]) != 0:
-        raise OSError(f"cannot write {path}")
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code) if code else "cannot write", str(path))
 
 
 def _load() -> ctypes.CDLL:
     global _library
     if _library is None:
         path = library_path("libcosim_kernel.so")
-        lib = ctypes.CDLL(str(path))
+        lib = ctypes.CDLL(str(path), use_errno=True)  # a write's errno (a full disk) reaches write_csv
         check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
                                                   (_Instance, "KernelInstance"), (_Kernel, "Kernel"), (_Feed, "KernelFeed"),
                                                   (_Controller, "Controller")])

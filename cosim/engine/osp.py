@@ -16,6 +16,7 @@ from pathlib import Path
 from fmpy import read_model_description
 from lxml import etree
 
+from .files import replacing, write_bytes
 from .settings import EnergyControl, system_settings
 from .structure import SystemStructure
 
@@ -75,9 +76,9 @@ def write_osp(structure: SystemStructure, folder: Path, power_bonds: bool = True
     power_bonds=False leaves the bonds out (a fixed-step run does not use them; libcosimpy 0.0.6
     refuses a file with more than one bond, a bug of its configuration parser fixed upstream)."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     for fmu in dict.fromkeys(c.fmu for c in structure.components):
-        shutil.copyfile(fmu, folder / fmu.name)
-    path = folder / "OspSystemStructure.xml"
-    path.write_bytes(etree.tostring(to_osp_xml(structure, power_bonds), pretty_print=True, xml_declaration=True, encoding="UTF-8"))
-    return path
+        with replacing(folder / fmu.name, "an FMU of the OSP configuration", fmu.stat().st_size) as temporary:
+            shutil.copyfile(fmu, temporary)
+    return write_bytes(folder / "OspSystemStructure.xml", etree.tostring(
+        to_osp_xml(structure, power_bonds), pretty_print=True, xml_declaration=True, encoding="UTF-8"),
+        "the OSP configuration")

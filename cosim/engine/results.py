@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import replacing, write_bytes, write_text
+
 
 def thin(result: np.ndarray, interval: float | None) -> np.ndarray:
     """The rows nearest to every `interval` seconds (and the last), or all rows."""
@@ -18,13 +20,16 @@ def thin(result: np.ndarray, interval: float | None) -> np.ndarray:
     return result[np.union1d(keep, [len(t) - 1])]
 
 
-def write_csv(result: np.ndarray, path: Path) -> None:
+def write_csv(result: np.ndarray, path: Path) -> Path:
     """Every value with 17 significant digits (a float's round trip), one header line of names
-    (formatted in C: cosim/engine/kernel/csv.c)."""
+    (formatted in C: cosim/engine/kernel/csv.c), written whole or not at all (cosim.engine.files)."""
     from .kernel import write_csv as native
     names = result.dtype.names
     columns = np.column_stack([result[n] for n in names]) if len(result) else np.zeros((0, len(names)))
-    native(str(path), ",".join(names), columns)
+    needed = 25 * columns.size + sum(len(n) + 1 for n in names)  # at most 24 characters a value, and its comma
+    with replacing(path, "the results", needed) as temporary:
+        native(str(temporary), ",".join(names), columns)
+    return Path(path)
 
 
 def mat_name(name: str) -> str:
@@ -37,7 +42,7 @@ def _element(kind: int, data: bytes) -> bytes:
     return np.array([kind, len(data)], "<u4").tobytes() + data + b"\0" * (-len(data) % 8)
 
 
-def write_mat(result: np.ndarray, path: Path) -> None:
+def write_mat(result: np.ndarray, path: Path) -> Path:
     """MATLAB level-5 .mat, one double column vector per result column (what scipy.io.savemat
     writes, without importing scipy: the format is a header and one miMATRIX element a variable)."""
     MI_INT8, MI_INT32, MI_UINT32, MI_DOUBLE, MI_MATRIX, MX_DOUBLE_CLASS = 1, 5, 6, 9, 14, 6
@@ -51,26 +56,20 @@ def write_mat(result: np.ndarray, path: Path) -> None:
                 + _element(MI_INT8, mat_name(name).encode("ascii"))
                 + _element(MI_DOUBLE, column.tobytes()))
         parts.append(_element(MI_MATRIX, body))
-    Path(path).write_bytes(b"".join(parts))
+    return write_bytes(path, b"".join(parts), "the results")
 
 
-def write(result: np.ndarray, out: Path, stem: str) -> list[Path]:
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [out / f"{stem}.csv", out / f"{stem}.mat"]
-    write_csv(result, paths[0])
-    write_mat(result, paths[1])
-    return paths
-
-
-def write_log(messages, path: Path) -> None:
+def write_log(messages, path: Path) -> Path:
     """Everything the FMUs logged, as CSV: step_start (the communication point at which the call
     that logged it began) [s], instance, status, category, message."""
     import csv
-    with open(path, "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["step_start", "instance", "status", "category", "message"])
-        for instance, m in messages:
-            writer.writerow([repr(m.time), instance, m.status, m.category, m.text])
+    import io
+    text = io.StringIO(newline="")
+    writer = csv.writer(text)
+    writer.writerow(["step_start", "instance", "status", "category", "message"])
+    for instance, m in messages:
+        writer.writerow([repr(m.time), instance, m.status, m.category, m.text])
+    return write_text(path, text.getvalue(), "the FMUs' log")
 
 
 def message_kinds(messages, status: str = "warning") -> list[tuple[int, str]]:

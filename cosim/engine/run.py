@@ -12,6 +12,7 @@ platform application makes a Plan of a scene the same way (cosim.platform.run.ru
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -20,7 +21,8 @@ import numpy as np
 
 from .observers import DivergenceMonitor, Progress
 from .outcome import Outcome, Report, RunStopped, execute
-from .results import thin, write, write_log
+from .files import OutputError, folder_lock
+from .results import thin, write_csv, write_log, write_mat
 from .settings import Algorithm, StepControl, output_interval, recorded, system_settings
 from .structure import SystemStructure
 
@@ -53,20 +55,38 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     (ParameterError, NoStep, an FmuError at set-up)."""
     observers = [*([DivergenceMonitor(ratio=plan.divergence)] if plan.divergence else []),
                  *([Progress(plan.structure.name)] if progress else [])]
-    outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
-                      clock=plan.clock, observers=observers, advice=advice)
-    result = thin(outcome.result, plan.output_interval)
-    made = report(outcome, result)
-    if out is not None:
-        stem = stem or plan.structure.name
-        write(result, out, stem)
-        made.log = out / f"{stem}.log"
-        write_log(outcome.messages, made.log)
-        if files is not None:
-            files(result, made, outcome, out)
+    with folder_lock(out) if out is not None else nullcontext():  # one run's files at a time in a folder
+        outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
+                          clock=plan.clock, observers=observers, advice=advice)
+        result = thin(outcome.result, plan.output_interval)
+        made = report(outcome, result)
+        if out is not None:
+            write_files(result, made, outcome, Path(out), stem or plan.structure.name, files)
     if outcome.failure is not None:
         raise RunStopped(made, result, outcome.diverged)
     return result, made
+
+
+def write_files(result: np.ndarray, report: Report, outcome: Outcome, out: Path, stem: str,
+                files: Callable[[np.ndarray, Report, Outcome, Path], None] | None = None) -> None:
+    """The results as <stem>.csv and .mat, the log as <stem>.log and what `files` adds, each whole
+    or not at all; what the disk cannot take is one OutputError naming it (and the files that
+    did get written), after every other file has been tried: the results are kept where the space
+    allows."""
+    writes = [lambda: write_csv(result, out / f"{stem}.csv"), lambda: write_mat(result, out / f"{stem}.mat"),
+              lambda: write_log(outcome.messages, out / f"{stem}.log"),
+              *([lambda: files(result, report, outcome, out)] if files is not None else [])]
+    failures, written = [], []
+    for write in writes:
+        try:
+            written.append(write())
+        except OutputError as error:
+            failures.append(error)
+    report.log = out / f"{stem}.log" if out / f"{stem}.log" in written else None
+    if failures:
+        more = f" (and {len(failures) - 1} more files)" if len(failures) > 1 else ""
+        kept = [p.name for p in written if isinstance(p, Path)]
+        raise OutputError(f"{failures[0]}{more}" + (f"; written: {', '.join(kept)}" if kept else ""))
 
 
 def recording(structure: SystemStructure) -> tuple[list[tuple[str, str]], list[str]]:

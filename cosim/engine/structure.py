@@ -66,6 +66,9 @@ class SystemStructure:
     # how to run it (the algorithm and step control, see cosim.engine.settings): stored in an SSP
     # annotation, read back by `python -m cosim run FILE.ssp`
     settings: dict[str, Value] = field(default_factory=dict)
+    # where an archive's files were unpacked (a tempfile.TemporaryDirectory): held while the system
+    # lives, removed when it goes
+    unpacked: object = field(default=None, compare=False, repr=False)
 
     def component(self, name: str) -> Component:
         for c in self.components:
@@ -93,4 +96,4 @@ def with_parameters(structure: SystemStructure, values: Mapping[str, Mapping[str
     """A copy of `structure` with parameter values changed per component."""
     components = [Component(c.name, c.fmu, {**c.parameters, **values.get(c.name, {})}) for c in structure.components]
     return SystemStructure(structure.name, components, list(structure.connections), list(structure.bonds),
-                           Experiment(**vars(structure.experiment)), dict(structure.settings))
+                           Experiment(**vars(structure.experiment)), dict(structure.settings), structure.unpacked)

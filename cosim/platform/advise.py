@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..engine.files import write_text
 from ..engine.sweep import run_sweep
 from .ports import POSE
 from .run.runner import run_scene
@@ -164,17 +165,17 @@ def recommend(candidates: list[Candidate], tolerance: float, effort_tolerance: f
 def write_csv(candidates: list[Candidate], path: Path) -> Path:
     """Every candidate: step, effects off, fidelity, pose error, wall time, macro steps, divergence."""
     import csv
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["step_ms", "effects_off", "fidelity", "gains", "interface_jacobian", "pose_error",
-                         "effort_error", "window_error", "window_error_at", "wall_s", "macro_steps", "diverged"])
-        for c in candidates:
-            writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, c.gains,
-                             str(c.interface_jacobian).lower(), repr(c.error),
-                             repr(c.effort_error), repr(c.window_error), c.window_error_at, repr(c.wall),
-                             c.macro_steps, c.diverged or ""])
-    return path
+    import io
+    text = io.StringIO(newline="")
+    writer = csv.writer(text)
+    writer.writerow(["step_ms", "effects_off", "fidelity", "gains", "interface_jacobian", "pose_error",
+                     "effort_error", "window_error", "window_error_at", "wall_s", "macro_steps", "diverged"])
+    for c in candidates:
+        writer.writerow([f"{c.step * 1e3:g}", " ".join(c.effects_off), c.fidelity, c.gains,
+                         str(c.interface_jacobian).lower(), repr(c.error),
+                         repr(c.effort_error), repr(c.window_error), c.window_error_at, repr(c.wall),
+                         c.macro_steps, c.diverged or ""])
+    return write_text(path, text.getvalue(), "the candidates")
 
 
 def text(scene: Scene, tolerance: float, candidates: list[Candidate], info: dict) -> str:

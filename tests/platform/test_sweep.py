@@ -279,3 +279,103 @@ def test_every_shipped_sweep_file_is_valid(path):
     sweep = load_sweep(path)
     assert sweep.points and sweep.plot is not None
     assert all(set(point) == {a.name for a in sweep.axes} for point in sweep.points)
+
+
+def test_a_file_planted_in_the_workers_cache_is_replaced_never_run(tmp_path, dask_cluster):
+    """Someone else's scene laid beforehand where the sweep's scene goes in the workers' cache
+    (under its bundle's name) and under its blob's name: the workers check each file's SHA-256,
+    replace both, and the rows are this scene's, bit for bit like this process."""
+    from cosim.engine.sweep.bundle import Bundle, digest
+    address, _, cache = dask_cluster
+    path = sweep_file(tmp_path, '[[axis]]\nkey = "scene.step"\nvalues = [5e-4, 1e-3]\n')
+    sweep = load_sweep(path)
+    bundle, _ = Bundle.of(Path(sweep.evaluate.path), sweep.evaluate.files())
+    foreign = SCENE.read_text().replace("duration = 10.0", "duration = 10.0\nname = \"planted\"").replace(
+        "amplitude = 0.3", "amplitude = 0.05")
+    planted = [cache / "bundles" / bundle.key / bundle.main, cache / "blobs" / bundle.files[0][1]]
+    for place in planted:
+        place.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        place.write_text(foreign)
+    reference = in_process(path, tmp_path / "here")
+    remote = run_sweep(sweep.name, sweep.points, sweep.evaluate, sweep.columns, tmp_path / "remote", sweep.signature,
+                       scheduler=address, progress=False).rows
+    assert all(r["status"] == "ok" for r in remote) and comparable(remote) == comparable(reference)
+    assert all(digest(place.read_bytes()) == bundle.files[0][1] for place in planted)
+
+
+def test_an_interrupted_local_cluster_sweep_is_one_line(tmp_path):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a sweep on a local
+    cluster of two workers: one line from the command, no traceback from any worker process."""
+    path = sweep_file(tmp_path, EIGHT_POINTS, duration=5.0, extra="points_per_task = 1")
+    command = [sys.executable, "-m", "cosim", "sweep", str(path), "--workers", "2", "--out", str(tmp_path / "out")]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    _wait_for_parts(tmp_path / "out" / "study.parts", 1, process, timeout=120)
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.strip().splitlines()[-1].startswith("interrupted: the points finished so far are in"), err
+
+
+@pytest.fixture(scope="module")
+def tls_cluster(tmp_path_factory):
+    """A scheduler and a worker on 127.0.0.1 that speak TLS only, with a self-signed certificate
+    (openssl) as every party's authority, certificate and key."""
+    import json
+    folder = tmp_path_factory.mktemp("tls")
+    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "key.pem", "-out", "cert.pem",
+                    "-days", "2", "-subj", "/CN=localhost", "-addext", "subjectAltName=IP:127.0.0.1,DNS:localhost"],
+                   cwd=folder, check=True, capture_output=True)
+    tls = ["--tls-ca-file", "cert.pem", "--tls-cert", "cert.pem", "--tls-key", "key.pem"]
+    dask = str(Path(sys.executable).parent / "dask")
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "COSIM_CACHE_DIR": str(folder / "cache")}
+    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--protocol", "tls",
+                                   "--no-dashboard", "--scheduler-file", "scheduler.json", *tls], cwd=folder, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    start = time.time()
+    while not (folder / "scheduler.json").exists():
+        assert time.time() - start < 60, "the scheduler did not start"
+        time.sleep(0.1)
+    address = json.loads((folder / "scheduler.json").read_text())["address"]
+    processes.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--no-dashboard", "--host",
+                                       "127.0.0.1", *tls], cwd=folder, env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL))
+    yield address, folder
+    for process in reversed(processes):
+        process.terminate()
+    for process in processes:
+        try:
+            process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            process.kill()
+
+
+def test_a_sweep_on_a_tls_scheduler(tmp_path, tls_cluster):
+    """With the client's certificate options the sweep runs on the TLS cluster bit for bit like
+    this process; without them it is one line that says which options it needs."""
+    address, folder = tls_cluster
+    path = sweep_file(tmp_path, '[[axis]]\nkey = "scene.step"\nvalues = [5e-4, 1e-3]\n')
+    reference = in_process(path, tmp_path / "here")
+    tls = ["--tls-ca-file", str(folder / "cert.pem"), "--tls-cert", str(folder / "cert.pem"),
+           "--tls-key", str(folder / "key.pem")]
+    result = subprocess.run([sys.executable, "-m", "cosim", "sweep", str(path), "--scheduler", address, *tls,
+                             "--out", str(tmp_path / "remote")], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "warning" not in result.stderr
+    assert comparable(pq.read_table(tmp_path / "remote" / "study.parquet").to_pylist()) == comparable(reference)
+    bare = subprocess.run([sys.executable, "-m", "cosim", "sweep", str(path), "--scheduler", address, "--out",
+                           str(tmp_path / "bare")], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert bare.returncode == 2 and bare.stderr.count("\n") == 1 and "--tls-ca-file, --tls-cert, --tls-key" in bare.stderr
+
+
+@pytest.mark.parametrize("address,exposed", [("tls://192.0.2.1:8786", False), ("tcp://127.0.0.1:8786", False),
+                                             ("tcp://localhost:8786", False), ("tcp://192.0.2.1:8786", True),
+                                             ("192.0.2.1:8786", True), ("tcp://[::1]:8786", False)])
+def test_a_scheduler_beyond_this_machine_without_tls_is_named(address, exposed):
+    """The first line a sweep prints for an unencrypted scheduler that is not on this machine."""
+    from cosim.engine.sweep.dask_run import unprotected
+    said = unprotected(address)
+    assert (said is not None) == exposed
+    if exposed:
+        assert address in said and "neither encrypted nor authenticated" in said and "tls://" in said

@@ -8,6 +8,7 @@ from typing import Mapping
 
 import numpy as np
 
+from ..files import write_figure
 from .points import column_name
 
 
@@ -77,7 +78,7 @@ def plot_sweep(rows: list[dict], spec: dict, path: Path, title: str, units: Mapp
     else:
         ax.grid(False)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    try:
+        return write_figure(fig, path, 100, "the sweep's plot")
+    finally:
+        plt.close(fig)

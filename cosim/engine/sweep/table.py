@@ -3,12 +3,12 @@ truth), a CSV appended row by row, and the whole table in the points' order at t
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..files import appending, replacing, write_text
 from .points import SweepError, column_name
 
 
@@ -42,12 +42,11 @@ class ResultTable:
         self.csv = self.out / f"{name}.csv"
         self.parquet = self.out / f"{name}.parquet"
         self._pa = pa
-        self.parts.mkdir(parents=True, exist_ok=True)
         signature_file = self.parts / "signature"
         if signature_file.exists() and signature_file.read_text() != signature:
             raise SweepError(f"{self.parts} holds the results of another sweep (its target, duration, axes' names or "
                              "reports differ): remove the folder or choose another --out")
-        signature_file.write_text(signature)
+        write_text(signature_file, signature, "the sweep's signature")
         self.rows = self._read_parts()
         self.done = {row["point"] for row in self.rows}
         self._write_csv(self.rows)  # rebuilt from the parts: a line cut off by an interruption is gone
@@ -61,13 +60,20 @@ class ResultTable:
         return rows
 
     def _write_csv(self, rows: list[dict], append: bool = False) -> None:
+        """The rows as CSV: appended as they arrive, or the whole table written anew."""
         import csv
-        with open(self.csv, "a" if append else "w", newline="") as f:
-            writer = csv.DictWriter(f, self.columns, extrasaction="ignore")
-            if not append:
-                writer.writeheader()
-            for row in rows:
-                writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+        import io
+        text = io.StringIO(newline="")
+        writer = csv.DictWriter(text, self.columns, extrasaction="ignore")
+        if not append:
+            writer.writeheader()
+        for row in rows:
+            writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+        if not append:
+            write_text(self.csv, text.getvalue(), "the sweep's table")
+            return
+        with appending(self.csv, "the sweep's table") as file:
+            file.write(text.getvalue())
 
     def _arrow(self, rows: list[dict]):
         pa = self._pa
@@ -94,10 +100,8 @@ class ResultTable:
         rows = [row for row in rows if row["point"] not in self.done]
         if not rows:
             return
-        part = self.parts / f"part-{self._count:06d}.parquet"
-        temporary = part.with_suffix(".tmp")
-        pq.write_table(self._arrow(rows), temporary)
-        os.replace(temporary, part)
+        with replacing(self.parts / f"part-{self._count:06d}.parquet", "a part of the sweep's table") as temporary:
+            pq.write_table(self._arrow(rows), temporary)
         self._count += 1
         self._write_csv(rows, append=True)
         self.rows += rows
@@ -110,8 +114,7 @@ class ResultTable:
         by_key = {row["point"]: row for row in self.rows}
         rows = [by_key[k] for k in order if k in by_key]
         if rows:
-            temporary = self.parquet.with_suffix(".tmp")
-            pq.write_table(self._arrow(rows), temporary)
-            os.replace(temporary, self.parquet)
+            with replacing(self.parquet, "the sweep's table") as temporary:
+                pq.write_table(self._arrow(rows), temporary)
         self._write_csv(rows)
         return rows

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..report.plots import save_figure
 from .map import Actuator, DesignMap
 from .study import unit
 
@@ -52,10 +53,7 @@ def plot_kinematic(design: DesignMap, actuator: Actuator, path: Path, marks: dic
                                      if len(set(design.study.joint_limits)) == 1 else
                                      "{:g} (top), {:g} (bottom)".format(*map(math.degrees, design.study.joint_limits)))
                  + " deg (admissible: shaded)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[str, tuple[float, float]]) -> Path:
@@ -94,7 +92,4 @@ def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[
     friction, other = design.study.force_margins
     ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
                  "margins (admissible: shaded)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)

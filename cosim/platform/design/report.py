@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...engine.files import replacing, write_text
 from ..report.rows import Row, table
 from .confirm import confirmation_rows, study_confirmation
 from .figures import plot_dynamic, plot_kinematic
@@ -79,7 +80,6 @@ def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
     import pyarrow as pa
     import pyarrow.csv
     import pyarrow.parquet as pq
-    out.mkdir(parents=True, exist_ok=True)
     stem = design.study.path.stem
     (row_key, radii), (column_key, columns) = list(design.study.axes.items())
     written = []
@@ -98,7 +98,10 @@ def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
         values.update(force_paper=design.force_paper.ravel(), force_full=design.force_full.ravel(),
                       leg_speed=design.leg_speed.ravel())
     arrow = pa.table(values)
-    pq.write_table(arrow, out / f"{stem}.parquet")
-    pa.csv.write_csv(arrow, out / f"{stem}.csv")
-    (out / f"{stem}.md").write_text("\n".join([f"# {design.study.name}", "", *summary(design, rows), ""]))
-    return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", out / f"{stem}.md"]
+    with replacing(out / f"{stem}.parquet", "the design map", arrow.nbytes) as temporary:
+        pq.write_table(arrow, temporary)
+    with replacing(out / f"{stem}.csv", "the design map", 3 * arrow.nbytes) as temporary:
+        pa.csv.write_csv(arrow, temporary)
+    summary_file = write_text(out / f"{stem}.md", "\n".join([f"# {design.study.name}", "", *summary(design, rows), ""]),
+                              "the design summary")
+    return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", summary_file]

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..ports import POSE
+from ...engine.files import write_text
 from .plots import units
 from .view3d import SYNC_SCRIPT as VIEW_SYNC
 
@@ -127,9 +128,7 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 {VIEW_SYNC if view else ""}
 </body></html>
 """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(page, encoding="utf-8")
-    return path
+    return write_text(path, page, "the interactive report")
 
 
 def _summary_rows(report) -> list[tuple[str, str, str]]:

@@ -12,6 +12,7 @@ import numpy as np  # noqa: E402
 
 from ...engine.artifacts import fmu_path  # noqa: E402
 from ...engine.checks import variables  # noqa: E402
+from ...engine.files import write_figure  # noqa: E402
 from ..ports import DRIVES, LEGS, POSE  # noqa: E402
 
 
@@ -33,12 +34,13 @@ def units(drive: str) -> dict[str, str]:
 DOF = ["x (surge) [m]", "y (sway) [m]", "z (heave) [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"]
 
 
-def save_figure(fig, path: Path) -> None:
-    """Lays out, writes (creating the folder) and closes a figure."""
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+def save_figure(fig, path: Path, dpi: int = 100) -> Path:
+    """Lays out, writes whole (creating the folder) and closes a figure."""
+    try:
+        fig.tight_layout()
+        return write_figure(fig, path, dpi)
+    finally:
+        plt.close(fig)
 
 
 DRIVE_QUANTITIES = {"torque": "motor torque", "speed": "motor speed", "current.q": "i_q", "force": "motor force",

@@ -21,6 +21,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ...engine.files import write_text
 from ..core import Core, mechanics_value
 from ..ports import POSE
 from ..scene.signals import reference_motion
@@ -272,7 +273,4 @@ def write_view(scene, values: Mapping[str, object], path) -> tuple[object, list[
             f'pose the scene asks for, before any co-simulation (its trajectory FMU stepped alone).</p><ul>'
             + "".join(f"<li>{html.escape(line)}</li>" for line in lines)
             + f'</ul><section class="view">{html_div(figure(geometry, f, scene.name))}</section></body></html>')
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(page, encoding="utf-8")
-    return path, lines
+    return write_text(Path(path), page, "the 3D view"), lines

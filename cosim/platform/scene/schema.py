@@ -103,3 +103,19 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("drive", ListOf(Text()), "per drive (default: its effort, speed or velocity and current)"),
         Key("interval", SECONDS, "results written every interval (default: every macro step)"))),
 ), SceneError)
+
+
+def setting_key(name: str) -> str:
+    """The scene key a run setting given by its name sets (`cosim run SCENE --set step=5e-4`: the
+    names of cosim.engine.settings), a dotted key as it is; SceneError for a setting a scene does
+    not take."""
+    if "." in name:
+        return name
+    if name == "step":
+        return "scene.step"
+    coupling = SCHEMA.table("coupling")
+    if coupling.key(name) is not None:
+        return f"coupling.{name}"
+    raise SceneError(f"'{name}' is not a run setting a scene takes (a scene's: step, "
+                     f"{', '.join(k.name for k in coupling.keys)}; or any of its keys as table.key, e.g. "
+                     "'mechanics.parameters.\"platform.mass\"')")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...engine.files import write_text
 from ...engine.observers import TaskProgress
 from . import halder, meng, sumnu
 from ..report.rows import table
@@ -229,6 +230,4 @@ def build(out: Path) -> Path:
         parts.append(section(figures))
         progress.advance(label)
     parts.append(f"\n_Rebuilt in {time.perf_counter() - started:.0f} s._\n")
-    path = out / "validation.md"
-    path.write_text("\n".join(parts))
-    return path
+    return write_text(out / "validation.md", "\n".join(parts), "the validation report")
