@@ -123,19 +123,18 @@ def mounted_tmpfs(folder, options: str):
 @pytest.fixture
 def small_disk(tmp_path):
     """A folder on a file system of 3 MB (a tmpfs mounted for the test), to fill a disk in a test."""
-    import subprocess
-    folder = mounted_tmpfs(tmp_path / "small_disk", "size=3m")
-    try:
-        yield folder
-    finally:
-        subprocess.run(["umount", str(folder)], capture_output=True)
+    yield from _mounted(tmp_path / "small_disk", "size=3m")
 
 
 @pytest.fixture
 def read_only_disk(tmp_path):
     """A folder on a file system mounted read-only (which refuses root's writes too)."""
+    yield from _mounted(tmp_path / "read_only", "size=1m,ro")
+
+
+def _mounted(folder, options: str):
     import subprocess
-    folder = mounted_tmpfs(tmp_path / "read_only", "size=1m,ro")
+    mounted_tmpfs(folder, options)
     try:
         yield folder
     finally:

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -171,38 +172,48 @@ def test_an_interrupted_sweep_resumes_losing_and_repeating_nothing(tmp_path):
     assert len(list((out / "study.parts").glob("part-*.parquet"))) == 8
 
 
-@pytest.fixture(scope="module")
-def dask_cluster(tmp_path_factory):
-    """A scheduler and two workers, each its own process started by the `dask` command on
-    127.0.0.1, as on a cluster."""
-    folder = tmp_path_factory.mktemp("dask")
-    scheduler_file = folder / "scheduler.json"
+@contextmanager
+def dask_processes(folder: Path, workers: int, options: tuple[str, ...] = ()):
+    """A scheduler and `workers` workers on 127.0.0.1, each its own process started by the `dask`
+    command in `folder` (their cache there), as on a cluster; yields the scheduler's address and the
+    processes (the scheduler's first)."""
+    import json
     dask = str(Path(sys.executable).parent / "dask")
     env = {**os.environ, "PYTHONPATH": str(ROOT), "COSIM_CACHE_DIR": str(folder / "cache")}
-    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                   "--scheduler-file", str(scheduler_file)], cwd=folder, env=env,
+    protocol = ["--protocol", "tls"] if options else []
+    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", *protocol, "--no-dashboard",
+                                   "--scheduler-file", "scheduler.json", *options], cwd=folder, env=env,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
-    start = time.time()
-    while not scheduler_file.exists():
-        assert time.time() - start < 60, "the scheduler did not start"
-        time.sleep(0.1)
-    import json
-    address = json.loads(scheduler_file.read_text())["address"]
-    for _ in range(2):
-        processes.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
-                                           "--no-dashboard", "--host", "127.0.0.1"], cwd=folder, env=env,
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-    from distributed import Client
-    with Client(address, timeout="30s") as client:
-        client.wait_for_workers(2, timeout=60)
-    yield address, processes, folder / "cache"
-    for process in reversed(processes):
-        process.terminate()
-    for process in processes:
-        try:
-            process.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            process.kill()
+    try:
+        start = time.time()
+        while not (folder / "scheduler.json").exists():
+            assert time.time() - start < 60, "the scheduler did not start"
+            time.sleep(0.1)
+        address = json.loads((folder / "scheduler.json").read_text())["address"]
+        for _ in range(workers):
+            processes.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                               "--no-dashboard", "--host", "127.0.0.1", *options], cwd=folder, env=env,
+                                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        yield address, processes
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+        for process in processes:
+            try:
+                process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                process.kill()
+
+
+@pytest.fixture(scope="module")
+def dask_cluster(tmp_path_factory):
+    """A scheduler and two workers started as separate processes."""
+    folder = tmp_path_factory.mktemp("dask")
+    with dask_processes(folder, 2) as (address, processes):
+        from distributed import Client
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, processes, folder / "cache"
 
 
 def test_a_sweep_on_a_scheduler_and_workers_started_as_separate_processes(tmp_path, dask_cluster):
@@ -322,33 +333,13 @@ def test_an_interrupted_local_cluster_sweep_is_one_line(tmp_path):
 def tls_cluster(tmp_path_factory):
     """A scheduler and a worker on 127.0.0.1 that speak TLS only, with a self-signed certificate
     (openssl) as every party's authority, certificate and key."""
-    import json
     folder = tmp_path_factory.mktemp("tls")
     subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "key.pem", "-out", "cert.pem",
                     "-days", "2", "-subj", "/CN=localhost", "-addext", "subjectAltName=IP:127.0.0.1,DNS:localhost"],
                    cwd=folder, check=True, capture_output=True)
-    tls = ["--tls-ca-file", "cert.pem", "--tls-cert", "cert.pem", "--tls-key", "key.pem"]
-    dask = str(Path(sys.executable).parent / "dask")
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "COSIM_CACHE_DIR": str(folder / "cache")}
-    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--protocol", "tls",
-                                   "--no-dashboard", "--scheduler-file", "scheduler.json", *tls], cwd=folder, env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
-    start = time.time()
-    while not (folder / "scheduler.json").exists():
-        assert time.time() - start < 60, "the scheduler did not start"
-        time.sleep(0.1)
-    address = json.loads((folder / "scheduler.json").read_text())["address"]
-    processes.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--no-dashboard", "--host",
-                                       "127.0.0.1", *tls], cwd=folder, env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL))
-    yield address, folder
-    for process in reversed(processes):
-        process.terminate()
-    for process in processes:
-        try:
-            process.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            process.kill()
+    with dask_processes(folder, 1, ("--tls-ca-file", "cert.pem", "--tls-cert", "cert.pem", "--tls-key", "key.pem")) \
+            as (address, _):
+        yield address, folder
 
 
 def test_a_sweep_on_a_tls_scheduler(tmp_path, tls_cluster):
