@@ -125,11 +125,13 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         if given:
             raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
                              "settings)")
+        from contextlib import nullcontext
         from .engine.run import run_system
-        from .engine.ssp import read_ssp
-        structure = model if isinstance(model, SystemStructure) else read_ssp(Path(model))
+        from .engine.ssp import opened
         source = None if isinstance(model, SystemStructure) else str(model)
-        values, report = run_system(structure, dict(settings or {}), duration, target, source=source, progress=progress)
+        with nullcontext(model) if isinstance(model, SystemStructure) else opened(Path(model)) as structure:
+            values, report = run_system(structure, dict(settings or {}), duration, target, source=source,
+                                        progress=progress)
         return Run(values, report)
     if settings:
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "

@@ -7,8 +7,11 @@
 #   bash scripts/fuzz.sh replay MODEL SEED INDEX    one sequence, every call printed
 #   bash scripts/fuzz.sh long-inputs              10 000 mutants of each input file kind (seed 1)
 # CI also fuzzes the files a user writes (tests/fuzz/fuzz_inputs.py): seeded mutations of every
-# shipped scene and sweep file and of an exported SSD and SSV, each run briefly through the CLI;
-# any traceback, hang, exit other than 0/1/2 or multi-line error fails it.
+# shipped scene and sweep file and of an exported SSD, SSV and archive (hostile entries too), each
+# run briefly through the CLI, and the places they go: a disk filled before a run, export, sweep or
+# design writes to it (a tmpfs: root), a sweep cache with planted files or the wrong owner or mode;
+# any traceback, hang, exit other than 0/1/2, multi-line error, unpacked copy left behind,
+# half-written file or planted file run fails it.
 # Each run also checks for leaks (LeakSanitizer: every sequence instantiates and frees an instance)
 # and steps six instances on six threads against a sequential run (ThreadSanitizer reports races).
 # Exits non-zero on any violation, sanitizer report or difference.

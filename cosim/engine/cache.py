@@ -32,8 +32,15 @@ def cache_dir() -> Path:
     folder), made private (0700) if it is new. Raises CacheError when it is not a folder of its
     own (a link), belongs to another user, or others may write to it."""
     path = Path(os.environ.get("COSIM_CACHE_DIR") or _user_cache())
-    path.mkdir(mode=0o700, parents=True, exist_ok=True)
-    status = os.lstat(path)
+    try:
+        try:
+            path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        except FileExistsError:  # a file there: refused below
+            pass
+        status = os.lstat(path)
+    except OSError as error:
+        raise CacheError(f"the sweep cache {path} cannot be made ({error.strerror}); set COSIM_CACHE_DIR to a private "
+                         "folder") from None
     if stat.S_ISLNK(status.st_mode) or not stat.S_ISDIR(status.st_mode):
         raise CacheError(f"the sweep cache {path} is not a folder of its own (a link or a file); set COSIM_CACHE_DIR "
                          "to a private folder")

@@ -23,8 +23,10 @@ import stat
 import tempfile
 import zipfile
 import zlib
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterator
 
 from fmpy import read_model_description
 from lxml import etree
@@ -454,6 +456,18 @@ def _unpack_entry(path: Path, archive: zipfile.ZipFile, entry: zipfile.ZipInfo, 
                                f"({entry.file_size} bytes) or than the archive may: refused")
             out.write(chunk)
     return written
+
+
+@contextmanager
+def opened(path: str | Path) -> Iterator[SystemStructure]:
+    """The system of an SSP archive or SSD for the length of the block: an archive's unpacked copy
+    is removed when the block ends, however it ends."""
+    structure = read_ssp(path)
+    try:
+        yield structure
+    finally:
+        if structure.unpacked is not None:
+            structure.unpacked.cleanup()
 
 
 def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructure:

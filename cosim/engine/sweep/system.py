@@ -28,13 +28,15 @@ class SystemPoint:
                 *[f"{s}.{c}" for c, stats in self.outputs for s in stats]]
 
     def structure(self):
-        from ..ssp import read_ssp
-        return read_ssp(Path(self.path))
+        """The system for the length of a block (its unpacked copy removed afterwards)."""
+        from ..ssp import opened
+        return opened(Path(self.path))
 
     def recorded(self) -> list[str]:
         """The columns a run records (what `outputs` may name)."""
         from ..run import recording
-        return ["time", *recording(self.structure())[1]]
+        with self.structure() as structure:
+            return ["time", *recording(structure)[1]]
 
     def files(self, points=()) -> list[Path]:
         """The files the system reads besides its .ssp archive (which holds its FMUs and values):
@@ -47,9 +49,10 @@ class SystemPoint:
         from ..checks import check_parameters
         from ..settings import system_settings
         values = {**dict(self.fixed), **values}
-        structure = self._with(self.structure(), values)
-        system_settings(structure.settings, structure.experiment.step, self._settings(values))
-        check_parameters(structure)
+        with self.structure() as read:
+            structure = self._with(read, values)
+            system_settings(structure.settings, structure.experiment.step, self._settings(values))
+            check_parameters(structure)
 
     @staticmethod
     def _settings(values: Mapping[str, Value]) -> dict[str, str]:
@@ -73,14 +76,14 @@ class SystemPoint:
         from ..outcome import RunStopped
         from ..run import run_system
         values = {**dict(self.fixed), **values}
-        structure = self._with(self.structure(), values)
-        try:
-            result, report = run_system(structure, self._settings(values), self.stop_time, source=self.path,
-                                        advice=False)
-            status, message = "ok", ""
-        except RunStopped as failed:
-            result, report = failed.result, failed.report
-            status, message = ("diverged" if failed.diverged else "failed"), str(failed)
+        with self.structure() as read:
+            try:
+                result, report = run_system(self._with(read, values), self._settings(values), self.stop_time,
+                                            source=self.path, advice=False)
+                status, message = "ok", ""
+            except RunStopped as failed:
+                result, report = failed.result, failed.report
+                status, message = ("diverged" if failed.diverged else "failed"), str(failed)
         numbers = report.row()
         row = {key: numbers[key] for key in ("steps", "rejected", "energy_residual", "real_time_factor")}
         return {**row, **statistics(result, dict(self.outputs)), "status": status, "message": message}
