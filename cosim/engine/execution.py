@@ -15,6 +15,7 @@ import numpy as np
 
 from .checks import check_capabilities, check_parameters
 from .coupling import Coupling
+from . import interrupts
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
 from .observers import Diverged, Observer, RecordFull, Recorder
@@ -111,6 +112,7 @@ class Execution:
                 for observer in observers:
                     if observer.stop is not None:
                         raise observer.stop
+                interrupts.check()  # a Ctrl-C an FMU's callback held back
         except FmuError as error:
             batch = getattr(error, "batch", None)
             if batch is not None:

@@ -18,6 +18,8 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 from fmpy import extract, read_model_description
+
+from .interrupts import callback
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
@@ -109,6 +111,7 @@ class FmuInstance:
 
     # -- plumbing --------------------------------------------------------------------------------
 
+    @callback
     def _on_log(self, env, instance_name, status, category, message) -> None:
         self.messages.append(LogMessage(_STATUS[status] if 0 <= status < 6 else str(status),
                                         (category or b"").decode(), (message or b"").decode(),

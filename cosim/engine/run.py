@@ -22,6 +22,7 @@ import numpy as np
 from .observers import DivergenceMonitor, Progress
 from .outcome import Outcome, Report, RunStopped, execute
 from .files import OutputError, folder_lock
+from .interrupts import deferred
 from .results import thin, write_csv, write_log, write_mat
 from .settings import Algorithm, StepControl, output_interval, recorded, system_settings
 from .structure import SystemStructure
@@ -55,7 +56,8 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     (ParameterError, NoStep, an FmuError at set-up)."""
     observers = [*([DivergenceMonitor(ratio=plan.divergence)] if plan.divergence else []),
                  *([Progress(plan.structure.name)] if progress else [])]
-    with folder_lock(out) if out is not None else nullcontext():  # one run's files at a time in a folder
+    with folder_lock(out) if out is not None else nullcontext(), deferred():  # one run's files at a time in a
+        #                                                                         folder; Ctrl-C never lost in an FMU
         outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
                           clock=plan.clock, observers=observers, advice=advice)
         result = thin(outcome.result, plan.output_interval)

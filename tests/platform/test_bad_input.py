@@ -210,3 +210,56 @@ def test_an_output_folder_that_cannot_be_written_is_one_line_before_the_run(tmp_
         assert main([*command, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip()
         assert err == f"error: --out {blocker / 'out'}: cannot write results there ({blocker} is not a folder)", err
+
+
+def test_set_on_a_scene_sets_its_keys_or_refuses_in_one_line(tmp_path, capsys):
+    """`cosim run SCENE --set`: a run setting by its name (step) or any key of the scene as its file
+    writes it takes effect, checked as the file's own; what a scene does not take is one line."""
+    scene = str(ROOT / "scenes" / "meng_eq35.toml")
+    brief = ["--duration", "0.1", "--no-plots", "--out", str(tmp_path), "--set", "coupling.startup_time=0", "--set",
+             "coupling.edge_time=0"]
+    assert main(["run", scene, *brief, "--set", "step=5e-4"]) == 0
+    assert "0.1 s simulated in" in capsys.readouterr().out
+    import numpy as np
+    times = np.genfromtxt(tmp_path / "meng_eq35.csv", delimiter=",", names=True)["time"]
+    assert np.allclose(np.diff(times), 5e-4)  # the step the option set, not the scene's 1 ms
+    assert main(["run", scene, *brief, "--set", 'mechanics.parameters."platform.mass"=1100']) == 0
+    capsys.readouterr()
+    for setting, message in (("bogus=1", "--set bogus=1: 'bogus' is not a run setting a scene takes"),
+                             ("scene.bogus=1", "meng_eq35.toml:2: 'scene.bogus' is not a known key"),
+                             ("step=fast", "meng_eq35.toml:5: 'scene.step' = 'fast': must be a positive number"),
+                             ("sequence=a b", "--set sequence=a b: 'sequence' is not a run setting a scene takes")):
+        assert main(["run", scene, *brief, "--set", setting]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_closed_pipe_ends_the_command_quietly(tmp_path):
+    """`cosim run ... | head -1` and `cosim copy | head -1`, the reader gone before the output is
+    printed: exit 0 and nothing on stderr (as `cat` does), not a BrokenPipeError."""
+    import subprocess
+    import sys
+    for command in (["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--duration", "0.05", "--no-plots", "--out",
+                     str(tmp_path)], ["copy"]):
+        process = subprocess.Popen([sys.executable, "-m", "cosim", *command], stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE)
+        process.stdout.close()  # the reader goes away at once
+        err = process.stderr.read().decode()
+        assert process.wait(timeout=120) == 0 and err == "", (command, err)
+
+
+def test_ctrl_c_during_a_run_is_one_line(tmp_path):
+    """SIGINT while a scene runs (whichever FMU call or callback it lands in): one line, exit 130,
+    never an interrupt swallowed in an FMU's logger and the run going on."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    process = subprocess.Popen([sys.executable, "-m", "cosim", "run", str(ROOT / "scenes" / "meng_eq35.toml"),
+                                "--duration", "600", "--no-plots", "--out", str(tmp_path)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(2.0)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 130 and err == "interrupted\n" and out == "", (err, out)
