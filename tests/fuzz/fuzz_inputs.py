@@ -8,7 +8,8 @@ archives (bombs, names that climb out, links, thousands of entries: nothing unpa
 behind or land outside), a disk filled to a random level before a run, an export, a sweep or a
 design writes to it (no half-written file under a final name, no temporary file left), and a
 sweep's cache with planted files or the wrong owner or mode (a planted file is never run: the rows
-are the sweep's own).
+are the sweep's own); and a design study (`cosim design`), where a numpy warning that leaks is a
+violation too.
 
     .venv/bin/python tests/fuzz/fuzz_inputs.py                     CI: seed 1 and a new seed (printed),
                                                                   --mutants per file kind and seed (default 40)
@@ -57,7 +58,7 @@ BINARY = ("ssp", "archive")  # kinds whose file is bytes (held as latin-1 text)
 
 @dataclass
 class Base:
-    kind: str        # scene, sweep, ssd, ssv, table, ssp, archive, disk, cache
+    kind: str        # scene, sweep, ssd, ssv, table, ssp, archive, disk, cache, study
     name: str | None  # the mutant's path in the work tree (beside the files it refers to); None: no file
     text: str        # the unmutated file
     command: list    # the CLI call; {root} is the work tree, {out} the output folder, {disk} the small disk
@@ -75,7 +76,7 @@ def bases(root: Path) -> dict[str, list[Base]]:
     shutil.copytree(ROOT / "scenes", root / "scenes")
     shutil.copytree(ROOT / "sweeps", root / "sweeps")
     out: dict[str, list[Base]] = {"scene": [], "sweep": [], "ssd": [], "ssv": [], "table": [], "ssp": [],
-                                  "archive": [], "disk": [], "cache": []}
+                                  "archive": [], "disk": [], "cache": [], "study": []}
     for path in sorted((root / "scenes").glob("*.toml")):
         out["scene"].append(Base("scene", "scenes/mutant.toml", path.read_text(),
                                  ["run", "{root}/scenes/mutant.toml", "--duration", "0.02", "--no-plots", "--out", "{out}"]))
@@ -111,9 +112,13 @@ def bases(root: Path) -> dict[str, list[Base]]:
         f'[sweep]\nscene = "{root}/scenes/meng_eq35.toml"\nduration = 0.02\n[[axis]]\nkey = "scene.step"\n'
         'values = [5e-4, 1e-3]\n')
     (root / "studies").mkdir()
-    (root / "studies" / "tiny.toml").write_text((ROOT / "studies" / "halder_section5.toml").read_text().split(
-        "[workspace]")[0].replace("from = 0.80, to = 1.50, step = 0.01", "from = 1.0, to = 1.1, step = 0.05").replace(
-        "from = 0.60, to = 1.80, step = 0.01", "from = 1.2, to = 1.4, step = 0.1"))
+    tiny = (ROOT / "studies" / "halder_section5.toml").read_text().split("[workspace]")[0].replace(
+        "from = 0.80, to = 1.50, step = 0.01", "from = 1.0, to = 1.1, step = 0.05").replace(
+        "from = 0.60, to = 1.80, step = 0.01", "from = 1.2, to = 1.4, step = 0.1") + \
+        "[thresholds]\ncondition_number = 20\nsingular_distance_factor = 2\n"
+    (root / "studies" / "tiny.toml").write_text(tiny)
+    out["study"].append(Base("study", "studies/mutant.toml", tiny, ["design", "{root}/studies/mutant.toml", "--out",
+                                                                    "{out}"]))
     for command in (["run", "{root}/scenes/meng_eq35.toml", "--duration", "0.3", "--out", "{disk}/out"],
                     ["run", "{root}/scenes/meng_eq35.toml", "--duration", "1.0", "--no-plots", "--out", "{disk}/out"],
                     ["run", "{root}/meng.ssp", "--duration", "0.5", "--out", "{disk}/out"],
@@ -397,6 +402,8 @@ def verdict(code: int | None, output: str) -> str | None:
         return f"no end within {TIME_LIMIT:g} s (a hang)"
     if "Traceback" in output or code not in (0, 1, 2):
         return f"exit {code}" + (" with a traceback" if "Traceback" in output else "")
+    if "RuntimeWarning" in output:
+        return "a numpy warning leaked"
     errors = [line for line in output.splitlines() if line.startswith("error:")]
     if code == 2 and len(errors) != 1:
         return f"exit 2 with {len(errors)} error lines"
@@ -511,7 +518,7 @@ def arguments() -> argparse.Namespace:
     parser.add_argument("--mutants", type=int, default=40, help="mutants per file kind and seed (CI)")
     parser.add_argument("--long", action="store_true", help="10 000 mutants per file kind, seed 1")
     parser.add_argument("--seed", type=int, help="one seed instead of 1 and a new one")
-    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv,table,ssp,archive,disk,cache")
+    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv,table,ssp,archive,disk,cache,study")
     parser.add_argument("--replay", nargs=3, metavar=("KIND", "SEED", "INDEX"))
     return parser.parse_args()
 

@@ -66,7 +66,7 @@ def test_sumnu_family_unscaled_is_the_thesis_platform(tmp_path):
         radius = [math.hypot(v[f"geometry.base_joint[{i}].x"], v[f"geometry.base_joint[{i}].y"]) for v in (values, scaled)]
         assert radius[1] == pytest.approx(1.2 * radius[0], rel=1e-12)
     design = design_map(loaded)
-    assert design.length_max.shape == (4, 3, 1) and np.all(design.length_max > design.length_min)
+    assert design.actuated_length_max.shape == (4, 3, 1) and np.all(design.actuated_length_max > design.actuated_length_min)
 
 
 def test_a_scenes_motion_is_its_reference_about_the_neutral_with_exact_rates(meng):
@@ -105,7 +105,7 @@ def test_a_recorded_table_gives_the_limits_of_the_same_basic_motion(meng, tmp_pa
                  [1.0, 1.1], [1.2, 1.4])
     a, b = design_map(table, dynamic=False), design_map(basic, dynamic=False)
     assert a.motions == ["surge"] and b.motions == ["surge"]
-    assert np.allclose(a.length_max, b.length_max, atol=1e-9) and np.allclose(a.length_min, b.length_min, atol=1e-9)
+    assert np.allclose(a.actuated_length_max, b.actuated_length_max, atol=1e-9) and np.allclose(a.actuated_length_min, b.actuated_length_min, atol=1e-9)
 
 
 def test_the_leg_speed_is_the_rate_of_the_leg_lengths(meng):
@@ -148,7 +148,7 @@ def test_meng_eq35_needs_more_than_mengs_stroke_at_any_geometry(meng):
     part = grid(meng, np.arange(0.6, 1.51, 0.1), np.sort(np.r_[np.arange(1.5, 2.41, 0.1), 1.95]))
     design = design_map(part)
     assert not design.admissible(meng.actuators[0]).any() and design.admissible(meng.actuators[1]).any()
-    needed = design.length_max.max(axis=2) - design.length_min.min(axis=2)
+    needed = design.actuated_length_max.max(axis=2) - design.actuated_length_min.min(axis=2)
     joints = np.maximum(design.top_angle, design.bottom_angle).max(axis=2) < meng.joint_angle_limit
     row = next(r for r in map_rows(design) if r.quantity.startswith("the smallest stroke"))
     assert row.ours == pytest.approx(needed[joints].min(), abs=0) and row.ours > 0.665

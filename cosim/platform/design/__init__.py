@@ -11,7 +11,8 @@ against the actuator's force less the margins) and the conditioning. Every pose 
 mechanics FMU's own dynamics core on the platform the FMU builds from the design (the one mapping,
 cosim.platform.scene.parameter_sets), so the map and the co-simulation share one model.
 
-Beyond the map: a design's workspace and distance to a singular pose (workspace.py), the design
+Every row about a named design is of that design at exactly its values (map.at, map.along), not
+of the grid's nearest point. Beyond the map: a design's workspace and distance to a singular pose (workspace.py), the design
 with the largest worst-case margin (optimise.py), a design confirmed by co-simulation through our
 drives (confirm.py), a scene's motion as the specification (scene_fit.py); the figures
 (figures.py), Section V's numbers beside ours (halder.py), and the study's answer as rows, a
@@ -20,8 +21,10 @@ summary and files (report.py).
 Where the paper is loose (params/halder2013.toml says each choice): the disc's size "0.5mm" is read
 as a 0.5 m radius, the design height as the disc's (z_q0, which gives the paper's neutral running
 length 1647 mm at z = 1.4 m), Eq 1's even legs as (i - 2) pi/3, Section V's 100 kg payload with
-Section VII's inertia scaled by mass (the study file says so), and the margins as the force the
-demand may reach: continuous force / ((1 + friction margin)(1 + other margin)).
+Section VII's inertia scaled by mass (the study file says so), and the margins as the paper words
+them (830 N less 7 % and 20 %: force_margins_mode "subtract"). Every summary lists these
+assumptions first, each with what it changes at the chosen design (assumptions.py); every verdict
+word comes from the study's thresholds (verdicts.py).
 """
 
 from .map import DesignMap, design_map, parallel_map

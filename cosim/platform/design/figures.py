@@ -91,5 +91,5 @@ def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[
     ax.legend(handles=handles, fontsize=8, loc="upper right")
     friction, other = design.study.force_margins
     ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
-                 "margins (admissible: shaded)", fontsize=9)
+                 f"margins read as '{design.study.force_margins_mode}' (admissible: shaded)", fontsize=9)
     return save_figure(fig, path, dpi=110)

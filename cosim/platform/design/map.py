@@ -18,6 +18,7 @@ import numpy as np
 from ..core import Core
 from .motion import basic_motions
 from .study import Actuator, Study, platform_values, stubs
+from .verdicts import SINGULAR
 
 
 @dataclass
@@ -26,8 +27,8 @@ class DesignMap:
     over the motion; `seconds` the time the map took."""
     study: Study
     motions: list[str]
-    length_max: np.ndarray    # [rows, columns, motions]: the largest actuated length [m]
-    length_min: np.ndarray
+    actuated_length_max: np.ndarray    # [rows, columns, motions]: the largest actuated length [m]
+    actuated_length_min: np.ndarray
     neutral_length: np.ndarray  # [rows, columns]: the longest actuated length at the neutral
     top_angle: np.ndarray     # the largest top (universal) joint angle [rad]
     bottom_angle: np.ndarray  # the largest bottom (spherical) joint angle [rad]
@@ -40,13 +41,13 @@ class DesignMap:
 
     @property
     def points(self) -> int:
-        return self.length_max.shape[0] * self.length_max.shape[1]
+        return self.actuated_length_max.shape[0] * self.actuated_length_max.shape[1]
 
     def kinematic_admissible(self, actuator: Actuator) -> dict[str, np.ndarray]:
         """Per constraint, [rows, columns, motions] booleans (Eq 21): max stroke, min stroke, joint angle."""
         s = stubs(self.study)
-        return {"max stroke": s + self.length_max < actuator.running_length_max,
-                "min stroke": s + self.length_min > actuator.running_length_min,
+        return {"max stroke": s + self.actuated_length_max < actuator.running_length_max,
+                "min stroke": s + self.actuated_length_min > actuator.running_length_min,
                 "joint angle": self.study.joints_within(self.top_angle, self.bottom_angle)}
 
     def dynamic_admissible(self, actuator: Actuator) -> dict[str, np.ndarray]:
@@ -64,8 +65,9 @@ class DesignMap:
 
     def admissible(self, actuator: Actuator, dynamic: bool = False) -> np.ndarray:
         """[rows, columns]: every constraint of every basic motion holds (and the forces and
-        speed, with dynamic)."""
+        speed, with dynamic), on a platform that is not singular anywhere along them."""
         ok = np.all([c.all(axis=2) for c in self.kinematic_admissible(actuator).values()], axis=0)
+        ok &= self.condition.max(axis=2) <= SINGULAR
         if dynamic:
             for limit in self.dynamic_admissible(actuator).values():
                 ok &= limit.all(axis=2)
@@ -101,11 +103,13 @@ def design_map(study: Study, dynamic: bool = True) -> DesignMap:
             sampled = np.r_[0:len(poses):10, len(poses) - 1]
             singular = np.full((len(poses), 6), np.nan)
             singular[sampled] = np.linalg.svd(k["jacobian"][sampled], compute_uv=False)
-            for name, values, reduce in (("length_max", k["length"], np.max), ("length_min", k["length"], np.min),
+            with np.errstate(divide="ignore"):  # a singular pose: an infinite condition number
+                condition = singular[:, :1] / singular[:, -1:]
+            for name, values, reduce in (("actuated_length_max", k["length"], np.max), ("actuated_length_min", k["length"], np.min),
                                          ("top_angle", k["upper_angle"], np.max),
                                          ("bottom_angle", k["lower_angle"], np.max),
                                          ("smallest_singular", singular[:, -1:], np.nanmin),
-                                         ("condition", singular[:, :1] / singular[:, -1:], np.nanmax)):
+                                         ("condition", condition, np.nanmax)):
                 store(name, r, c, values, path_ends, reduce)
             out.setdefault("neutral_length", np.empty(shape))[r, c] = paper.leg_lengths(neutral).max()
             if dynamic:
@@ -119,21 +123,27 @@ def design_map(study: Study, dynamic: bool = True) -> DesignMap:
     return DesignMap(study, motions, seconds=time.perf_counter() - start, **out)
 
 
-def limit_along(design: DesignMap, actuator: Actuator, constraint: str, motion: str, row: float) -> float | None:
-    """Halder's points a, b, c: at the grid row nearest `row` (r_b), scanning the column variable
-    (z) upward, the last admissible value before the constraint fails (max stroke: the largest
-    admissible z) or the first admissible one (min stroke, joint angle: the smallest)."""
-    (_, rows), (_, columns) = list(design.study.axes.items())
-    r = int(np.argmin(np.abs(rows - row)))
-    ok = design.kinematic_admissible(actuator)[constraint][r, :, design.motions.index(motion)]
+def at(study: Study, point: dict[str, float], dynamic: bool = True) -> DesignMap:
+    """The map of one design at exactly its values (whatever the study's grid holds)."""
+    return design_map(study.with_axes({key: np.array([float(point[key])]) for key in study.axes}), dynamic)
+
+
+def along(study: Study, row: float, dynamic: bool = False) -> DesignMap:
+    """The map of one row at exactly `row` of the first axis, over the grid's columns."""
+    (row_key, _), (column_key, columns) = list(study.axes.items())
+    return design_map(study.with_axes({row_key: np.array([float(row)]), column_key: columns}), dynamic)
+
+
+def limit_along(line: DesignMap, actuator: Actuator, constraint: str, motion: str) -> float | None:
+    """Halder's points a, b, c on a map of one row (`along`): scanning the column variable (z)
+    upward, the last admissible value before the constraint fails (max stroke: the largest
+    admissible z) or the first admissible one (min stroke, joint angle: the smallest); None where
+    it holds nowhere. On the grid: within one column step of the crossing."""
+    columns = list(line.study.axes.values())[1]
+    ok = line.kinematic_admissible(actuator)[constraint][0, :, line.motions.index(motion)]
     if not ok.any():
         return None
     return float(columns[ok][-1] if constraint == "max stroke" else columns[ok][0])
-
-
-def nearest(study: Study, point: tuple[float, float]) -> tuple[int, int]:
-    (_, rows), (_, columns) = list(study.axes.items())
-    return int(np.argmin(np.abs(rows - point[0]))), int(np.argmin(np.abs(columns - point[1])))
 
 
 def _rows(study: Study, rows: list[int], dynamic: bool) -> DesignMap:
@@ -156,6 +166,6 @@ def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
         parts = client.gather(client.map(_rows, [study] * len(rows), [list(r) for r in rows if len(r)],
                                          [dynamic] * len(rows), pure=False))
     merged = {name: np.concatenate([getattr(p, name) for p in parts]) for name in
-              ("length_max", "length_min", "neutral_length", "top_angle", "bottom_angle", "smallest_singular",
+              ("actuated_length_max", "actuated_length_min", "neutral_length", "top_angle", "bottom_angle", "smallest_singular",
                "condition", *(("force_paper", "force_full", "leg_speed") if dynamic else ()))}
     return DesignMap(study, parts[0].motions, seconds=time.perf_counter() - start, **merged)

@@ -20,8 +20,8 @@ def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[s
     joint angle (of the limit) and the peak force of the paper's model (of the allowed force)."""
     design = design_map(study.with_axes({key: np.array([number]) for key, number in point.items()}), dynamic=True)
     s = stubs(study)
-    return {"max stroke": float((actuator.running_length_max - s - design.length_max.max()) / actuator.stroke),
-            "min stroke": float((design.length_min.min() + s - actuator.running_length_min) / actuator.stroke),
+    return {"max stroke": float((actuator.running_length_max - s - design.actuated_length_max.max()) / actuator.stroke),
+            "min stroke": float((design.actuated_length_min.min() + s - actuator.running_length_min) / actuator.stroke),
             "joint angle": float(1 - max(design.top_angle.max() / study.joint_limits[0],
                                          design.bottom_angle.max() / study.joint_limits[1])),
             "force": float(1 - design.force_paper.max() / study.allowed_force(actuator))}

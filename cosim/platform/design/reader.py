@@ -15,7 +15,7 @@ from ...engine.schema import Document, read
 from ..ports import POSE
 from .schema import RECORDED, SCHEMA, StudyError
 from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, OptimiseSpec, Recorded, Study,
-                    WorkspaceSpec, parameter_set)
+                    Thresholds, WorkspaceSpec, parameter_set)
 
 MOST_PER_AXIS = 2000
 
@@ -28,8 +28,8 @@ def load_study(path: str | Path) -> Study:
     family = FAMILIES[family_name]
     config = parameter_set(family_name)
     design_values = family.design_values(config)
-    fixed = _fixed(doc, design_values)
-    axes = _axes(doc, design_values, family.fixed_only)
+    fixed = _fixed(doc, design_values, family.may_be_zero)
+    axes = _axes(doc, design_values, family.fixed_only, family.may_be_zero)
     motion, recorded = _motion(doc)
     actuators = [_actuator(doc, k, family.mechanics(config, design_values)) for k in range(len(doc.entries("actuator")))]
     payload_mass, payload_inertia = family.payload(config)
@@ -37,30 +37,98 @@ def load_study(path: str | Path) -> Study:
     limits = {key: math.radians(doc.value("study", key)) for key in
               ("joint_angle_limit_deg", "top_joint_angle_limit_deg", "bottom_joint_angle_limit_deg")
               if doc.value("study", key) is not None}
-    return Study(doc.path, str(doc.value("study", "name", doc.path.stem)), family_name, axes, motion, actuators,
-                 limits["joint_angle_limit_deg"], float(doc.value("study", "payload_mass", payload_mass)),
-                 tuple(float(v) for v in doc.value("study", "payload_inertia", payload_inertia)),
-                 tuple(float(v) for v in doc.value("study", "force_margins")), int(doc.value("study", "samples")),
-                 fixed=fixed, workspace=_workspace(doc, axes, names), optimise=_optimise(doc, names),
-                 confirm=_confirm(doc, axes, names), recorded=recorded,
-                 top_joint_limit=limits.get("top_joint_angle_limit_deg"),
-                 bottom_joint_limit=limits.get("bottom_joint_angle_limit_deg"))
+    study = Study(doc.path, str(doc.value("study", "name", doc.path.stem)), family_name, axes, motion, actuators,
+                  limits["joint_angle_limit_deg"], float(doc.value("study", "payload_mass", payload_mass)),
+                  tuple(float(v) for v in doc.value("study", "payload_inertia", payload_inertia)),
+                  _margins(doc), doc.value("study", "force_margins_mode"), int(doc.value("study", "samples")),
+                  fixed=fixed, workspace=_workspace(doc, axes, names), optimise=_optimise(doc, names),
+                  confirm=_confirm(doc, axes, names), recorded=recorded,
+                  top_joint_limit=limits.get("top_joint_angle_limit_deg"),
+                  bottom_joint_limit=limits.get("bottom_joint_angle_limit_deg"),
+                  thresholds=Thresholds(float(doc.value("thresholds", "condition_number")),
+                                        float(doc.value("thresholds", "singular_distance_factor"))),
+                  payload_from=_payload_from(doc, family_name))
+    study.chosen = _point(doc, "study", axes, key="chosen") if doc.value("study", "chosen") is not None else None
+    _not_degenerate(doc, study)
+    return study
 
 
-def _fixed(doc: Document, design_values: dict[str, float]) -> dict[str, float]:
-    """[study] fixed: design values held at their own values (non-negative numbers)."""
+def _margins(doc: Document) -> tuple[float, float]:
+    """[study] force_margins, leaving some force under the mode they are read in."""
+    friction, other = (float(v) for v in doc.value("study", "force_margins"))
+    if doc.value("study", "force_margins_mode") == "subtract" and friction + other >= 1:
+        raise doc.fail("study.force_margins", "leave no force: read as 'subtract', friction + other must be below 1",
+                       [friction, other])
+    return friction, other
+
+
+def _payload_from(doc: Document, family_name: str) -> str:
+    """Where the payload comes from: the study's words (payload_from), else which file gives its
+    mass and which its inertia."""
+    if doc.value("study", "payload_from") is not None:
+        return str(doc.value("study", "payload_from"))
+    source = {key: "the study file" if doc.value("study", key) is not None else f"params/{family_name}.toml"
+              for key in ("payload_mass", "payload_inertia")}
+    if len(set(source.values())) == 1:
+        return source["payload_mass"]
+    return f"the mass from {source['payload_mass']}, the inertia from {source['payload_inertia']}"
+
+
+def _not_degenerate(doc: Document, study: Study) -> None:
+    """Every corner of the grid (and each design the study names) builds a platform whose legs hold
+    it at its neutral pose: a finite neutral and a leg Jacobian there that is not singular."""
+    from ..core import Core
+    from .study import platform_values
+    (row_key, rows), (column_key, columns) = list(study.axes.items())
+    named = [(f"study.chosen", study.chosen), ("workspace.point", study.workspace and study.workspace.point),
+             ("confirm.point", study.confirm and study.confirm.point)]
+    corners = [("axes", {row_key: float(r), column_key: float(c)}) for r in (rows[0], rows[-1])
+               for c in (columns[0], columns[-1])]
+    core = Core(actuators=False, motors=False, friction=False)
+    for key, point in corners + [(k, p) for k, p in named if p]:
+        problem = degenerate(core, platform_values(study, point))
+        if problem:
+            where = ", ".join(f"{k} = {v:g}" for k, v in point.items())
+            raise doc.fail(key, f"makes a degenerate platform at {where}: {problem}")
+
+
+def degenerate(core, values: dict) -> str | None:
+    """Why the platform of these mechanics values cannot be a design (None if it can): its neutral
+    pose not finite, or its leg Jacobian there singular (condition number above 1e6)."""
+    with np.errstate(all="ignore"):
+        try:
+            core.use_start_values(values)
+            neutral = core.neutral_pose
+            jacobian = core.pose_kinematics(neutral[None], jacobian=True)["jacobian"][0]
+        except (ValueError, RuntimeError) as error:
+            return str(error)
+        if not np.all(np.isfinite(neutral)) or not np.all(np.isfinite(jacobian)):
+            return "its neutral pose is not finite"
+        singular = np.linalg.svd(jacobian, compute_uv=False)
+        if not singular[-1] > 1e-6 * singular[0]:
+            return (f"its legs' Jacobian is singular at the neutral pose (condition number "
+                    f"{singular[0] / singular[-1] if singular[-1] > 0 else math.inf:.3g})")
+    return None
+
+
+def _fixed(doc: Document, design_values: dict[str, float], may_be_zero: tuple[str, ...]) -> dict[str, float]:
+    """[study] fixed: design values held at their own values (positive numbers; 0 for one that is
+    not a size)."""
     fixed = doc.value("study", "fixed", {})
     for key, number in fixed.items():
         if key not in design_values:
             raise doc.fail(f"study.fixed.{key}", f"is not a design value of {doc.value('study', 'parameter_set')} "
                            f"({', '.join(sorted(design_values))})")
-        if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number) or number < 0:
-            raise doc.fail(f"study.fixed.{key}", "must be a non-negative number", number)
+        if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number) or number < 0 \
+                or (number == 0 and key not in may_be_zero):
+            raise doc.fail(f"study.fixed.{key}", "must be a non-negative number" if key in may_be_zero else
+                           "must be a positive number (a size)", number)
     return {k: float(v) for k, v in fixed.items()}
 
 
-def _axes(doc: Document, design_values: dict[str, float], fixed_only: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """[axes]: two design values of the family, each from, to, step."""
+def _axes(doc: Document, design_values: dict[str, float], fixed_only: tuple[str, ...],
+          may_be_zero: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """[axes]: two design values of the family, each from, to, step (from above 0 for a size)."""
     given = doc.family("axes.<value>")
     known = ", ".join(sorted(design_values))
     if len(given) != 2:
@@ -73,9 +141,14 @@ def _axes(doc: Document, design_values: dict[str, float], fixed_only: tuple[str,
         if key in fixed_only:
             raise doc.fail(f"axes.{key}", "is one value per study: set it in [study] fixed")
         low, high, step = (float(spec[k]) for k in ("from", "to", "step"))
+        if low == 0 and key not in may_be_zero:
+            raise doc.fail(f"axes.{key}.from", f"must be above 0: {key} is a size", spec["from"])
         if not high >= low:
             raise doc.fail(f"axes.{key}.to", f"must not be below from = {low:g}", spec["to"])
         count = int(round((high - low) / step)) + 1
+        if count < 2:
+            raise doc.fail(f"axes.{key}", f"has one value ({low:g}): a map needs at least two an axis (to above "
+                           f"from by a step or more)")
         if count > MOST_PER_AXIS:
             raise doc.fail(f"axes.{key}", f"has {count} values; at most {MOST_PER_AXIS} per axis")
         axes[key] = np.round(low + step * np.arange(count), 10)
@@ -138,16 +211,18 @@ def _actuator(doc: Document, k: int, transmission: dict[str, float]) -> Actuator
                     limits["continuous_force"], limits.get("peak_force"), limits.get("speed"))
 
 
-def _point(doc: Document, table: str, axes: dict[str, np.ndarray], actuators: list[str]) -> dict[str, float]:
-    """[workspace] or [confirm]: a design (a positive value of each axis) and one of the actuators."""
-    point = doc.value(table, "point")
+def _point(doc: Document, table: str, axes: dict[str, np.ndarray], actuators: list[str] | None = None,
+           key: str = "point") -> dict[str, float]:
+    """[workspace] or [confirm] (a design, a positive value of each axis, and one of the
+    actuators), or [study] chosen (a design)."""
+    point = doc.value(table, key)
     if set(point) != set(axes):
-        raise doc.fail(f"{table}.point", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
-    for key, number in point.items():
+        raise doc.fail(f"{table}.{key}", f"must give the design as {{{', '.join(f'{k} = ...' for k in axes)}}}")
+    for name, number in point.items():
         if isinstance(number, bool) or not isinstance(number, (int, float)) or not math.isfinite(number) \
                 or not number > 0:
-            raise doc.fail(f"{table}.point.{key}", "must be a positive number", number)
-    if doc.value(table, "actuator") not in actuators:
+            raise doc.fail(f"{table}.{key}.{name}", "must be a positive number", number)
+    if actuators is not None and doc.value(table, "actuator") not in actuators:
         raise doc.fail(f"{table}.actuator", f"is not one of the study's actuators ({', '.join(actuators)})",
                        doc.value(table, "actuator"))
     return {k: float(v) for k, v in point.items()}

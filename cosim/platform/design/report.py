@@ -16,7 +16,9 @@ from .figures import plot_dynamic, plot_kinematic
 from .halder import is_section5, longest, marks, paper_rows, shortest
 from .map import DesignMap
 from .optimise import optimum_rows, study_optimum
-from .study import span, stubs, value
+from .assumptions import assumption_rows
+from .study import point_text, span, stubs
+from .verdicts import SINGULAR
 from .workspace import study_workspace, workspace_rows
 
 
@@ -32,46 +34,59 @@ def map_rows(design: DesignMap) -> list[Row]:
         failing = {name: float(np.mean(~holds.all(axis=2))) for name, holds in
                    {**design.kinematic_admissible(actuator), **design.dynamic_admissible(actuator)}.items()}
         r, c = np.nonzero(both)
-        extent = f"{span(row_key, rows[r])}, {span(column_key, columns[c])}" if both.any() else "none"
+        extent = (f"{span(row_key, rows[r], study.decimals(row_key))}, "
+                  f"{span(column_key, columns[c], study.decimals(column_key))}") if both.any() else "none"
         out.append(Row(f"admissible designs, {actuator.name}", "", f"{kinematic.sum()} / {both.sum()} of {design.points}",
                        "points", f"kinematic / with forces and speed; {extent}; each limit fails at: " + ", ".join(
                            f"{name} {share:.0%}" for name, share in failing.items())))
     joints = study.joints_within(design.top_angle, design.bottom_angle).all(axis=2)
-    needed = np.where(joints, design.length_max.max(axis=2) - design.length_min.min(axis=2), np.inf)
+    needed = np.where(joints, design.actuated_length_max.max(axis=2) - design.actuated_length_min.min(axis=2), np.inf)
     if np.isfinite(needed).any():
         r, c = np.unravel_index(np.argmin(needed), needed.shape)
         s = stubs(study)
-        out.append(Row("the smallest stroke that carries every motion, over the grid (joint limit held)", "", float(needed[r, c]), "m",
-                       f"at {value(row_key, rows[r])}, {value(column_key, columns[c])}: running length "
-                       f"{design.length_min[r, c].min() + s:.3f} to {design.length_max[r, c].max() + s:.3f} m"
+        out.append(Row("the smallest stroke that carries every motion, over the grid (joint limit held)", "",
+                       float(needed[r, c]), "m",
+                       f"at {point_text(study, {row_key: rows[r], column_key: columns[c]}, grid=True)}: running length "
+                       f"{design.actuated_length_min[r, c].min() + s:.3f} to {design.actuated_length_max[r, c].max() + s:.3f} m"
                        + ("; on the grid's edge: a wider grid may need less" if r in (0, len(rows) - 1)
                           or c in (0, len(columns) - 1) else "")))
     else:
         out.append(Row("the smallest stroke that carries every motion", "", "none", "",
                        "the joint limit fails at every design of the grid"))
+    condition = design.condition.max(axis=2)
+    limit = study.thresholds.condition_number
+    singular = int((~(condition <= SINGULAR)).sum())
+    out.append(Row("well-conditioned designs of the grid", "", f"{int((condition <= limit).sum())} of {design.points}",
+                   "points", f"the leg Jacobian's condition number within the study's {limit:g} over every motion; "
+                   f"over the grid {np.nanmin(condition):.1f} to {np.nanmax(condition):.3g}"
+                   + (f"; {singular} singular (above {SINGULAR:.0e}: not admissible)" if singular else "")))
     return out
 
 
 def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None) -> list[Row]:
-    """The map's rows (beside the paper's numbers for Halder's Section V plane), then the
+    """The study's assumptions and what each changes at its chosen design; the map's rows (beside
+    the paper's numbers for Halder's Section V plane), then the
     [workspace] design's and the [optimise] optimum's, where the study names them (the
     optimiser's designs on Dask as workers/scheduler say)."""
     space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
     runs = study_confirmation(design.study, workers, scheduler)
-    return (paper_rows(design) if is_section5(design.study) else []) + map_rows(design) + \
+    return assumption_rows(design.study) + (paper_rows(design) if is_section5(design.study) else []) + map_rows(design) + \
         (workspace_rows(design.study, space) if space else []) + \
         (optimum_rows(design.study, best) if best else []) + (confirmation_rows(design.study, runs) if runs else [])
 
 
 def summary(design: DesignMap, rows: list | None = None) -> list[str]:
-    """Markdown lines: the grid, the rows (report_rows unless given), the map's speed."""
-    (row_key, grid_rows), (column_key, columns) = list(design.study.axes.items())
-    return [f"Grid: {span(row_key, grid_rows)} x {span(column_key, columns)}, {design.points} points, " + (f"the motion of {design.study.recorded.name} "
-                                             f"({len(design.study.recorded.times)} samples)." if design.study.recorded else
-                                             f"{len(design.motions)} basic motions ({', '.join(design.motions)})."), "",
+    """Markdown lines: the grid, the rows (report_rows unless given: the assumptions first), the
+    map's speed."""
+    study = design.study
+    grid = " x ".join(f"{span(key, values, study.decimals(key))} in steps of {study.step(key):g}"
+                      for key, values in study.axes.items())
+    motion = (f"the motion of {study.recorded.name} ({len(study.recorded.times)} samples)" if study.recorded else
+              f"{len(design.motions)} basic motions ({', '.join(design.motions)})")
+    return [f"Grid: {grid}, {design.points} points, {motion}.", "",
             table(rows if rows is not None else report_rows(design)), "",
-            f"The map took {design.seconds:.1f} s ({design.points / design.seconds:.0f} grid points per second, each "
-            + ("over the motion)." if design.study.recorded else "over every basic motion).")]
+            f"The map took {design.seconds:.1f} s ({design.points / max(design.seconds, 1e-9):.0f} grid points per "
+            "second, each " + ("over the motion)." if study.recorded else "over every basic motion).")]
 
 
 def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
@@ -90,8 +105,10 @@ def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
     if design.force_paper is not None:
         written.append(plot_dynamic(design, longest(design.study), out / f"{stem}_dynamic.png", chosen))
     r, c, m = np.meshgrid(np.arange(len(radii)), np.arange(len(columns)), np.arange(len(design.motions)), indexing="ij")
+    s = stubs(design.study)
     values = {row_key: radii[r].ravel(), column_key: columns[c].ravel(), "motion": np.array(design.motions)[m].ravel(),
-              "length_min": design.length_min.ravel(), "length_max": design.length_max.ravel(),
+              "actuated_length_min": design.actuated_length_min.ravel(), "actuated_length_max": design.actuated_length_max.ravel(),
+              "running_length_min": design.actuated_length_min.ravel() + s, "running_length_max": design.actuated_length_max.ravel() + s,
               "top_angle": design.top_angle.ravel(), "bottom_angle": design.bottom_angle.ravel(),
               "smallest_singular": design.smallest_singular.ravel(), "condition": design.condition.ravel()}
     if design.force_paper is not None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 from ...engine.errors import InputError
 from ...engine.schema import Key, Schema, Table
 from ...engine.values import REQUIRED, Choice, Free, Number, Row, Text
-from .study import DOFS, FAMILIES, ROTATIONS
+from .study import CONDITION_REASON, DOFS, FAMILIES, MARGIN_MODES, NEAR_REASON, ROTATIONS, Thresholds
 
 
 class StudyError(InputError):
@@ -36,14 +36,26 @@ SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY
         Key("top_joint_angle_limit_deg", Number("deg", 0, above=True), "the top (universal) joint's own limit"),
         Key("bottom_joint_angle_limit_deg", Number("deg", 0, above=True), "the bottom (spherical) joint's own "
             "limit"),
-        Key("force_margins", Row((FRACTION, FRACTION)), "[friction, other]: the force the demand may reach is the "
-            "continuous force / ((1 + friction)(1 + other))", [0.07, 0.20]),
+        Key("payload_from", Text(), "where the payload's mass and inertia come from, printed with the assumptions "
+            "(default: the study file where it gives them, the parameter set otherwise)"),
+        Key("force_margins", Row((FRACTION, FRACTION)), "[friction, other]: shares of the continuous force kept for "
+            "friction and for other factors", [0.07, 0.20]),
+        Key("force_margins_mode", Choice(tuple(MARGIN_MODES)), "how the margins leave the force the demand may "
+            "reach: " + "; ".join(f"{k}: {v}" for k, v in MARGIN_MODES.items()), "subtract"),
+        Key("chosen", Free("axis = value"), "the design the summary's assumptions are judged at (default: "
+            "[confirm]'s, else [workspace]'s, else the grid's middle)"),
         Key("samples", Number(low=3, high=10001, whole=True), "poses per basic motion along its path", 121),
         Key("fixed", Free("design value = number"), "design values of the family held at other values than the "
             "parameter set's (a stub, which cannot be an axis)"))),
+    Table("thresholds", "Where the words of the summary change: each verdict is computed against these.", (
+        Key("condition_number", Number(low=1, above=True), "above it a design is ill conditioned: "
+            + CONDITION_REASON, Thresholds.condition_number),
+        Key("singular_distance_factor", Number(low=0, above=True), "a singular pose nearer to the neutral than this "
+            "many times the motion's half range along a DOF is near: " + NEAR_REASON,
+            Thresholds.singular_distance_factor))),
     Table("axes.<value>", "The two design values the map sweeps (each a design value of the family, e.g. "
           "base_radius, disc_height for Halder's).", (
-        Key("from", NON_NEGATIVE, "the first value", REQUIRED),
+        Key("from", NON_NEGATIVE, "the first value (above 0 for a size: a length, an angle, a scale)", REQUIRED),
         Key("to", NON_NEGATIVE, "the last value (not below from)", REQUIRED),
         Key("step", POSITIVE, "the spacing (at most 2000 values an axis)", REQUIRED))),
     Table("motion", "What the platform must carry: each DOF from -range to +range in the shortest time its limits "

@@ -70,6 +70,7 @@ class Family:
     stubs: Callable[[dict[str, float]], float]
     payload: Callable[[dict], tuple[float, list[float]]]
     fixed_only: tuple[str, ...] = ()
+    may_be_zero: tuple[str, ...] = ()  # design values that are not sizes (a stub, an offset): 0 is a design
 
 
 def _scalars(table: dict) -> dict[str, float]:
@@ -100,7 +101,8 @@ FAMILIES = {
     "halder2013": Family("Halder's 6-SBU layout (Eqs 1-4): joint pairs on the base circle and the disc, stubs",
                          lambda c: _scalars(c["geometry"]), lambda c, g: halder_mechanics(_with_geometry(c, g)),
                          lambda g: g["top_stub"] + g["bottom_stub"],
-                         lambda c: (c["payload"]["mass"], c["payload"]["inertia_diag"]), ("top_stub", "bottom_stub")),
+                         lambda c: (c["payload"]["mass"], c["payload"]["inertia_diag"]), ("top_stub", "bottom_stub"),
+                         ("top_stub", "bottom_stub", "payload_com_above_disc")),
     "meng2010": Family("Meng's layout (Table 1): joint pairs on two circles, the neutral height from the middle leg "
                        "length", lambda c: _scalars(c["geometry"]), lambda c, g: meng_mechanics(_with_geometry(c, g)),
                        lambda g: 0.0, lambda c: (c["platform"]["mass"], c["platform"]["inertia_diag"])),
@@ -109,6 +111,34 @@ FAMILIES = {
                         lambda c: (c["mass_sets"]["heavy"]["platform_mass"],
                                    c["mass_sets"]["heavy"]["platform_inertia_diag"])),
 }
+
+
+MARGIN_MODES = {  # how the force margins [friction, other] leave the force the demand may reach
+    "subtract": "the continuous force less each margin's share of it: F (1 - friction - other), the paper's "
+                "words (\"keeping 7% margin for friction and another 20% for other factors\")",
+    "product": "the continuous force less one margin, then the other: F (1 - friction)(1 - other)",
+    "divide": "the continuous force over the margins as factors on the demand: F / ((1 + friction)(1 + other))"}
+
+
+def allowed(force: float, margins: tuple[float, float], mode: str) -> float:
+    """The force the demand may reach [N] of an actuator's continuous force under the margins,
+    read as `mode` (MARGIN_MODES)."""
+    friction, other = margins
+    return {"subtract": force * (1 - friction - other), "product": force * (1 - friction) * (1 - other),
+            "divide": force / ((1 + friction) * (1 + other))}[mode]
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """[thresholds]: where the words the summary prints change (CONDITION_REASON, NEAR_REASON)."""
+    condition_number: float = 20.0          # above it, ill conditioned
+    singular_distance_factor: float = 2.0   # a singular pose nearer than this many motion ranges is near
+
+
+CONDITION_REASON = ("the leg Jacobian's condition number bounds how much a relative error of the legs' lengths or "
+                    "forces grows in the platform's pose or wrench: at 20 a 0.5 % leg error stays below 10 %")
+NEAR_REASON = ("a singular pose twice the motion's range away along a DOF leaves the motion's own range again as "
+               "margin for overshoot, a wider motion or a stop")
 
 
 @dataclass(frozen=True)
@@ -149,6 +179,7 @@ class Study:
     payload_mass: float
     payload_inertia: tuple[float, float, float]
     force_margins: tuple[float, float] = (0.07, 0.20)
+    force_margins_mode: str = "subtract"   # MARGIN_MODES
     samples: int = 121               # poses per basic motion along its path
     phase_samples: int = 11          # poses per phase (accelerate, cruise, decelerate) of a timed motion
     fixed: dict[str, float] = field(default_factory=dict)  # geometry values over the parameter set's
@@ -158,6 +189,9 @@ class Study:
     recorded: Recorded | None = None  # [motion] scene or table: one motion, the time series
     top_joint_limit: float | None = None     # [rad] the top (universal) joint's own limit
     bottom_joint_limit: float | None = None  # [rad] the bottom (spherical) joint's own limit
+    thresholds: Thresholds = Thresholds()
+    chosen: dict[str, float] | None = None   # [study] chosen: the design the assumptions are judged at
+    payload_from: str = "the parameter set"  # where the payload's mass and inertia come from
 
     @property
     def joint_limits(self) -> tuple[float, float]:
@@ -176,9 +210,19 @@ class Study:
     def actuator(self, name: str) -> Actuator:
         return next(a for a in self.actuators if a.name == name)
 
-    def allowed_force(self, actuator: Actuator) -> float:
-        friction, other = self.force_margins
-        return actuator.continuous_force / ((1 + friction) * (1 + other))
+    def allowed_force(self, actuator: Actuator, mode: str | None = None) -> float:
+        """The force the demand may reach [N]: the continuous force under the study's margins, read
+        as its force_margins_mode (or `mode`)."""
+        return allowed(actuator.continuous_force, self.force_margins, mode or self.force_margins_mode)
+
+    def step(self, key: str) -> float | None:
+        """The spacing of an axis's grid (None for an axis of one value)."""
+        values = self.axes[key]
+        return float(np.round(np.min(np.diff(values)), 10)) if len(values) > 1 else None
+
+    def decimals(self, key: str) -> int:
+        """The decimals an axis's values print with: those its spacing and its first value need."""
+        return max(decimals(self.step(key) or 0.0), decimals(float(self.axes[key][0])))
 
     def with_axes(self, axes: dict[str, np.ndarray]) -> "Study":
         """The study over other values of its axes (a part of its grid, one design)."""
@@ -193,14 +237,29 @@ def unit(key: str) -> str:
     return "deg" if key.endswith("_deg") else "" if key.endswith("_scale") else "m"
 
 
+def decimals(number: float, most: int = 6) -> int:
+    """The fewest decimals that write `number` exactly (to 1e-9 of it), at most `most`: 2 for a
+    0.01 m grid, 4 for a 0.0005 m one."""
+    return next((d for d in range(most) if abs(round(number, d) - number) <= 1e-9 * max(1.0, abs(number))), most)
+
+
 def value(key: str, number: float, digits: str = "g") -> str:
-    """`key = number unit`, e.g. 'base_radius = 1.1 m'."""
+    """`key = number unit`, e.g. 'base_radius = 1.1 m'; digits: a format (".2f") or "g"."""
     return f"{key} = {number:{digits}}" + (f" {unit(key)}" if unit(key) else "")
 
 
-def span(key: str, values: np.ndarray) -> str:
-    """`key low-high unit`, e.g. 'base_radius 0.8-1.5 m'."""
-    return f"{key} {np.min(values):g}-{np.max(values):g}" + (f" {unit(key)}" if unit(key) else "")
+def span(key: str, values: np.ndarray, places: int | None = None) -> str:
+    """`key low-high unit`, e.g. 'base_radius 0.80-1.50 m' (to `places` decimals, or as short as
+    the values allow)."""
+    low, high = float(np.min(values)), float(np.max(values))
+    d = places if places is not None else max(decimals(low), decimals(high))
+    return f"{key} {low:.{d}f}-{high:.{d}f}" + (f" {unit(key)}" if unit(key) else "")
+
+
+def point_text(study: Study, point: dict[str, float], grid: bool = False) -> str:
+    """A design as 'base_radius = 1.1 m, disc_height = 1.4 m': a named design as it is written, a
+    point of the grid (`grid`) at its axes' precision ('base_radius = 1.10 m')."""
+    return ", ".join(value(k, v, f".{study.decimals(k) if grid else decimals(v)}f") for k, v in point.items())
 
 
 _SETS: dict[str, dict] = {}

@@ -12,7 +12,11 @@ import numpy as np
 
 from ..core import Core
 from ..report.rows import Row
-from .study import DOFS, ROTATIONS, Actuator, Study, platform_values, stubs, value
+from .study import DOFS, ROTATIONS, Actuator, Study, platform_values, point_text, stubs
+from .verdicts import conditioning, near_text
+
+REACH, ANGULAR_REACH = 1.0, math.pi  # [m], [rad] how far along each DOF a singular pose is sought
+SEARCH = {False: f"{REACH:g} m", True: f"{math.degrees(ANGULAR_REACH):g} deg"}
 
 
 @dataclass
@@ -57,7 +61,8 @@ def reachable(core: Core, poses: np.ndarray, actuator: Actuator, joint_limit: fl
             & np.all(k["upper_angle"] <= top_limit, axis=1) & np.all(k["lower_angle"] <= bottom_limit, axis=1))
 
 
-def singular_distance(core: Core, reach: float = 1.0, angular_reach: float = math.pi, samples: int = 2001) -> dict:
+def singular_distance(core: Core, reach: float = REACH, angular_reach: float = ANGULAR_REACH,
+                      samples: int = 2001) -> dict:
     """Along each DOF alone from the neutral pose, the smallest displacement (either sign) at which
     the leg Jacobian turns singular: where its determinant changes sign between two samples,
     refined by bisection; inf if it does not within +-reach (m) or +-angular_reach (rad)."""
@@ -130,21 +135,24 @@ def study_workspace(study: Study) -> Workspace | None:
 
 
 def workspace_rows(study: Study, space: Workspace) -> list[Row]:
-    """The [workspace] design's reach, volume, conditioning and singular distances as rows."""
-    where = ", ".join(value(k, v) for k, v in study.workspace.point.items())
+    """The [workspace] design's reach, volume, conditioning and singular distances as rows, each
+    verdict against the study's thresholds."""
+    where = point_text(study, study.workspace.point)
     reach = space.reach()
-    lines = [Row(f"reachable positions at the neutral orientation ({where}, {study.workspace.actuator})", "",
-                 space.volume, "m^3", f"a {1e3 * space.spacing:g} mm grid; on the axes: " + ", ".join(
-                     f"{d} {reach[d][0]:+.2f}/{reach[d][1]:+.2f} m" for d in ("surge", "sway", "heave"))),
-             Row("reachable orientations at the neutral position, each alone", "",
-                 ", ".join(f"{d} {math.degrees(reach[d][0]):+.0f}/{math.degrees(reach[d][1]):+.0f}" for d in ROTATIONS),
-                 "deg", f"{len(space.orientations)} of the {math.degrees(space.angle_step):g} deg grid's orientations "
-                 "reachable"),
-             Row("leg Jacobian over the reachable positions", "",
-                 f"smallest singular value {space.smallest_singular:.3f}, condition number {space.condition:.1f}", "", ""),
-             Row("nearest singular pose along each DOF from the neutral", "(left open by the papers)",
-                 ", ".join(f"{d} {math.degrees(v):.1f} deg" if d in ROTATIONS else f"{d} {v:.3f} m"
-                           for d, v in space.singular_distance.items() if math.isfinite(v)) or "none",
-                 "", "translations: none within 1 m" if not any(math.isfinite(space.singular_distance[d])
-                                                                 for d in ("surge", "sway", "heave")) else "")]
-    return lines
+    found = {d: v for d, v in space.singular_distance.items() if math.isfinite(v)}
+    return [Row(f"reachable positions at the neutral orientation ({where}, {study.workspace.actuator})", "",
+                space.volume, "m^3", f"a {1e3 * space.spacing:g} mm grid; on the axes: " + ", ".join(
+                    f"{d} {reach[d][0]:+.2f}/{reach[d][1]:+.2f} m" for d in ("surge", "sway", "heave"))),
+            Row("reachable orientations at the neutral position, each alone", "",
+                ", ".join(f"{d} {math.degrees(reach[d][0]):+.0f}/{math.degrees(reach[d][1]):+.0f}" for d in ROTATIONS),
+                "deg", f"{len(space.orientations)} of the {math.degrees(space.angle_step):g} deg grid's orientations "
+                "reachable"),
+            Row("leg Jacobian over the reachable positions", "",
+                f"smallest singular value {space.smallest_singular:.3f}, condition number {space.condition:.1f}", "",
+                conditioning(study, space.condition)),
+            Row("nearest singular pose along each DOF from the neutral", "(left open by the papers)",
+                ", ".join(f"{d} {math.degrees(v):.1f} deg" if d in ROTATIONS else f"{d} {v:.3f} m"
+                          for d, v in found.items()) or "none", "",
+                "; ".join([near_text(study, space.singular_distance)] + [
+                    f"none within +-{SEARCH[rotation]} along {', '.join(missing)}" for rotation in (False, True)
+                    if (missing := [d for d in DOFS if d not in found and (d in ROTATIONS) == rotation])]))]

@@ -163,15 +163,16 @@ def _halder_section_5(figures: Path) -> str:
     from ...engine.artifacts import data_dir
     from ..design import design_map, load_study, report_rows
     from ..design.halder import PAPER, figures as section5_figures
-    from ..design.map import nearest
+    from ..design.map import at
     from ..design.study import stubs
     study = load_study(data_dir("studies") / "halder_section5.toml")
     map_d = design_map(study)
     section5_figures(map_d, figures)
     rows_d = report_rows(map_d)
     (_, radii), (_, heights) = list(study.axes.items())
-    r, c = nearest(study, PAPER["chosen"])
-    needed = 1e3 * (map_d.length_max[r, c].max() + stubs(study))
+    chosen = at(study, dict(zip(study.axes, PAPER["chosen"])), dynamic=False)
+    needed = 1e3 * (chosen.actuated_length_max.max() + stubs(study))
+    allowed = study.allowed_force(study.actuators[-1])
     return _section(
         "Halder et al., Section V: configuration design (Figs 2-4)",
         f"""`cosim design halder_section5` (the study `studies/halder_section5.toml`): Halder's 6-SBU layout
@@ -181,10 +182,11 @@ z_p0 {heights[0]:g}-{heights[-1]:g} m in the paper's 0.01 m steps ({map_d.points
 shortest time under 0.05 m/s, 0.05 m/s^2, 12.6 deg/s and 100 deg/s^2; the legs' actuated lengths and
 joint angles (Eqs 8-9) and the leg forces of the paper's inverse model (Eq 16: payload only, 100 kg)
 from the mechanics FMU's dynamics core, against the two Danaher EC2 actuators (running lengths
-1.18-1.63 m and 1.286-1.886 m), the 20 deg joint limit and 830 N with the 7 % and 20 % margins.
-Readings the paper leaves open are those of `params/halder2013.toml` (the disc's "0.5mm" as a 0.5 m
-radius, z_p0 as the disc's height, Eq 1's even legs); Section V's 100 kg payload takes Section VII's
-inertia scaled by mass. Points a, b and c land within one grid step of the paper's, and the 0.45 m
+1.18-1.63 m and 1.286-1.886 m), the 20 deg joint limit and 830 N less the 7 % and 20 % margins
+(read as the paper's words: 830 N x (1 - 0.07 - 0.20) = {allowed:.0f} N). Readings the paper leaves
+open are those of `params/halder2013.toml` (the disc's "0.5mm" as a 0.5 m radius, z_p0 as the disc's
+height, Eq 1's even legs); Section V's 100 kg payload takes Section VII's inertia scaled by mass. The
+first rows below name each assumption and what it changes at the paper's chosen design. Points a, b and c land within one grid step of the paper's, and the 0.45 m
 actuator's narrow zone where the paper shows it. The paper's chosen design (r_b 1.1 m, z_p0 1.4 m)
 is a hair outside its own Eq 21a in our reading: +0.3 m heave from 1.4 m needs a {needed:.0f} mm running
 length against the actuator's 1886 mm; any reading of the disc that keeps the paper's neutral 1647
