@@ -20,13 +20,15 @@ def add(commands) -> argparse.ArgumentParser:
 
 def main(args: argparse.Namespace) -> int:
     from ..platform.design import load_study, parallel_map, report_rows, summary, write
+    from ..platform.design.pareto import study_front
     from ..platform.scene import shipped
     count = workers(args)
     study = load_study(shipped(args.study, "studies") or args.study if not Path(args.study).exists() else args.study)
     with security(args):
         design = parallel_map(study, workers=count, scheduler=args.scheduler)
-        rows = report_rows(design, count, args.scheduler)
+        front = study_front(study, count, args.scheduler)
+        rows = report_rows(design, count, args.scheduler, front)
     print("\n".join(summary(design, rows)))
-    files = write(design, args.out, rows)
+    files = write(design, args.out, rows, front)
     print("written: " + ", ".join(str(f) for f in files))
     return 0

@@ -180,6 +180,14 @@ BAD = {
     "[study]\nforce_margins_mode = \"halve\"\n": "'study.force_margins_mode' = 'halve': use 'subtract', 'product' or",
     "[study]\nchosen = {base_radius = 1.1}\n": "'study.chosen' must give the design as {base_radius = ..., disc_height",
     "[thresholds]\ncondition_number = 0.5\n": "'thresholds.condition_number' = 0.5: must be a number > 1",
+    "[pareto]\nobjectives = [\"stroke\"]\n": "'pareto.objectives' = ['stroke']: must be a list of at least 2",
+    "[pareto]\nobjectives = [\"stroke\", \"stroke\"]\n": "'pareto.objectives' = ['stroke', 'stroke']: names an "
+        "objective twice",
+    "[pareto]\nobjectives = [\"stroke\", \"beauty\"]\n": "'pareto.objectives' = ['stroke', 'beauty']: must be",
+    "[pareto]\nobjectives = [\"stroke\", \"workspace\"]\nactuators = [\"EC3\"]\n": "'pareto.actuators' = ['EC3']: "
+        "names 'EC3', not one of the study's actuators",
+    "[pareto]\nobjectives = [\"stroke\", \"workspace\"]\nscrew_lead = [0.01, 0.02]\n": "'pareto.screw_lead' = "
+        "[0.01, 0.02]: needs an actuator given by its motor",
 }
 
 
@@ -200,7 +208,7 @@ def test_a_bad_study_file_is_one_line(text, tmp_path, capsys):
         key = text.split("\n")[1].split(" = ")[0]
         own = next((line for line in body.splitlines() if line.startswith(f"{key} = ")), None)
         body = body.replace(own + "\n", text[len("[study]\n"):], 1) if own else body.replace("[study]\n", text, 1)
-    elif text.startswith("[thresholds]"):
+    elif text.startswith(("[thresholds]", "[pareto]")):
         body = body + text
     else:
         body = text

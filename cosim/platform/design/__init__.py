@@ -13,7 +13,9 @@ cosim.platform.scene.parameter_sets), so the map and the co-simulation share one
 
 Every row about a named design is of that design at exactly its values (map.at, map.along), not
 of the grid's nearest point. Beyond the map: a design's workspace and distance to a singular pose (workspace.py), the design
-with the largest worst-case margin (optimise.py), a design confirmed by co-simulation through our
+with the largest worst-case margin (optimise.py), the Pareto front over several objectives with
+the actuator (and a motor's screw lead) chosen from a catalogue together with the geometry, its
+knee and extremes co-simulated (pareto.py, NSGA-II), a design confirmed by co-simulation through our
 drives (confirm.py), a scene's motion as the specification (scene_fit.py); the figures
 (figures.py), Section V's numbers beside ours (halder.py), and the study's answer as rows, a
 summary and files (report.py).

@@ -25,7 +25,7 @@ from ..scene.parameter_sets import drive_set, drive_set_name
 from ..scene.signals import trajectory_parameters
 from .motion import displacements, motion_profile
 from .schema import DRIVEN
-from .study import DOFS, ROTATIONS, Actuator, Study, platform_values, value
+from .study import DOFS, ROTATIONS, Actuator, Study, platform_values
 
 HOLD = 0.5  # [s] at the start pose before a basic motion, and after it
 START_UP = 0.2  # [s] of a motion that starts moving at once, left out of its forces and currents
@@ -174,19 +174,18 @@ def study_confirmation(study: Study, workers: int | None = 0, scheduler: str | N
     return confirm(study, spec.point, study.actuator(spec.actuator), workers, scheduler, drive=spec.drive)
 
 
-def confirmation_rows(study: Study, runs: list[dict[str, Any]]) -> list[Row]:
-    """Each confirmed motion's forces and currents, as rows."""
-    where = ", ".join(value(k, v) for k, v in study.confirm.point.items())
+def confirmation_rows(runs: list[dict[str, Any]], where: str) -> list[Row]:
+    """Each confirmed motion's forces and currents, as rows; `where`: the design and its actuator."""
     out = []
     for r in runs:
-        quantity = f"co-simulated {r['motion']} ({where}, {study.confirm.actuator}; {r['drive']})"
+        quantity = f"co-simulated {r['motion']} ({where}; {r['drive']})"
         if "problem" in r:
             out.append(Row(quantity, "", "cannot hold the start pose", "", r["problem"]))
             continue
         unit = "rad" if r["motion"] in ROTATIONS else "m" if r["motion"] in DOFS else "m, rad"
         note = (f"the full inverse dynamics' peak {r['predicted_peak']:.0f} N "
                 f"({100 * (r['peak_force'] / r['predicted_peak'] - 1):+.1f} %); tracking within "
-                f"{r['tracking']:.1e} {unit}; continuous {r['continuous_force']:g} N")
+                f"{r['tracking']:.1e} {unit}; continuous {r['continuous_force']:.0f} N")
         if r.get("from"):
             note += f"; from {r['from']:g} s into the motion (it starts moving at once)"
         if "peak_current" in r:

@@ -93,3 +93,38 @@ def plot_dynamic(design: DesignMap, actuator: Actuator, path: Path, marks: dict[
     ax.set_title(f"{actuator.name}: {actuator.continuous_force:g} N continuous less {friction:.0%} and {other:.0%} "
                  f"margins read as '{design.study.force_margins_mode}' (admissible: shaded)", fontsize=9)
     return save_figure(fig, path, dpi=110)
+
+
+def plot_front(study, front, path: Path) -> Path:
+    """The Pareto front in every pair of its objectives: one colour per actuator of the catalogue,
+    the knee a star, each objective's best a diamond."""
+    import itertools
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    pairs = list(itertools.combinations(range(len(front.objectives)), 2))
+    columns = min(3, len(pairs))
+    rows = -(-len(pairs) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.2 * columns, 3.6 * rows), squeeze=False)
+    names = list(study.pareto.actuators)
+    colours = {name: f"C{k}" for k, name in enumerate(names)}
+    for ax, (i, j) in zip(axes.flat, pairs):
+        for name in names:
+            mine = [n for n, a in enumerate(front.actuators) if a.name == name]
+            if mine:
+                ax.scatter(front.values[mine, i], front.values[mine, j], s=14, color=colours[name], label=name)
+        ax.scatter(*front.values[front.knee, [i, j]], marker="*", s=160, color="k", label="knee", zorder=3)
+        for objective, index in front.best.items():
+            ax.scatter(*front.values[index, [i, j]], marker="D", s=40, facecolors="none", edgecolors="k", zorder=3)
+            ax.annotate(f"best {objective}", front.values[index, [i, j]], fontsize=6, textcoords="offset points",
+                        xytext=(4, 3))
+        ax.set_xlabel(front.objectives[i].replace("_", " "), fontsize=8)
+        ax.set_ylabel(front.objectives[j].replace("_", " "), fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(pairs):]:
+        ax.set_visible(False)
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.suptitle(f"{study.name}: {len(front)} designs no other beats in every objective (NSGA-II)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.95 - 0.02 * (rows < 3)))
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.975), ncol=min(4, len(labels)), fontsize=7)
+    return save_figure(fig, path, dpi=110)

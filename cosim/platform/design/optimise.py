@@ -4,27 +4,39 @@ maximised by scipy's differential evolution over the axes' ranges, its evaluatio
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..report.rows import Row
-from .map import design_map
+from .map import DesignMap, at
 from .study import Actuator, Study, stubs, value
+from .verdicts import SINGULAR
 
 
 def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[str, float]:
-    """A design's margins against each constraint over every basic motion, each as a fraction of
+    """A design's margins (margins_of) at a point of the study's axes."""
+    return margins_of(study, at(study, point), actuator)
+
+
+def margins_of(study: Study, design: DesignMap, actuator: Actuator) -> dict[str, float]:
+    """A one-design map's margins against each constraint over every motion, each as a fraction of
     what it is measured against (negative: violated): the stroke at both ends (of the stroke), the
-    joint angle (of the limit) and the peak force of the paper's model (of the allowed force)."""
-    design = design_map(study.with_axes({key: np.array([number]) for key, number in point.items()}), dynamic=True)
+    joint angle (of the limit), the peak force of the paper's model (of the allowed force), the
+    full model's peak force (of the actuator's peak) and the legs' speed (of its speed) where it
+    gives them (inf where not), and the conditioning (of the singular threshold)."""
     s = stubs(study)
+    full, speed = design.force_full.max(), design.leg_speed.max()
     return {"max stroke": float((actuator.running_length_max - s - design.actuated_length_max.max()) / actuator.stroke),
             "min stroke": float((design.actuated_length_min.min() + s - actuator.running_length_min) / actuator.stroke),
             "joint angle": float(1 - max(design.top_angle.max() / study.joint_limits[0],
                                          design.bottom_angle.max() / study.joint_limits[1])),
-            "force": float(1 - design.force_paper.max() / study.allowed_force(actuator))}
+            "force": float(1 - design.force_paper.max() / study.allowed_force(actuator)),
+            "peak force": float(1 - full / actuator.peak_force) if actuator.peak_force is not None else math.inf,
+            "speed": float(1 - speed / actuator.speed) if actuator.speed is not None else math.inf,
+            "singular": float(1 - np.nanmax(design.condition) / SINGULAR)}
 
 
 def _negative_margin(x: np.ndarray, study: Study, keys: tuple[str, ...], actuator: Actuator) -> float:
@@ -43,8 +55,8 @@ def optimise(study: Study, actuator: Actuator, workers: int | None = 0, schedule
              seed: int = 1, max_iterations: int = 60) -> Optimum:
     """The design (within the study's axes' ranges) whose smallest margin over every constraint and
     basic motion is largest: the most robust admissible design, found by scipy's differential
-    evolution (one objective: the worst margin; a Pareto front would need a second, which the
-    papers' specification does not give). Its evaluations run on Dask when workers/scheduler say
+    evolution (one objective, the worst margin, for one actuator; pareto.py trades several
+    objectives and the actuator's choice). Its evaluations run on Dask when workers/scheduler say
     so (each a design of the map), in this process otherwise; the same seed gives the same design."""
     from contextlib import nullcontext
     from functools import partial
@@ -78,4 +90,5 @@ def optimum_rows(study: Study, best: Optimum) -> list[Row]:
     worst = min(best.margins, key=best.margins.get)
     return [Row(f"the most robust design for {study.optimise.actuator} (largest worst-case margin)", "", where, "",
                 f"differential evolution, {best.evaluations} designs; margins: " + ", ".join(
-                    f"{k} {v:.1%}" for k, v in best.margins.items()) + f" (the least: {worst})")]
+                    f"{k} {v:.1%}" for k, v in best.margins.items() if k != "singular" and math.isfinite(v))
+                + f" (the least: {worst})")]

@@ -14,8 +14,8 @@ import numpy as np
 from ...engine.schema import Document, read
 from ..ports import POSE
 from .schema import RECORDED, SCHEMA, StudyError
-from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, OptimiseSpec, Recorded, Study,
-                    Thresholds, WorkspaceSpec, parameter_set)
+from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, Motor, OptimiseSpec, ParetoSpec,
+                    Recorded, Study, Thresholds, WorkspaceSpec, parameter_set)
 
 MOST_PER_AXIS = 2000
 
@@ -49,6 +49,7 @@ def load_study(path: str | Path) -> Study:
                                         float(doc.value("thresholds", "singular_distance_factor"))),
                   payload_from=_payload_from(doc, family_name))
     study.chosen = _point(doc, "study", axes, key="chosen") if doc.value("study", "chosen") is not None else None
+    study.pareto = _pareto(doc, actuators)
     _not_degenerate(doc, study)
     return study
 
@@ -207,8 +208,15 @@ def _actuator(doc: Document, k: int, transmission: dict[str, float]) -> Actuator
             limits[force] = float(entry[force])
     if "continuous_force" not in limits:
         raise doc.fail(f"{where}.continuous_force", "is missing (or give continuous_torque)")
+    motor = None
+    if "continuous_torque" in entry:
+        given = {key: float(entry[key]) if key in entry else None for key in ("peak_torque", "motor_speed", "rotor_inertia")}
+        motor = Motor(float(entry["continuous_torque"]), *given.values(), force_torque / screw_ratio)
+    elif "rotor_inertia" in entry:
+        raise doc.fail(f"{where}.rotor_inertia", "belongs to an actuator given by its motor (continuous_torque)")
     return Actuator(entry["name"], float(entry["stroke"]), float(entry["running_length_min"]),
-                    limits["continuous_force"], limits.get("peak_force"), limits.get("speed"))
+                    limits["continuous_force"], limits.get("peak_force"), limits.get("speed"), motor,
+                    2 * math.pi / screw_ratio if motor else None, entry.get("drive", "pmsm" if motor else "force"))
 
 
 def _point(doc: Document, table: str, axes: dict[str, np.ndarray], actuators: list[str] | None = None,
@@ -243,6 +251,33 @@ def _optimise(doc: Document, actuators: list[str]) -> OptimiseSpec | None:
                        doc.value("optimise", "actuator"))
     return OptimiseSpec(doc.value("optimise", "actuator"), int(doc.value("optimise", "seed")),
                         int(doc.value("optimise", "iterations")))
+
+
+def _pareto(doc: Document, actuators: list[Actuator]) -> ParetoSpec | None:
+    """[pareto]: distinct objectives, a catalogue of the study's actuators, a lead range where one
+    of them is given by its motor."""
+    if "pareto" not in doc.data:
+        return None
+    objectives = doc.value("pareto", "objectives")
+    if len(set(objectives)) != len(objectives):
+        raise doc.fail("pareto.objectives", "names an objective twice", objectives)
+    names = [a.name for a in actuators]
+    catalogue = doc.value("pareto", "actuators", names)
+    for name in catalogue:
+        if name not in names:
+            raise doc.fail("pareto.actuators", f"names {name!r}, not one of the study's actuators ({', '.join(names)})",
+                           catalogue)
+    lead = doc.value("pareto", "screw_lead")
+    if lead is not None:
+        if not lead[1] >= lead[0]:
+            raise doc.fail("pareto.screw_lead", "must run from a lead to one not below it", lead)
+        if not any(a.motor for a in actuators if a.name in catalogue):
+            raise doc.fail("pareto.screw_lead", "needs an actuator given by its motor (continuous_torque) in the "
+                           "catalogue", lead)
+    return ParetoSpec(tuple(objectives), tuple(catalogue), None if lead is None else (float(lead[0]), float(lead[1])),
+                      int(doc.value("pareto", "population")), int(doc.value("pareto", "generations")),
+                      int(doc.value("pareto", "seed")), float(doc.value("pareto", "workspace_spacing")),
+                      bool(doc.value("pareto", "confirm")))
 
 
 def _confirm(doc: Document, axes: dict[str, np.ndarray], actuators: list[str]) -> ConfirmSpec | None:

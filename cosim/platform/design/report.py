@@ -16,6 +16,7 @@ from .figures import plot_dynamic, plot_kinematic
 from .halder import is_section5, longest, marks, paper_rows, shortest
 from .map import DesignMap
 from .optimise import optimum_rows, study_optimum
+from .pareto import Front, pareto_rows, write_front
 from .assumptions import assumption_rows
 from .study import point_text, span, stubs
 from .verdicts import SINGULAR
@@ -63,16 +64,26 @@ def map_rows(design: DesignMap) -> list[Row]:
     return out
 
 
-def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None) -> list[Row]:
+def report_rows(design: DesignMap, workers: int | None = 0, scheduler: str | None = None,
+                front: Front | None = None) -> list[Row]:
     """The study's assumptions and what each changes at its chosen design; the map's rows (beside
-    the paper's numbers for Halder's Section V plane), then the
-    [workspace] design's and the [optimise] optimum's, where the study names them (the
-    optimiser's designs on Dask as workers/scheduler say)."""
-    space, best = study_workspace(design.study), study_optimum(design.study, workers, scheduler)
-    runs = study_confirmation(design.study, workers, scheduler)
-    return assumption_rows(design.study) + (paper_rows(design) if is_section5(design.study) else []) + map_rows(design) + \
-        (workspace_rows(design.study, space) if space else []) + \
-        (optimum_rows(design.study, best) if best else []) + (confirmation_rows(design.study, runs) if runs else [])
+    the paper's numbers for Halder's Section V plane), then the [workspace] design's, the
+    [optimise] optimum's, the [confirm] design's co-simulation and the [pareto] front's (`front`,
+    pareto.study_front), where the study names them (the optimiser's designs and the
+    confirmations on Dask as workers/scheduler say)."""
+    study = design.study
+    space, best = study_workspace(study), study_optimum(study, workers, scheduler)
+    runs = study_confirmation(study, workers, scheduler)
+    rows = assumption_rows(study) + (paper_rows(design) if is_section5(study) else []) + map_rows(design)
+    if space:
+        rows += workspace_rows(study, space)
+    if best:
+        rows += optimum_rows(study, best)
+    if runs:
+        rows += confirmation_rows(runs, f"{point_text(study, study.confirm.point)}, {study.confirm.actuator}")
+    if front is not None:
+        rows += pareto_rows(study, front)
+    return rows
 
 
 def summary(design: DesignMap, rows: list | None = None) -> list[str]:
@@ -89,9 +100,10 @@ def summary(design: DesignMap, rows: list | None = None) -> list[str]:
             "second, each " + ("over the motion)." if study.recorded else "over every basic motion).")]
 
 
-def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
+def write(design: DesignMap, out: Path, rows: list | None = None, front: Front | None = None) -> list[Path]:
     """The figures (Halder's Figs 2 and 3 per actuator, Fig 4 for the longest stroke), the summary
-    and the map as a table (one row per grid point and basic motion) into `out`."""
+    and the map as a table (one row per grid point and basic motion) into `out`; the Pareto front's
+    table and figure where there is one."""
     import pyarrow as pa
     import pyarrow.csv
     import pyarrow.parquet as pq
@@ -121,4 +133,6 @@ def write(design: DesignMap, out: Path, rows: list | None = None) -> list[Path]:
         pa.csv.write_csv(arrow, temporary)
     summary_file = write_text(out / f"{stem}.md", "\n".join([f"# {design.study.name}", "", *summary(design, rows), ""]),
                               "the design summary")
+    if front is not None:
+        written += write_front(design.study, front, out)
     return [*written, out / f"{stem}.parquet", out / f"{stem}.csv", summary_file]

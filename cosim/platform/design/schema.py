@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from ...engine.errors import InputError
 from ...engine.schema import Key, Schema, Table
-from ...engine.values import REQUIRED, Choice, Free, Number, Row, Text
-from .study import CONDITION_REASON, DOFS, FAMILIES, MARGIN_MODES, NEAR_REASON, ROTATIONS, Thresholds
+from ...engine.values import REQUIRED, Choice, Flag, Free, ListOf, Number, Row, Text
+from .study import (CONDITION_REASON, DOFS, FAMILIES, MARGIN_MODES, NEAR_REASON, OBJECTIVES, ROTATIONS,
+                    Thresholds)
 
 
 class StudyError(InputError):
@@ -83,8 +84,11 @@ SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY
         Key("speed", POSITIVE, "the largest extension rate [m/s]"),
         Key("continuous_torque", POSITIVE, "the motor's continuous torque [N m], times the screw's K_FT"),
         Key("peak_torque", POSITIVE, "the motor's peak torque [N m]"),
-        Key("motor_speed", POSITIVE, "the motor's largest speed [rad/s], over the screw ratio")), many=True,
-          required=True),
+        Key("motor_speed", POSITIVE, "the motor's largest speed [rad/s], over the screw ratio"),
+        Key("rotor_inertia", NON_NEGATIVE, "the motor's rotor and screw about its axis [kg m^2] (default: the "
+            "parameter set's)"),
+        Key("drive", Choice(tuple(DRIVEN)), "what a co-simulated confirmation of a [pareto] design drives it with "
+            "(default: pmsm for an actuator given by its motor, force otherwise)")), many=True, required=True),
     Table("workspace", "The reach of one design: the positions and orientations it reaches within the actuator's "
           "running lengths and the joint limits, and how far it is from a singular pose.", (
         Key("point", Free("axis = value"), "the design: a value of each axis", REQUIRED),
@@ -96,6 +100,20 @@ SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY
         Key("actuator", Text(), "one of the study's actuators, by name", REQUIRED),
         Key("seed", Number(low=0, whole=True), "the search's seed (the same seed, the same design)", 1),
         Key("iterations", Number(low=1, whole=True), "its generations at most", 60))),
+    Table("pareto", "Geometry and actuator chosen together: the designs no other beats in every objective at once "
+          "(NSGA-II, pymoo), each an admissible design of the map with an actuator of the catalogue (and, for one "
+          "given by its motor, a screw lead); the knee and each objective's best confirmed by co-simulation.", (
+        Key("objectives", ListOf(Choice(tuple(OBJECTIVES)), 2), "what is traded: " + "; ".join(
+            f"{k}: {v}" for k, v in OBJECTIVES.items()), REQUIRED),
+        Key("actuators", ListOf(Text(), 1), "the catalogue: names of the study's actuators (default: all)"),
+        Key("screw_lead", Row((POSITIVE, POSITIVE)), "[from, to] the screw's travel per motor turn [m] an actuator "
+            "given by its motor may take (a design variable; default: the parameter set's lead alone)"),
+        Key("population", Number(low=4, high=1000, whole=True), "designs per generation", 40),
+        Key("generations", Number(low=1, high=1000, whole=True), "generations", 25),
+        Key("seed", Number(low=0, whole=True), "the search's seed (the same seed, the same front)", 1),
+        Key("workspace_spacing", Number("m", 0.005, high=0.5), "the workspace objective's grid of positions", 0.05),
+        Key("confirm", Flag(), "co-simulate the knee and each objective's best design, each with its actuator's "
+            "drive", True))),
     Table("confirm", "One design through the co-simulation, every motion, closed loop.", (
         Key("point", Free("axis = value"), "the design: a value of each axis", REQUIRED),
         Key("actuator", Text(), "one of the study's actuators, by name", REQUIRED),

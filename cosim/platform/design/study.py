@@ -10,7 +10,8 @@ and the payload; `platform_values` gives the mechanics values of a design point.
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -23,6 +24,17 @@ ROTATIONS = ("roll", "pitch", "yaw")
 
 
 @dataclass(frozen=True)
+class Motor:
+    """An actuator given by its motor, turning the leg's screw: its torques, speed and the rotor's
+    (and screw's) inertia about its axis; the screw's lead makes them leg force and speed."""
+    continuous_torque: float            # [N m]
+    peak_torque: float | None = None    # [N m]
+    speed: float | None = None          # [rad/s]
+    rotor_inertia: float | None = None  # [kg m^2] (None: the parameter set's)
+    efficiency: float = 1.0             # K_FT / i_theta: the screw's (and belt's) share of the power
+
+
+@dataclass(frozen=True)
 class Actuator:
     name: str
     stroke: float              # [m]
@@ -30,10 +42,33 @@ class Actuator:
     continuous_force: float    # [N], 100 % duty cycle (a study may give the motor's torque: times K_FT)
     peak_force: float | None = None  # [N], what it gives for a moment (checked against the full model)
     speed: float | None = None       # [m/s], the largest extension rate (or the motor's speed / i_theta)
+    motor: Motor | None = None       # given by its motor: the forces and speed above at `lead`
+    lead: float | None = None        # [m] the screw's travel per motor turn the forces were turned at
+    drive: str = "force"             # the drive a co-simulated confirmation runs it with (schema.DRIVEN)
 
     @property
     def running_length_max(self) -> float:
         return self.running_length_min + self.stroke
+
+    def with_lead(self, lead: float) -> "Actuator":
+        """A motor's actuator through a screw of another lead [m per turn]: leg force = torque x
+        efficiency x 2 pi / lead, leg speed = motor speed x lead / (2 pi)."""
+        m = self.motor
+        ratio = 2 * math.pi / lead  # i_theta [rad/m]
+        return replace(self, continuous_force=m.continuous_torque * m.efficiency * ratio,
+                       peak_force=None if m.peak_torque is None else m.peak_torque * m.efficiency * ratio,
+                       speed=None if m.speed is None else m.speed / ratio, lead=lead)
+
+    def mechanics(self) -> dict[str, float]:
+        """What the actuator sets on the mechanics FMU's legs: a motor's screw ratio, K_FT and rotor
+        inertia (nothing for one given by its force)."""
+        if self.motor is None or self.lead is None:
+            return {}
+        ratio = 2 * math.pi / self.lead
+        out = {"transmission.screw_ratio": ratio, "transmission.force_torque": self.motor.efficiency * ratio}
+        if self.motor.rotor_inertia is not None:
+            out["motor_system.rotor_inertia"] = self.motor.rotor_inertia
+        return out
 
 
 @dataclass(frozen=True)
@@ -128,6 +163,15 @@ def allowed(force: float, margins: tuple[float, float], mode: str) -> float:
             "divide": force / ((1 + friction) * (1 + other))}[mode]
 
 
+OBJECTIVES = {  # [pareto] objectives: what each measures, and which way is better
+    "stroke": "the stroke the motions need, the longest less the shortest actuated length over them [m], smaller",
+    "force_margin": "1 - the full model's peak leg force / the force the margins leave the actuator, larger",
+    "workspace": "the volume of positions reachable at the neutral orientation [m^3], larger",
+    "conditioning": "the leg Jacobian's largest condition number over the motions, smaller",
+    "actuator_force": "the actuator's continuous leg force [N], what its size costs, smaller"}
+MAXIMISED = ("force_margin", "workspace")  # the objectives where larger is better
+
+
 @dataclass(frozen=True)
 class Thresholds:
     """[thresholds]: where the words the summary prints change (CONDITION_REASON, NEAR_REASON)."""
@@ -157,6 +201,21 @@ class OptimiseSpec:
     actuator: str
     seed: int
     iterations: int
+
+
+@dataclass(frozen=True)
+class ParetoSpec:
+    """[pareto]: the objectives traded (pareto.OBJECTIVES), the catalogue the actuator is chosen
+    from, the screw leads a motor's actuator may take, NSGA-II's population, generations and seed,
+    the workspace objective's grid, and whether the knee and the extremes are co-simulated."""
+    objectives: tuple[str, ...]
+    actuators: tuple[str, ...]
+    lead: tuple[float, float] | None  # [m per turn] from, to
+    population: int
+    generations: int
+    seed: int
+    workspace_spacing: float          # [m]
+    confirm: bool
 
 
 @dataclass(frozen=True)
@@ -192,6 +251,8 @@ class Study:
     thresholds: Thresholds = Thresholds()
     chosen: dict[str, float] | None = None   # [study] chosen: the design the assumptions are judged at
     payload_from: str = "the parameter set"  # where the payload's mass and inertia come from
+    pareto: ParetoSpec | None = None
+    mechanics: dict[str, float] = field(default_factory=dict)  # mechanics values over the family's (an actuator's)
 
     @property
     def joint_limits(self) -> tuple[float, float]:
@@ -228,6 +289,12 @@ class Study:
         """The study over other values of its axes (a part of its grid, one design)."""
         part = copy.copy(self)
         part.axes = axes
+        return part
+
+    def with_actuator(self, actuator: Actuator) -> "Study":
+        """The study with the legs an actuator sets (a motor's screw and rotor) on its platform."""
+        part = copy.copy(self)
+        part.mechanics = {**self.mechanics, **actuator.mechanics()}
         return part
 
 
@@ -283,6 +350,7 @@ def platform_values(study: Study, point: dict[str, float], effects: bool = False
     for axis, inertia in zip(("xx", "yy", "zz"), study.payload_inertia):
         values[f"platform.inertia_{axis}"] = inertia
     values.update({"effects.actuator_inertia": effects, "effects.motor_inertia": effects, "effects.friction": effects})
+    values.update(study.mechanics)
     return values
 
 

@@ -97,6 +97,25 @@ def singular_distance(core: Core, reach: float = REACH, angular_reach: float = A
     return out
 
 
+def cube(neutral: np.ndarray, first: int, half: float, step: float) -> np.ndarray:
+    """Poses about the neutral on a grid (of `step`, within +-half) over three coordinates from
+    `first` on: the positions (0) or the orientations (3)."""
+    axis = np.arange(-half, half + step / 2, step)
+    grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    poses = np.tile(neutral, (len(grid), 1))
+    poses[:, first:first + 3] += grid
+    return poses
+
+
+def position_volume(study: Study, point: dict[str, float], actuator: Actuator, spacing: float,
+                    extent: float = 0.8) -> float:
+    """[m^3] the positions of a design reachable at the neutral orientation (Workspace.volume alone,
+    on a grid of `spacing` within +-extent)."""
+    core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
+    poses = cube(core.neutral_pose, 0, extent, spacing)
+    return float(reachable(core, poses, actuator, study.joint_limits, stubs(study)).sum() * spacing ** 3)
+
+
 def workspace(study: Study, point: dict[str, float], actuator: Actuator, spacing: float = 0.02,
               angle_step: float = math.radians(1.0), extent: float = 0.8, angular_extent: float = math.radians(45.0)) -> Workspace:
     """The workspace of the design at `point` (see Workspace): positions within +-extent of the
@@ -104,19 +123,10 @@ def workspace(study: Study, point: dict[str, float], actuator: Actuator, spacing
     core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
     neutral = core.neutral_pose
     s = stubs(study)
-
-    def cube(first: int, half: float, step: float) -> np.ndarray:
-        """Poses about the neutral on a grid over three coordinates from `first` on."""
-        axis = np.arange(-half, half + step / 2, step)
-        grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
-        poses = np.tile(neutral, (len(grid), 1))
-        poses[:, first:first + 3] += grid
-        return poses
-
-    poses = cube(0, extent, spacing)
+    poses = cube(neutral, 0, extent, spacing)
     ok = reachable(core, poses, actuator, study.joint_limits, s)
     positions = poses[ok, :3] - neutral[:3]
-    turned = cube(3, angular_extent, angle_step)
+    turned = cube(neutral, 3, angular_extent, angle_step)
     orientations = turned[reachable(core, turned, actuator, study.joint_limits, s), 3:] - neutral[3:]
     sample = poses[ok][:: max(1, ok.sum() // 5000)]
     singular = np.linalg.svd(core.pose_kinematics(sample, jacobian=True)["jacobian"], compute_uv=False) \
