@@ -92,7 +92,8 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
 
 def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | None = None,
              overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
-             out: str | Path | None = None, plots: bool = False, progress: bool = False, twin: bool = False) -> Run:
+             out: str | Path | None = None, plots: bool = False, progress: bool = False, twin: bool = False,
+             real_time: float | None = None, stream: str | None = None, listen: str | None = None) -> Run:
     """Runs a scene or an SSP system and returns its named results.
 
     Args:
@@ -109,6 +110,10 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         progress: a progress bar on a terminal.
         twin: judge a scene's run against its converged twin (the scene at a 16th of its step
             throughout), window by window (start-up, each load pulse, steady tracking).
+        real_time: pace the run at this factor of the wall clock (1.0: real time); its lateness
+            and overruns are in `.report.pacing` (docs/guide/realtime.md).
+        stream: send the run's samples live to udp://HOST:PORT[?every=N] (`cosim.realtime.receive`).
+        listen: take a scene's pose reference live from udp://HOST:PORT (`cosim.realtime.send`).
 
     Raises:
         SceneError, SspError, SettingsError: the input cannot run (one line).
@@ -121,17 +126,20 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         raise UsageError("simulate: plots are drawn into a folder: give out as well")
     if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
                                               and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
-        given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin)) if value]
+        given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin),
+                                          ("listen", listen)) if value]
         if given:
             raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
                              "settings)")
         from contextlib import nullcontext
+        from .engine.realtime import RealTime
         from .engine.run import run_system
         from .engine.ssp import opened
         source = None if isinstance(model, SystemStructure) else str(model)
+        paced = RealTime(real_time, stream) if real_time is not None or stream else None
         with nullcontext(model) if isinstance(model, SystemStructure) else opened(Path(model)) as structure:
             values, report = run_system(structure, dict(settings or {}), duration, target, source=source,
-                                        progress=progress)
+                                        progress=progress, real_time=paced)
         return Run(values, report)
     if settings:
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "
@@ -140,7 +148,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     scene = model.changed(overrides or {}) if isinstance(model, Scene) else load_scene(model, overrides)
     if duration is not None:
         scene = scene.changed({"scene.duration": float(duration)})
-    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin)
+    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin, real_time=real_time,
+                               stream=stream, listen=listen)
     return Run(values, report)
 
 

@@ -27,8 +27,9 @@ def unwritable(folder: Path) -> str | None:
     return None
 
 
-def seconds(option: str, text: str | None) -> float | None:
-    """A command line's duration in seconds (None where it gives none)."""
+def seconds(option: str, text: str | None, what: str = "must be a positive finite number of seconds") -> float | None:
+    """A command line's duration in seconds, or another positive finite number (`what` says what a
+    wrong one should have been); None where it gives none."""
     if text is None:
         return None
     try:
@@ -36,7 +37,7 @@ def seconds(option: str, text: str | None) -> float | None:
     except ValueError:
         value = float("nan")
     if not (math.isfinite(value) and value > 0):
-        raise UsageError(f"{option} {text}: must be a positive finite number of seconds")
+        raise UsageError(f"{option} {text}: {what}")
     return value
 
 

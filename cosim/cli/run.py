@@ -23,6 +23,12 @@ def add(commands) -> argparse.ArgumentParser:
     run.add_argument("--duration", type=str, help="override the scene's duration [s]")
     run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
                      "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
+    run.add_argument("--real-time", nargs="?", const="1", metavar="FACTOR", help="pace the run to the wall clock (each "
+                     "macro step at its deadline), FACTOR simulated seconds per wall second (default 1)")
+    run.add_argument("--stream", metavar="udp://HOST:PORT[?every=N]", help="send the run's samples live, one datagram "
+                     "every N macro steps (layout: cosim stream-layout)")
+    run.add_argument("--listen", metavar="udp://HOST:PORT", help="a scene's pose reference taken live from datagrams "
+                     "sent here (cosim.realtime.send); binds 127.0.0.1 unless a host is named")
     return run
 
 
@@ -57,10 +63,17 @@ def scene_values(items: list[str]) -> dict[str, object]:
 
 def main(args: argparse.Namespace) -> int:
     duration = seconds("--duration", args.duration)
+    factor = seconds("--real-time", args.real_time, "expected a real-time factor > 0 (1: the wall clock's pace)")
+    if args.listen:
+        from ..engine.realtime import address
+        host = address(args.listen, "--listen")[0]
+        if host not in ("127.0.0.1", "localhost", "::1"):
+            print(f"listening on {host}: datagrams from other machines can drive this run's platform", flush=True)
     system = args.scene.suffix.lower() in SYSTEM_SUFFIXES
     stem = args.scene.stem
     written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if system or args.no_plots else
                                                      f", plots and the report {stem}.html")
     given = {"settings": settings(args.set) or None} if system else {"overrides": scene_values(args.set) or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
-                                   twin=args.twin, progress=True, **given).report, written, args.out)
+                                   twin=args.twin, progress=True, real_time=factor, stream=args.stream,
+                                   listen=args.listen, **given).report, written, args.out)

@@ -19,6 +19,7 @@ from . import interrupts
 from .fmi import FmuError, FmuInstance, LogMessage
 from .kernel import Kernel
 from .observers import Diverged, Observer, RecordFull, Recorder
+from .realtime import RealTime, Session, batch_size
 from .settings import Algorithm, FixedStep, SettingsError, StepControl, control_name
 from .structure import SystemStructure
 
@@ -39,15 +40,23 @@ class Execution:
     ((component, variable) pairs) as columns `names` (default 'component.variable') after every
     accepted step. The time column is that of component `clock` (default the first).
     `interpolating` overrides per component whether it takes input derivatives (default: its
-    modelDescription's canInterpolateInputs). A context manager: the FMUs are freed on leaving it."""
+    modelDescription's canInterpolateInputs). `real_time`: the run paced to the wall clock,
+    streamed and driven from outside (cosim.engine.realtime; fixed steps only). A context manager:
+    the FMUs are freed on leaving it."""
 
     def __init__(self, structure: SystemStructure, algorithm: Algorithm, control: StepControl,
                  record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None,
                  clock: str | None = None, logging_on: bool = False,
-                 interpolating: Mapping[str, bool] | None = None):
+                 interpolating: Mapping[str, bool] | None = None, real_time: RealTime | None = None):
         check_parameters(structure)  # before any FMU is instantiated
         check_capabilities(structure, control)
+        if real_time is not None and not isinstance(control, FixedStep):
+            raise SettingsError(f"a real-time run takes fixed steps, one a deadline; the step control "
+                                f"'{control_name(control)}' chooses its steps as it goes: set step_control = fixed",
+                                "step_control")
+        self.real_time, self.pacing = real_time, None
         self.structure, self.algorithm, self.control = structure, algorithm, control
+        self.record = list(record)
         self.control_name = control_name(control)
         if algorithm.sequence and sorted(algorithm.sequence) != sorted(c.name for c in structure.components):
             raise SettingsError(f"the Gauss-Seidel sequence {list(algorithm.sequence)} must name every component "
@@ -65,6 +74,8 @@ class Execution:
         self.steps = np.zeros(0)              # the accepted macro steps [s]
         self.bond_residual_max = np.zeros(len(self.bond_names))  # per bond, the largest |residual| of a step [J]
         self.start_time = self.stop_time = structure.experiment.start
+        self.session: Session | None = None
+        self.master_messages: list[LogMessage] = []  # what the master itself logs (the live input's watchdog)
         self.record_budget = 0.5 * _memory()  # [bytes] of recorded rows; a fixed-step run is refused above it
 
     @property
@@ -80,8 +91,10 @@ class Execution:
         return sum(i.fmi_seconds for i in self.instances.values())
 
     def messages(self, status: str | None = None) -> list[tuple[str, LogMessage]]:
-        """(instance, message) of everything the FMUs logged, or only of one status."""
-        return [(n, m) for n, i in self.instances.items() for m in i.messages if status in (None, m.status)]
+        """(instance, message) of everything the FMUs logged and the master ("master": a live
+        input's watchdog), or only of one status."""
+        return [*((n, m) for n, i in self.instances.items() for m in i.messages if status in (None, m.status)),
+                *(("master", m) for m in self.master_messages if status in (None, m.status))]
 
     def run(self, stop_time: float, observers: Sequence[Observer] = ()) -> np.ndarray:
         """Runs from the start to stop_time; returns the recorded results (structured array).
@@ -92,6 +105,9 @@ class Execution:
         observers = [recorder, *observers]
         self.start_time, self.stop_time = self.time, stop_time
         parts_residuals, parts_steps = [], []
+        session = Session(self.real_time, self.names[1:], self.record, self.coupling.names, self.coupling.sources) \
+            if self.real_time else None
+        self.session = session
         try:
             recorder.add(self.kernel.initialize())
             for observer in observers:
@@ -113,6 +129,9 @@ class Execution:
                     if observer.stop is not None:
                         raise observer.stop
                 interrupts.check()  # a Ctrl-C an FMU's callback held back
+                if session:
+                    session.between_batches()
+                    self.master_messages += session.news()
         except FmuError as error:
             batch = getattr(error, "batch", None)
             if batch is not None:
@@ -125,6 +144,10 @@ class Execution:
         finally:
             self.energy_residuals = np.concatenate([self.energy_residuals, *parts_residuals])
             self.steps = np.concatenate([self.steps, *parts_steps])
+            if session:
+                self.master_messages += session.news()
+                self.pacing = session.pacing()
+                session.close()
             for observer in observers:
                 observer.finish(self)
         return recorder.result()
@@ -167,10 +190,17 @@ class Execution:
 
     def _batches(self, h: float, n: int):
         done, size = 0, 100  # small batches first: a divergence shows early
+        largest = 1000
+        if self.session:  # under real time: long batches (the work between them is a step's lateness) ...
+            largest = size = batch_size(self.real_time, h)
+            if not self.session.started:  # ... and the clock starts after the first step, the start-up iteration
+                yield self.kernel.run_fixed(h, 1, self.session.unpaced())
+                self.session.start(self.time)
+                done = 1
         while done < n:
-            take = min(size, n - done)
-            size = min(2 * size, 1000)
-            yield self.kernel.run_fixed(h, take)
+            take = min(size, largest, n - done)
+            size = min(2 * size, largest)
+            yield self.kernel.run_fixed(h, take, self.session)
             done += take
 
     def _controlled_batches(self, stop_time: float):

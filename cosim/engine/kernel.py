@@ -96,13 +96,15 @@ def _load() -> ctypes.CDLL:
     if _library is None:
         path = library_path("libcosim_kernel.so")
         lib = ctypes.CDLL(str(path), use_errno=True)  # a write's errno (a full disk) reaches write_csv
+        from .realtime import _RealTime
         check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
                                                   (_Instance, "KernelInstance"), (_Kernel, "Kernel"), (_Feed, "KernelFeed"),
-                                                  (_Controller, "Controller")])
+                                                  (_Controller, "Controller"), (_RealTime, "RealTime")])
         K, C = ctypes.POINTER(_Kernel), ctypes.POINTER(_Controller)
         lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int, ctypes.c_int]
         lib.kernel_record.argtypes = [K, ctypes.c_int, _DOUBLES]
-        lib.kernel_run_fixed.argtypes = [K, ctypes.c_int, ctypes.c_double, ctypes.c_int, _DOUBLES, _DOUBLES, _DOUBLES]
+        lib.kernel_run_fixed.argtypes = [K, ctypes.POINTER(_RealTime), ctypes.c_int, ctypes.c_double, ctypes.c_int,
+                                         _DOUBLES, _DOUBLES, _DOUBLES, _DOUBLES, _DOUBLES]
         for name in ("kernel_run_doubling", "kernel_run_energy"):
             getattr(lib, name).argtypes = [K, C, ctypes.c_int, ctypes.c_double, ctypes.c_int, _DOUBLES, _DOUBLES,
                                            _DOUBLES, _DOUBLES]
@@ -151,10 +153,13 @@ def _failure_messages(messages: list[LogMessage]) -> list[LogMessage]:
 class Batch:
     """What one kernel call produced: rows (time and recorded columns, one per accepted step), the
     accepted steps, the largest bond energy residual per macro step (two per row under step
-    doubling: the halves), and per bond the residual and the energy transferred."""
+    doubling: the halves), and per bond the residual and the energy transferred; under real time,
+    per step how late it started and how far past the next deadline it ended [s]."""
 
-    def __init__(self, rows: np.ndarray, steps: np.ndarray, residuals: np.ndarray, bond_energy: np.ndarray):
+    def __init__(self, rows: np.ndarray, steps: np.ndarray, residuals: np.ndarray, bond_energy: np.ndarray,
+                 lateness: np.ndarray | None = None, finish: np.ndarray | None = None):
         self.rows, self.steps, self.residuals, self.bond_energy = rows, steps, residuals, bond_energy
+        self.lateness, self.finish = lateness, finish
 
 
 class Kernel:
@@ -307,14 +312,21 @@ class Kernel:
             self._raise_failure()
         return row
 
-    def run_fixed(self, h: float, n_steps: int) -> Batch:
-        """n_steps macro steps of h. Raises FmuError (with .batch: the steps completed) on failure."""
+    def run_fixed(self, h: float, n_steps: int, real_time=None) -> Batch:
+        """n_steps macro steps of h, paced, streamed and driven from outside by `real_time` (a
+        cosim.engine.realtime.Session) if given. Raises FmuError (with .batch: the steps
+        completed) on failure."""
         rows = np.zeros((n_steps, 1 + self.n_columns))
         residuals = np.zeros(max(n_steps, 1))
         bond_energy = np.zeros((max(n_steps, 1), max(self.n_bonds, 1), 2))
-        done = self._call(self.library.kernel_run_fixed, self.clock, h, n_steps, _ptr(rows, _DOUBLES),
-                          _ptr(residuals, _DOUBLES), _ptr(bond_energy, _DOUBLES))
-        batch = Batch(rows[:done], np.full(done, h), residuals[:done], bond_energy[:done, :self.n_bonds])
+        lateness, finish = np.zeros(max(n_steps, 1)), np.zeros(max(n_steps, 1))
+        done = self._call(self.library.kernel_run_fixed, real_time.pointer if real_time else None, self.clock, h,
+                          n_steps, _ptr(rows, _DOUBLES), _ptr(residuals, _DOUBLES), _ptr(bond_energy, _DOUBLES),
+                          _ptr(lateness, _DOUBLES), _ptr(finish, _DOUBLES))
+        batch = Batch(rows[:done], np.full(done, h), residuals[:done], bond_energy[:done, :self.n_bonds],
+                      *((lateness[:done], finish[:done]) if real_time else ()))
+        if real_time:
+            real_time.add(batch.lateness, batch.finish)
         if done < n_steps:
             self._fail(batch)
         return batch

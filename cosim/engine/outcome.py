@@ -17,6 +17,7 @@ import numpy as np
 from .execution import Execution, RunFailed
 from .fmi import LogMessage
 from .observers import Diverged, Observer
+from .realtime import Pacing, RealTime
 from .results import message_kinds
 from .settings import Algorithm, FixedStep, StepControl, control_name
 from .structure import SystemStructure
@@ -42,6 +43,7 @@ class Outcome:
     observers: list[Observer] = field(default_factory=list)
     failure: RunFailed | None = None
     fmi_seconds_by_instance: dict[str, float] = field(default_factory=dict)  # of the stepping, per instance
+    pacing: Pacing | None = None  # a real-time run's lateness, stream and live input
 
     @property
     def warnings(self) -> list[str]:
@@ -62,13 +64,14 @@ class Outcome:
 
 def execute(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
             record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None, clock: str | None = None,
-            observers: Sequence[Observer] = (), advice: bool = False) -> Outcome:
+            observers: Sequence[Observer] = (), advice: bool = False, real_time: RealTime | None = None) -> Outcome:
     """Runs `structure` from its start to stop_time and returns the Outcome; a run that an FMU or
     an observer stops is an Outcome with its failure and the results up to then, not an exception.
     advice: a fixed-step run that diverged probes shorter steps on the same system and its failure
     says which one held (cosim.engine.advice). Raises before a single step for what makes the run
-    impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path."""
-    with Execution(structure, algorithm, control, record, names, clock=clock) as execution:
+    impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path.
+    real_time: paced, streamed, driven from outside (cosim.engine.realtime); its figures in .pacing."""
+    with Execution(structure, algorithm, control, record, names, clock=clock, real_time=real_time) as execution:
         setup_fmi = execution.fmi_seconds  # instantiation and parameters: not part of the stepping
         setup_by_instance = {name: instance.fmi_seconds for name, instance in execution.instances.items()}
         start = time.perf_counter()
@@ -82,7 +85,8 @@ def execute(structure: SystemStructure, algorithm: Algorithm, control: StepContr
                           wall, execution.fmi_seconds - setup_fmi, control_name(control), execution.messages(),
                           dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers),
                           fmi_seconds_by_instance={name: instance.fmi_seconds - setup_by_instance[name]
-                                                   for name, instance in execution.instances.items()})
+                                                   for name, instance in execution.instances.items()},
+                          pacing=execution.pacing)
     if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
         from .advice import advice_text
         failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
@@ -111,6 +115,7 @@ class Report:
     messages: list[tuple[str, LogMessage]] = field(default_factory=list, repr=False)  # everything logged
     remarks: list[str] = field(default_factory=list)  # what the run chose that its input did not say
     fmi_seconds_by_instance: dict[str, float] = field(default_factory=dict, repr=False)  # of the stepping
+    pacing: Pacing | None = field(default=None, repr=False)  # a real-time run's lateness, stream, live input
 
     @classmethod
     def of(cls, outcome: Outcome, simulated: float | None = None, **extra) -> "Report":
@@ -119,15 +124,21 @@ class Report:
                    outcome.wall, outcome.fmi_seconds, float(np.max(outcome.energy_residuals, initial=0.0)),
                    outcome.warnings, str(outcome.failure) if outcome.failure else None, outcome.rejected,
                    outcome.control, message_kinds(outcome.messages), messages=outcome.messages,
-                   fmi_seconds_by_instance=dict(outcome.fmi_seconds_by_instance), **extra)
+                   fmi_seconds_by_instance=dict(outcome.fmi_seconds_by_instance), pacing=outcome.pacing, **extra)
 
     @property
     def real_time_factor(self) -> float:
         return self.simulated / self.wall if self.wall > 0 else float("nan")
 
     @property
+    def busy(self) -> float:
+        """The stepping's wall time [s], less what a paced run slept until its deadlines."""
+        return self.wall - (self.pacing.waited if self.pacing is not None else 0.0)
+
+    @property
     def master_share(self) -> float:
-        return 1.0 - self.fmi_seconds / self.wall if self.wall > 0 else 0.0
+        """The stepping's share outside the FMUs (a paced run's sleep not counted)."""
+        return 1.0 - self.fmi_seconds / self.busy if self.busy > 0 else 0.0
 
     def measured(self) -> list[str]:
         return []
@@ -139,9 +150,13 @@ class Report:
         steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"
                                                      if self.step_control != "fixed" else "")
         lines = [f"{self.name}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {steps}, "
-                 f"real-time factor {self.real_time_factor:.1f}, {100 * self.master_share:.0f} % of the wall time in the "
-                 f"master outside the FMUs", f"largest energy residual of a power bond in one step: "
-                 f"{self.largest_energy_residual:.2e} J", *self.measured()]
+                 f"real-time factor {self.real_time_factor:.1f}, " + (
+                     f"{100 * self.busy / self.wall:.0f} % of the wall time stepping (the rest waiting for deadlines), "
+                     f"{100 * self.master_share:.0f} % of the stepping in the master outside the FMUs"
+                     if self.pacing is not None and self.pacing.waited > 0 else
+                     f"{100 * self.master_share:.0f} % of the wall time in the master outside the FMUs"), f"largest energy residual of a power bond in one step: "
+                 f"{self.largest_energy_residual:.2e} J", *(self.pacing.lines() if self.pacing else []),
+                 *self.measured()]
         if self.warnings:
             kinds = "; ".join(f"{n} x {kind}" for n, kind in self.warning_kinds[:3])
             more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""
@@ -155,7 +170,8 @@ class Report:
     def row(self) -> dict[str, float]:
         """The run's numbers as a sweep's row has them."""
         return {"steps": self.macro_steps, "rejected": self.rejected_steps, "energy_residual": self.largest_energy_residual,
-                "real_time_factor": self.real_time_factor, "stepping_wall": self.wall}
+                "real_time_factor": self.real_time_factor, "stepping_wall": self.wall,
+                **(self.pacing.row() if self.pacing else {})}
 
 
 class RunStopped(RuntimeError):

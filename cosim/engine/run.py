@@ -13,13 +13,14 @@ platform application makes a Plan of a scene the same way (cosim.platform.run.ru
 from __future__ import annotations
 
 from contextlib import nullcontext
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from .observers import DivergenceMonitor, Progress
+from .realtime import RealTime
 from .outcome import Outcome, Report, RunStopped, execute
 from .files import OutputError, folder_lock
 from .interrupts import deferred
@@ -32,8 +33,9 @@ from .structure import SystemStructure
 class Plan:
     """One run of a system: its coupling and step control, its stop time, the recorded variables
     (component, variable) and their column names, the interval results are kept at (None: every
-    macro step), whose time the results carry (None: the run's own) and the divergence monitor's
-    threshold (None: unwatched)."""
+    macro step), whose time the results carry (None: the run's own), the divergence monitor's
+    threshold (None: unwatched) and the run's real time (None: as fast as it goes, no stream, no
+    live input: cosim.engine.realtime)."""
     structure: SystemStructure
     algorithm: Algorithm
     control: StepControl
@@ -43,6 +45,7 @@ class Plan:
     output_interval: float | None = None
     clock: str | None = None
     divergence: float | None = 0.05
+    real_time: RealTime | None = None
 
 
 def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progress: bool = False,
@@ -59,7 +62,7 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     with folder_lock(out) if out is not None else nullcontext(), deferred():  # one run's files at a time in a
         #                                                                         folder; Ctrl-C never lost in an FMU
         outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
-                          clock=plan.clock, observers=observers, advice=advice)
+                          clock=plan.clock, observers=observers, advice=advice, real_time=plan.real_time)
         result = thin(outcome.result, plan.output_interval)
         made = report(outcome, result)
         if out is not None:
@@ -112,11 +115,12 @@ def system_plan(structure: SystemStructure, overrides: Mapping[str, str] | None 
 
 def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
                stop_time: float | None = None, out: Path | None = None, *, source: str | None = None,
-               progress: bool = False, advice: bool = True) -> tuple[np.ndarray, Report]:
+               progress: bool = False, advice: bool = True, real_time: RealTime | None = None) -> tuple[np.ndarray, Report]:
     """Runs a system by its own settings (system_plan) and writes its results to `out` as
-    <name>.csv, .mat and .log. What cannot start (a setting, a parameter value, a time that fits no
-    step, an FMU that refuses its values) is an SspError naming `source` (the file the system came
-    from; default its name), one line; a run that stopped part way raises RunStopped."""
+    <name>.csv, .mat and .log; paced and streamed by `real_time` if given. What cannot start (a
+    setting, a parameter value, a time that fits no step, an FMU that refuses its values) is an
+    SspError naming `source` (the file the system came from; default its name), one line; a run
+    that stopped part way raises RunStopped."""
     from .checks import ParameterError
     from .execution import NoStep
     from .fmi import FmuError
@@ -125,6 +129,8 @@ def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None =
     where = source or structure.name
     try:
         plan = system_plan(structure, overrides, stop_time)
+        if real_time is not None:
+            plan = replace(plan, real_time=real_time)
 
         def report(outcome: Outcome, result: np.ndarray) -> Report:
             made = Report.of(outcome)

@@ -38,6 +38,11 @@ class Platform(ctypes.Structure):
     ]
 
 
+class PlatformStroke(ctypes.Structure):
+    """A platform and its legs' stroke [m], for platform_pose_within_stroke (a live input's check)."""
+    _fields_ = [("platform", Platform), ("length_min", D), ("length_max", D)]
+
+
 class LegGeometry(ctypes.Structure):
     _fields_ = [("axis", D * 3), ("length", D), ("arm", D * 3), ("velocity", D)]
 
@@ -53,7 +58,8 @@ def load() -> ctypes.CDLL:
     path = library_path("libplatform_core.so")
     dll = ctypes.CDLL(str(path))
     check_layout(dll, "platform_core_layout", path, [(Platform, "Platform"), (LegGeometry, "LegGeometry"),
-                                                      (Diagnostics, "PlatformDiagnostics")])
+                                                      (Diagnostics, "PlatformDiagnostics"),
+                                                      (PlatformStroke, "PlatformStroke")])
     P = ctypes.POINTER
     dll.mechanics_platform_from_values.argtypes = [P(D), ctypes.c_int, P(Platform)]
     dll.mechanics_platform_from_values.restype = ctypes.c_int

@@ -558,14 +558,18 @@ static int macro_step(Kernel *s, double t, double h, double *residual, double *b
 /* Takes n_steps macro steps of h from the time of instance `clock` (whose time the rows carry).
  * Returns the number of steps completed; fewer than n_steps when an FMI call failed (then
  * failed_instance and failed_call say which). rows: n_steps x (1 + n_columns); residuals: n_steps;
- * bond_energy: n_steps x n_bonds x (residual, transferred). */
-int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, double *residuals,
-                     double *bond_energy) {
+ * bond_energy: n_steps x n_bonds x (residual, transferred). With real_time (else NULL), each step
+ * starts at its deadline and its lateness and finish (realtime.c) go to lateness and finish. */
+int kernel_run_fixed(Kernel *s, RealTime *real_time, int clock, double h, int n_steps, double *rows,
+                     double *residuals, double *bond_energy, double *lateness, double *finish) {
     s->failed_instance = s->failed_call = -1;
     for (int step = 0; step < n_steps; step++) {
         double *bonds = bond_energy + (size_t)step * 2 * (size_t)s->n_bonds;
+        double *row = rows + (size_t)step * (size_t)(1 + s->n_columns);
+        if (real_time) lateness[step] = realtime_wait(real_time, s->instance_time[clock]);
         if (!macro_step(s, s->instance_time[clock], h, &residuals[step], bonds)) return step;
-        if (!record(s, rows + (size_t)step * (size_t)(1 + s->n_columns), s->instance_time[clock])) return step;
+        if (!record(s, row, s->instance_time[clock])) return step;
+        if (real_time) finish[step] = realtime_after_step(s, real_time, s->instance_time[clock], h, row);
     }
     return n_steps;
 }
@@ -727,6 +731,13 @@ static const StructLayout LAYOUT[] = {
     C(previous), C(safety), C(change_min), C(change_max), C(t), C(rejected), C(accepted_count), C(force_reject), C(n_force_reject), C(saved_time),
     C(saved_samples), C(saved_rates), C(saved_inputs), C(saved_instance_time), C(full),
 #undef C
+#define R(field) STRUCT_LAYOUT_FIELD(RealTime, field)
+    STRUCT_LAYOUT(RealTime), R(factor), R(origin), R(t0), R(waited), R(stream_fd), R(stream_every), R(stream_countdown),
+    R(n_stream), R(stream_columns), R(stream_sequence), R(packet), R(stream_failed), R(listen_fd), R(live_instance),
+    R(n_live), R(live_index), R(live_column), R(rate_max), R(acceleration_max), R(neutral), R(late_after),
+    R(watchdog), R(admissible), R(admissible_context), R(live), R(target_time), R(last_good), R(live_active),
+    R(watchdog_engaged), R(live_sequence), R(counts), R(watchdog_time), R(received), R(receive_size),
+#undef R
     STRUCT_LAYOUT_END};
 
 const StructLayout *kernel_layout(void) { return LAYOUT; }

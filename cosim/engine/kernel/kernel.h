@@ -112,14 +112,59 @@ typedef struct {
     double *saved_time, *saved_samples, *saved_rates, *saved_inputs, *saved_instance_time, *full;
 } Controller;
 
-/* The layout of KernelPort, KernelBond, KernelInstance, Kernel and Controller. */
+/* A run paced to the wall clock, streamed out and driven from outside (realtime.c): every macro
+ * step starts at its deadline, origin + (t - t0) / factor on the monotonic clock; after each step
+ * the live input's datagrams are taken (the reference they give replaces outputs of one instance
+ * in the history, moving towards it within rate and acceleration limits) and every stream_every
+ * steps the row's streamed columns go out as one datagram. Layouts: docs/guide/realtime.md. */
+enum { LIVE_ACCEPTED, LIVE_LATE, LIVE_REPEATED, LIVE_OUT_OF_ORDER, LIVE_MALFORMED, LIVE_NON_FINITE, LIVE_OUTSIDE,
+       LIVE_WATCHDOG, LIVE_COUNTS };
+
+typedef int (*AdmissibleFn)(void *context, const double *values); /* 1: the values may be applied */
+
+typedef struct {
+    /* pacing (factor <= 0: as fast as it goes) */
+    double factor;                    /* simulated seconds per wall second */
+    double origin, t0;                /* the monotonic clock [s] at which simulated time t0 is due */
+    double waited;                    /* [s] slept until deadlines, added to */
+    /* stream (stream_fd < 0: none): a connected datagram socket */
+    int stream_fd, stream_every, stream_countdown, n_stream;
+    const int *stream_columns;        /* row columns streamed (0 is the time) */
+    unsigned long long stream_sequence;
+    unsigned char *packet;            /* scratch: header and n_stream values */
+    int stream_failed;                /* datagrams the socket did not take */
+    /* live input (listen_fd < 0: none): a bound non-blocking datagram socket */
+    int listen_fd, live_instance, n_live;
+    const int *live_index;            /* per channel: index among the instance's coupled outputs */
+    const int *live_column;           /* per channel: its row column, or -1 */
+    const double *rate_max, *acceleration_max, *neutral; /* per channel */
+    double late_after, watchdog;      /* [s] simulated age of a late packet; [s] wall silence for the watchdog */
+    AdmissibleFn admissible;          /* NULL: every finite value is admissible */
+    void *admissible_context;
+    double *live;                     /* [5][n_live]: reference value, rate, acceleration; target, target rate */
+    double target_time, last_good;    /* simulated time the target was given for; wall time of the last good packet */
+    int live_active, watchdog_engaged;
+    unsigned long long live_sequence; /* of the last accepted packet */
+    long long counts[LIVE_COUNTS];
+    double watchdog_time;             /* simulated time the watchdog last engaged */
+    unsigned char *received;          /* scratch: one datagram (receive_size bytes) */
+    int receive_size;
+} RealTime;
+
+/* realtime.c: waits for step's deadline (returns how late it started [s]); after the step at t_new,
+ * takes the live input into the history and the row and streams the row (returns how far past
+ * the next deadline the step ended [s]: > 0 an overrun). */
+double realtime_wait(RealTime *r, double t);
+double realtime_after_step(Kernel *s, RealTime *r, double t_new, double h, double *row);
+
+/* The layout of KernelPort, KernelBond, KernelInstance, Kernel, Controller and RealTime. */
 const StructLayout *kernel_layout(void);
 
 int kernel_initialize(Kernel *s, double t, int sweeps, int zero_start);
 int kernel_record(Kernel *s, int clock, double *row);
 void kernel_release(Kernel *s);
-int kernel_run_fixed(Kernel *s, int clock, double h, int n_steps, double *rows, double *residuals,
-                     double *bond_energy);
+int kernel_run_fixed(Kernel *s, RealTime *real_time, int clock, double h, int n_steps, double *rows,
+                     double *residuals, double *bond_energy, double *lateness, double *finish);
 int kernel_run_doubling(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,
                         double *accepted_h, double *residuals, double *bond_energy);
 int kernel_run_energy(Kernel *s, Controller *a, int clock, double t_end, int max_rows, double *rows,

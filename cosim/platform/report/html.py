@@ -120,6 +120,7 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 {view}
 <h2>Scene</h2>{_table(_scene_rows(scene))}
 <h2>Run</h2>{_table(_summary_rows(report))}
+{_pacing(report.pacing) if report.pacing is not None else ""}
 <h2>Power bonds: largest energy residual in one step</h2>{_table(bonds)}
 <h2>Warnings and errors from the FMUs ({len(warnings)})</h2>
 <table class="warnings"><tr><th>step start [s]</th><th>instance</th><th>message</th></tr>{warning_rows}</table>
@@ -150,6 +151,29 @@ def _summary_rows(report) -> list[tuple[str, str, str]]:
               f"{pose:.1e} / {effort:.1e} / {100 * relative:.2f} %", repr(relative))
              for name, pose, effort, relative in report.windows]
     return rows
+
+
+def _pacing(pacing) -> str:
+    """A real-time run's figures (cosim.engine.realtime.Pacing): lateness, overruns, the stream and
+    the live input, and the lateness histogram."""
+    import plotly.graph_objects as go
+    import plotly.io as pio
+    rows = [(line.split(":")[0], line, line) for line in pacing.lines()]
+    if pacing.factor is not None and len(pacing.lateness):
+        p50, p99, largest = pacing.percentiles()
+        rows = [("lateness of a step's start p50 / p99 / largest [ms]", f"{1e3 * p50:.3f} / {1e3 * p99:.3f} / "
+                 f"{1e3 * largest:.3f}", repr((p50, p99, largest))),
+                ("steps that overran their deadline", f"{pacing.overruns} of {len(pacing.finish)}",
+                 repr(pacing.overruns)), *rows[1:]]
+        counts, edges = pacing.histogram(40)
+        figure = go.Figure(go.Bar(x=1e3 * 0.5 * (edges[:-1] + edges[1:]), y=counts, name="steps"))
+        figure.update_layout(height=260, margin=dict(l=50, r=20, t=10, b=40), xaxis_title="lateness [ms]",
+                             yaxis_title="steps", yaxis_type="log")
+        histogram = pio.to_html(figure, full_html=False, include_plotlyjs=False, config=dict(responsive=True))
+    else:
+        histogram = ""
+    return (f'<h2>Real time: paced at {pacing.factor:g} x the wall clock</h2>' if pacing.factor is not None
+            else "<h2>Real time</h2>") + _table(rows) + histogram
 
 
 def _scene_rows(scene) -> list[tuple[str, str, str]]:

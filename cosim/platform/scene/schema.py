@@ -102,6 +102,16 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("mechanics", ListOf(Text()), "mechanics outputs"),
         Key("drive", ListOf(Text()), "per drive (default: its effort, speed or velocity and current)"),
         Key("interval", SECONDS, "results written every interval (default: every macro step)"))),
+    Table("live", "A live input's limits (`cosim run SCENE --listen udp://HOST:PORT`, docs/guide/realtime.md): the "
+          "reference moves towards each pose received, braking in time, within these; refused packets and a silent "
+          "sender leave it where it is going.", (
+        Key("velocity_max", Number("m/s", 0, above=True), "the reference's largest speed along x, y, z", 0.25),
+        Key("angular_velocity_max", Number("rad/s", 0, above=True), "its largest roll, pitch and yaw rate", 0.5),
+        Key("acceleration_max", Number("m/s^2", 0, above=True), "its largest acceleration along x, y, z", 2.0),
+        Key("angular_acceleration_max", Number("rad/s^2", 0, above=True), "its largest angular acceleration", 4.0),
+        Key("watchdog", SECONDS, "wall seconds without a good packet after which the reference goes back to the "
+            "neutral pose", 0.5),
+        Key("late_after", SECONDS, "a packet for a simulated time older than this is late and refused", 0.1))),
 ), SceneError)
 
 

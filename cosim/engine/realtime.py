@@ -1,0 +1,472 @@
+"""Real time: a run paced to the wall clock, streamed out live and driven from outside.
+
+The stepping stays in C (cosim/engine/kernel/realtime.c): each macro step starts at its deadline
+on the monotonic clock, one datagram goes out every N steps, and the live input's datagrams are
+taken between steps. This module holds what a run is asked for (`RealTime`), the sockets and the
+C side's state over the run (`Session`), what it measured (`Pacing`), and the datagram layouts
+with a receiver and a sender for users and tests (`receive`, `send`). It knows nothing of the
+platform: the application says which columns stream, which outputs the live input replaces, and
+what is admissible (a C function of the values).
+
+Datagrams are little-endian (docs/guide/realtime.md):
+- stream, one a sample: "CSIM", version (u16), n (u16), sequence (u64), simulated time (f64),
+  wall clock as Unix time (f64), then n values (f64);
+- stream layout, before the first sample and then every second: "CSLY", version (u16), n (u16),
+  then the n column names, UTF-8, one per line;
+- live input: "CREF", version (u16), count (u16: n values, then optionally n rates and n
+  accelerations), sequence (u64), the simulated time they are for (f64, NaN: now), the values.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import socket
+import struct
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Iterator, Sequence
+from urllib.parse import parse_qs, urlsplit
+
+import numpy as np
+
+from .errors import UsageError
+
+VERSION = 1
+SAMPLE = struct.Struct("<4sHHQdd")   # magic, version, n, sequence, time, wall
+LAYOUT = struct.Struct("<4sHH")      # magic, version, n; then the names
+REFERENCE = struct.Struct("<4sHHQd")  # magic, version, count, sequence, time
+MAX_VALUES = (65507 - SAMPLE.size) // 8  # what one UDP datagram holds
+LIVE_KINDS = ("accepted", "late", "repeated", "out_of_order", "malformed", "non_finite", "outside", "watchdog")
+DEFAULT_HOST = "127.0.0.1"
+
+
+def address(text: str, option: str) -> tuple[str, int, dict[str, str]]:
+    """udp://HOST:PORT[?key=value] (HOST may be left out: 127.0.0.1) as (host, port, query);
+    a UsageError naming `option` for anything else."""
+    parts = urlsplit(text if "://" in text else f"udp://{text}")
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if parts.scheme != "udp" or port is None or parts.path not in ("", "/"):
+        raise UsageError(f"{option} {text}: expected udp://HOST:PORT (HOST defaults to {DEFAULT_HOST})")
+    query = {k: v[-1] for k, v in parse_qs(parts.query, keep_blank_values=True).items()}
+    return parts.hostname or DEFAULT_HOST, port, query
+
+
+@dataclass(frozen=True)
+class LiveInput:
+    """Which outputs of which instance the live input replaces (a source that gives its outputs'
+    exact derivatives: the reference then reaches its inputs with its rate and acceleration), the
+    limits the reference moves within, its neutral values (where the watchdog takes it), how old
+    a packet may be [s simulated] and how long the input may be silent [s wall]; `admissible`: a
+    C function int(void *context, const double *values) and its context (None: any finite value),
+    `refusal`: what a refused value is called in the report ('outside the workspace')."""
+    instance: str
+    outputs: Sequence[str]
+    rate_max: Sequence[float]
+    acceleration_max: Sequence[float]
+    neutral: Sequence[float]
+    late_after: float = 0.1
+    watchdog: float = 0.5
+    admissible: object = None  # a ctypes function pointer
+    admissible_context: object = None  # what it points at, kept alive with it
+    refusal: str = "not admissible"
+
+
+@dataclass(frozen=True)
+class RealTime:
+    """A run paced at `factor` (simulated seconds per wall second; None: as fast as it goes),
+    streamed to `stream` (udp://HOST:PORT[?every=N]: a datagram every N macro steps) with the
+    recorded columns `stream_names` (default all), and driven through `listen` by `live`."""
+    factor: float | None = 1.0
+    stream: str | None = None
+    stream_names: Sequence[str] | None = None
+    listen: str | None = None
+    live: LiveInput | None = None
+
+    def __post_init__(self):
+        if self.factor is not None and not (isinstance(self.factor, (int, float)) and math.isfinite(self.factor)
+                                            and self.factor > 0):
+            raise UsageError(f"--real-time {self.factor}: expected a real-time factor > 0 (1: the wall clock's pace)")
+        if self.stream is not None:
+            _, _, query = address(self.stream, "--stream")
+            unknown = sorted(set(query) - {"every"})
+            if unknown:
+                raise UsageError(f"--stream {self.stream}: unknown option '{unknown[0]}' (known: every)")
+            if "every" in query and not (query["every"].isdigit() and int(query["every"]) >= 1):
+                raise UsageError(f"--stream {self.stream}: every={query['every']} is not a whole number >= 1")
+        if self.listen is not None:
+            address(self.listen, "--listen")
+            if self.live is None:
+                raise UsageError("--listen: this system names no outputs for a live input to replace")
+
+    @property
+    def every(self) -> int:
+        return int(address(self.stream, "--stream")[2].get("every", 1)) if self.stream else 1
+
+
+class _RealTime(ctypes.Structure):
+    _P, _D, _I = ctypes.c_void_p, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
+    _fields_ = [("factor", ctypes.c_double), ("origin", ctypes.c_double), ("t0", ctypes.c_double),
+                ("waited", ctypes.c_double),
+                ("stream_fd", ctypes.c_int), ("stream_every", ctypes.c_int), ("stream_countdown", ctypes.c_int),
+                ("n_stream", ctypes.c_int), ("stream_columns", _I), ("stream_sequence", ctypes.c_ulonglong),
+                ("packet", _P), ("stream_failed", ctypes.c_int), ("listen_fd", ctypes.c_int),
+                ("live_instance", ctypes.c_int), ("n_live", ctypes.c_int), ("live_index", _I),
+                ("live_column", _I), ("rate_max", _D), ("acceleration_max", _D), ("neutral", _D),
+                ("late_after", ctypes.c_double), ("watchdog", ctypes.c_double), ("admissible", _P),
+                ("admissible_context", _P), ("live", _D), ("target_time", ctypes.c_double),
+                ("last_good", ctypes.c_double), ("live_active", ctypes.c_int), ("watchdog_engaged", ctypes.c_int),
+                ("live_sequence", ctypes.c_ulonglong), ("counts", ctypes.c_longlong * len(LIVE_KINDS)),
+                ("watchdog_time", ctypes.c_double), ("received", _P), ("receive_size", ctypes.c_int)]
+
+
+@dataclass
+class Pacing:
+    """What a real-time run measured: per macro step how late it started past its deadline and
+    how far past the next deadline it ended [s] (> 0: an overrun), the stream's datagrams sent
+    and refused by the socket, the live input's packets by kind (LIVE_KINDS) and where the
+    watchdog last engaged [s simulated]."""
+    factor: float | None
+    lateness: np.ndarray
+    finish: np.ndarray
+    waited: float = 0.0  # [s] of wall time slept until deadlines
+    streamed: int = 0
+    stream_failed: int = 0
+    live: dict[str, int] = field(default_factory=dict)
+    watchdog_time: float | None = None
+    refusal: str = "not admissible"
+
+    @property
+    def overruns(self) -> int:
+        return int(np.count_nonzero(self.finish > 0.0))
+
+    def percentiles(self) -> tuple[float, float, float]:
+        """Lateness p50, p99 and largest [s]."""
+        if not len(self.lateness):
+            return (math.nan,) * 3
+        return (float(np.percentile(self.lateness, 50)), float(np.percentile(self.lateness, 99)),
+                float(self.lateness.max()))
+
+    def histogram(self, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
+        """Counts of the steps' lateness and the bins' edges [s]."""
+        top = max(float(self.lateness.max(initial=0.0)), 1e-6)
+        return np.histogram(self.lateness, bins=bins, range=(0.0, top))
+
+    def lines(self) -> list[str]:
+        out = []
+        if self.factor is not None and len(self.lateness):
+            p50, p99, top = self.percentiles()
+            out.append(f"paced at {self.factor:g} x the wall clock: lateness of a step's start p50 {1e3 * p50:.3f} ms, "
+                       f"p99 {1e3 * p99:.3f} ms, largest {1e3 * top:.3f} ms; {self.overruns} of {len(self.finish)} "
+                       "steps overran their deadline")
+        if self.streamed or self.stream_failed:
+            out.append(f"streamed {self.streamed} samples" + (f" ({self.stream_failed} not taken by the socket: no "
+                                                               "receiver)" if self.stream_failed else ""))
+        if self.live:
+            refused = {k: v for k, v in self.live.items() if k not in ("accepted", "watchdog") and v}
+            names = {"outside": self.refusal, "out_of_order": "out of order", "non_finite": "non-finite"}
+            out.append(f"live input: {self.live.get('accepted', 0)} references taken" + (
+                "; refused: " + ", ".join(f"{v} {names.get(k, k)}" for k, v in refused.items()) if refused else "") +
+                (f"; the watchdog engaged {self.live['watchdog']} times, last at t = {self.watchdog_time:.3f} s "
+                 "(no input: back to neutral)" if self.live.get("watchdog") else ""))
+        return out
+
+    def row(self) -> dict[str, float]:
+        p50, p99, top = self.percentiles()
+        return {"lateness_p50": p50, "lateness_p99": p99, "lateness_max": top, "overruns": self.overruns}
+
+
+class Session:
+    """The C side's real-time state over one run, its sockets and what it measured. `columns`:
+    the recorded column names (the row's columns 1 ..), `record`: the (instance, variable) each
+    holds, `instances`: the kernel's instance names, `outputs`: per instance its coupled outputs'
+    names."""
+
+    def __init__(self, options: RealTime, columns: Sequence[str], record: Sequence[tuple[str, str]],
+                 instances: Sequence[str], outputs: dict[str, Sequence[str]]):
+        self.options = options
+        self.state = r = _RealTime()
+        self._keep: list = []
+        self.lateness: list[np.ndarray] = []
+        self.finish: list[np.ndarray] = []
+        self.sockets: list[socket.socket] = []
+        self.last_layout = -math.inf
+        self.started = False
+        self.watchdog_said = 0
+        r.factor = options.factor or 0.0
+        r.stream_fd = r.listen_fd = -1
+        try:
+            if options.stream:
+                self._open_stream(options, list(columns))
+            if options.listen:
+                self._open_listen(options, [tuple(r) for r in record], list(instances), outputs)
+        except BaseException:
+            self.close()
+            raise
+
+    def _array(self, values, kind=np.float64) -> np.ndarray:
+        array = np.ascontiguousarray(values, dtype=kind)
+        self._keep.append(array)
+        return array
+
+    def _open_stream(self, options: RealTime, columns: list[str]) -> None:
+        names = list(options.stream_names) if options.stream_names is not None else columns
+        missing = [n for n in names if n not in columns]
+        if missing:
+            raise UsageError(f"--stream: '{missing[0]}' is not recorded by this run (recorded: {', '.join(columns)})")
+        if len(names) > MAX_VALUES:
+            raise UsageError(f"--stream: {len(names)} values do not fit one datagram (at most {MAX_VALUES})")
+        host, port, _ = address(options.stream, "--stream")
+        sock = self._socket(host)
+        try:
+            sock.connect((host, port))
+        except OSError as error:
+            raise UsageError(f"--stream {options.stream}: {error.strerror or error}") from None
+        self.stream_socket, self.stream_names = sock, names
+        r = self.state
+        r.stream_fd, r.stream_every, r.stream_countdown = sock.fileno(), options.every, options.every
+        r.n_stream = len(names)
+        r.stream_columns = self._array([1 + columns.index(n) for n in names], np.intc).ctypes.data_as(
+            ctypes.POINTER(ctypes.c_int))
+        r.packet = self._array(np.zeros(SAMPLE.size // 8 + len(names))).ctypes.data
+        self.layout_datagram = layout_datagram(names)
+
+    def _open_listen(self, options: RealTime, record: list[tuple[str, str]], instances: list[str],
+                     outputs: dict[str, Sequence[str]]) -> None:
+        live = options.live
+        host, port, query = address(options.listen, "--listen")
+        if query:
+            raise UsageError(f"--listen {options.listen}: takes no options")
+        sock = self._socket(host)
+        try:
+            sock.bind((host, port))
+        except OSError as error:
+            raise UsageError(f"--listen {options.listen}: {error.strerror or error}") from None
+        sock.setblocking(False)
+        self.listen_socket = sock
+        r = self.state
+        n = len(live.outputs)
+        r.listen_fd, r.live_instance, r.n_live = sock.fileno(), instances.index(live.instance), n
+        own = list(outputs[live.instance])
+        ints = ctypes.POINTER(ctypes.c_int)
+        r.live_index = self._array([own.index(o) for o in live.outputs], np.intc).ctypes.data_as(ints)
+        replaced = [(live.instance, o) for o in live.outputs]
+        r.live_column = self._array([1 + record.index(c) if c in record else -1 for c in replaced],
+                                    np.intc).ctypes.data_as(ints)
+        doubles = ctypes.POINTER(ctypes.c_double)
+        r.rate_max = self._array(live.rate_max).ctypes.data_as(doubles)
+        r.acceleration_max = self._array(live.acceleration_max).ctypes.data_as(doubles)
+        r.neutral = self._array(live.neutral).ctypes.data_as(doubles)
+        r.late_after, r.watchdog = live.late_after, live.watchdog
+        if live.admissible is not None:
+            r.admissible = ctypes.cast(live.admissible, ctypes.c_void_p).value
+            r.admissible_context = ctypes.cast(live.admissible_context, ctypes.c_void_p).value
+            self._keep.append((live.admissible, live.admissible_context))
+        r.live = self._array(np.zeros(6 * n)).ctypes.data_as(doubles)
+        r.receive_size = REFERENCE.size + 8 * 3 * n + 8
+        r.received = self._array(np.zeros(r.receive_size // 8 + 1)).ctypes.data
+
+    def _socket(self, host: str) -> socket.socket:
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        sock = socket.socket(family, socket.SOCK_DGRAM)
+        self.sockets.append(sock)
+        return sock
+
+    @property
+    def pointer(self):
+        return ctypes.byref(self.state)
+
+    def unpaced(self) -> "Session":
+        """This session with its pacing off until `start` (the first step: streamed, not timed)."""
+        self.state.factor = 0.0
+        return self
+
+    def start(self, t0: float) -> None:
+        """The clock starts: simulated time t0 is due now (steps before it are not timed)."""
+        self.state.factor = self.options.factor or 0.0
+        self.state.origin, self.state.t0 = time.monotonic(), t0
+        self.state.waited = 0.0
+        self.lateness, self.finish = [], []
+        self.started = True
+        self.between_batches()
+
+    def between_batches(self) -> None:
+        """The stream's layout before the first sample, then once a second."""
+        if self.state.stream_fd >= 0 and time.monotonic() - self.last_layout >= 1.0:
+            try:
+                self.stream_socket.send(self.layout_datagram)
+            except OSError:
+                self.state.stream_failed += 1
+            self.last_layout = time.monotonic()
+
+    def news(self) -> list:
+        """What the master logs of the live input since the last call: the watchdog engaging."""
+        from .fmi import LogMessage
+        engaged = int(self.state.counts[LIVE_KINDS.index("watchdog")])
+        out = []
+        if engaged > self.watchdog_said:
+            t = float(self.state.watchdog_time)
+            out.append(LogMessage("warning", "live input", f"t = {t:.6f} s: no good live input for "
+                                  f"{self.options.live.watchdog:g} s: the reference goes back to the neutral pose", t))
+            self.watchdog_said = engaged
+        return out
+
+    def add(self, lateness: np.ndarray, finish: np.ndarray) -> None:
+        self.lateness.append(lateness)
+        self.finish.append(finish)
+
+    def pacing(self) -> Pacing:
+        r = self.state
+        live = dict(zip(LIVE_KINDS, list(r.counts))) if r.listen_fd >= 0 else {}
+        return Pacing(self.options.factor, np.concatenate(self.lateness) if self.lateness else np.zeros(0),
+                      np.concatenate(self.finish) if self.finish else np.zeros(0), waited=float(r.waited),
+                      streamed=int(r.stream_sequence), stream_failed=int(r.stream_failed), live=live,
+                      watchdog_time=float(r.watchdog_time) if live.get("watchdog") else None,
+                      refusal=self.options.live.refusal if self.options.live else "not admissible")
+
+    def close(self) -> None:
+        for sock in self.sockets:
+            sock.close()
+        self.sockets = []
+
+
+def batch_size(options: RealTime, h: float) -> int:
+    """Steps a kernel call takes under pacing: about a fifth of a second of wall time (at most 4000
+    steps), so that the work between calls (recording, monitoring, a Ctrl-C) comes seldom and soon
+    enough."""
+    if options.factor is None:
+        return 1000
+    return int(min(4000, max(1, round(0.2 * options.factor / h))))
+
+
+# -- the datagrams, for users and tests -------------------------------------------------------
+
+def layout_datagram(names: Sequence[str]) -> bytes:
+    return LAYOUT.pack(b"CSLY", VERSION, len(names)) + "\n".join(names).encode()
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One streamed sample: its sequence number, simulated time, wall clock (Unix time) when it
+    was sent, and its values by name (`sample["pose.z"]`)."""
+    sequence: int
+    time: float
+    wall: float
+    names: tuple[str, ...]
+    values: np.ndarray
+
+    def __getitem__(self, name: str) -> float:
+        try:
+            return float(self.values[self.names.index(name)])
+        except ValueError:
+            raise KeyError(f"'{name}' is not streamed (streamed: {', '.join(self.names)})") from None
+
+    def as_dict(self) -> dict[str, float]:
+        return dict(zip(self.names, self.values.tolist()))
+
+
+def decode(datagram: bytes, names: Sequence[str] | None = None) -> Sample | list[str] | None:
+    """A sample (named by `names`, else value[k]), a layout (its names), or None for anything else."""
+    if datagram[:4] == b"CSLY" and len(datagram) >= LAYOUT.size:
+        _, version, n = LAYOUT.unpack_from(datagram)
+        listed = datagram[LAYOUT.size:].decode("utf-8", "replace").split("\n") if n else []
+        return listed if version == VERSION and len(listed) == n else None
+    if datagram[:4] != b"CSIM" or len(datagram) < SAMPLE.size:
+        return None
+    _, version, n, sequence, simulated, wall = SAMPLE.unpack_from(datagram)
+    if version != VERSION or len(datagram) != SAMPLE.size + 8 * n:
+        return None
+    values = np.frombuffer(datagram, dtype="<f8", count=n, offset=SAMPLE.size).copy()
+    named = tuple(names) if names is not None and len(names) == n else tuple(f"value[{k}]" for k in range(n))
+    return Sample(sequence, simulated, wall, named, values)
+
+
+def receive(where: str, timeout: float | None = 10.0, names: Sequence[str] | None = None,
+            ready=None, until=None) -> Iterator[Sample]:
+    """The samples a run streams to `where` (udp://HOST:PORT, HOST default 127.0.0.1), decoded and
+    named by the layout the stream sends (or by `names`); ends when nothing arrives for `timeout`
+    seconds (None: never) or, if `until` (a threading.Event) is given, only once it is set.
+    `ready`, if given, is called once the socket is bound (a test starts the run then). Samples
+    that arrive before the first layout are held until it comes."""
+    host, port, _ = address(where, "receive")
+    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
+        sock.bind((host, port))
+        sock.settimeout(0.2 if until is not None else timeout)
+        if ready is not None:
+            ready()
+        layout, held = list(names) if names is not None else None, []
+        while until is None or not until.is_set():
+            try:
+                datagram = sock.recv(65535)
+            except (socket.timeout, TimeoutError):
+                if until is not None:
+                    continue
+                break
+            decoded = decode(datagram, layout)
+            if isinstance(decoded, list):
+                if layout is None or decoded != layout:  # a new run may stream other columns
+                    layout = decoded
+                    yield from (decode(d, layout) for d in held)
+                    held = []
+            elif decoded is not None:
+                if layout is None:
+                    held.append(datagram)
+                else:
+                    yield decoded
+        yield from (decode(d, layout) for d in held)
+    finally:
+        sock.close()
+
+
+def reference_datagram(values: Sequence[float], sequence: int, time: float | None = None,
+                       rates: Sequence[float] | None = None, accelerations: Sequence[float] | None = None) -> bytes:
+    """One live-input datagram: the values (and their rates, and then accelerations, if given) for
+    simulated time `time` (None: apply on arrival)."""
+    parts = [list(values)]
+    if rates is not None:
+        parts.append(list(rates))
+    if accelerations is not None:
+        if rates is None:
+            parts.append([0.0] * len(parts[0]))
+        parts.append(list(accelerations))
+    if any(len(p) != len(parts[0]) for p in parts):
+        raise UsageError("send: values, rates and accelerations must be as many each")
+    flat = [float(v) for p in parts for v in p]
+    return REFERENCE.pack(b"CREF", VERSION, len(flat), sequence, math.nan if time is None else float(time)) + \
+        struct.pack(f"<{len(flat)}d", *flat)
+
+
+class Sender:
+    """Sends live-input datagrams to `where` (udp://HOST:PORT), numbering them."""
+
+    def __init__(self, where: str):
+        host, port, _ = address(where, "send")
+        self.socket = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
+        self.target, self.sequence = (host, port), 0
+
+    def send(self, values: Sequence[float], time: float | None = None, rates: Sequence[float] | None = None,
+             accelerations: Sequence[float] | None = None) -> int:
+        """Sends one; returns its sequence number."""
+        sequence = self.sequence
+        self.socket.sendto(reference_datagram(values, sequence, time, rates, accelerations), self.target)
+        self.sequence += 1
+        return sequence
+
+    def close(self) -> None:
+        self.socket.close()
+
+    def __enter__(self) -> "Sender":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+if sys.byteorder != "little":  # the kernel writes and reads the datagrams in the host's order
+    raise ImportError("cosim.engine.realtime: the datagrams are little-endian and this host is not")

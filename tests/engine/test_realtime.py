@@ -1,0 +1,69 @@
+"""The real-time layer's own pieces (cosim.engine.realtime): addresses, the datagrams both ways,
+and what it refuses, with one line each."""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+import pytest
+
+from cosim.engine.errors import UsageError
+from cosim.engine.realtime import (REFERENCE, SAMPLE, Pacing, RealTime, address, decode, layout_datagram,
+                                   reference_datagram)
+
+
+def test_addresses_default_to_the_loopback_and_bad_ones_are_one_line():
+    assert address("udp://:9870", "--stream") == ("127.0.0.1", 9870, {})
+    assert address("udp://10.0.0.2:9870?every=5", "--stream") == ("10.0.0.2", 9870, {"every": "5"})
+    assert address("127.0.0.1:9870", "--listen")[:2] == ("127.0.0.1", 9870)
+    for bad in ("tcp://127.0.0.1:9870", "udp://127.0.0.1", "udp://127.0.0.1:99999", "udp://host:port"):
+        with pytest.raises(UsageError, match="expected udp://HOST:PORT") as caught:
+            address(bad, "--stream")
+        assert "\n" not in str(caught.value)
+    for options, message in (({"factor": 0.0}, "factor > 0"), ({"factor": math.nan}, "factor > 0"),
+                             ({"stream": "udp://:9870?every=0"}, "every=0"),
+                             ({"stream": "udp://:9870?often=2"}, "unknown option 'often'"),
+                             ({"listen": "udp://:9871"}, "names no outputs")):
+        with pytest.raises(UsageError, match=message):
+            RealTime(**options)
+    assert RealTime(stream="udp://:9870?every=4").every == 4
+
+
+def test_a_sample_decodes_to_its_values_by_name_bit_for_bit():
+    values = np.array([1.0, -2.5e-300, np.pi, 1e300])
+    datagram = SAMPLE.pack(b"CSIM", 1, 4, 17, 0.125, 1.7e9) + values.astype("<f8").tobytes()
+    names = ["pose.z", "a", "b", "c"]
+    assert decode(layout_datagram(names)) == names
+    sample = decode(datagram, names)
+    assert (sample.sequence, sample.time, sample.wall) == (17, 0.125, 1.7e9)
+    assert sample["pose.z"] == 1.0 and np.array_equal(sample.values, values)
+    with pytest.raises(KeyError, match="not streamed"):
+        sample["pose.x"]
+    assert decode(datagram, ["too", "few"]).names == ("value[0]", "value[1]", "value[2]", "value[3]")
+    for broken in (datagram[:-1], b"XSIM" + datagram[4:], datagram[:4] + struct.pack("<H", 2) + datagram[6:], b""):
+        assert decode(broken) is None
+
+
+def test_a_reference_datagram_carries_values_rates_and_accelerations_in_order():
+    pose, rates = [0.0, 0.1, 1.7, 0.0, 0.02, 0.0], [0.0] * 5 + [0.3]
+    datagram = reference_datagram(pose, 9, None, rates, [1.0] * 6)
+    magic, version, count, sequence, time = REFERENCE.unpack_from(datagram)
+    assert (magic, version, count, sequence) == (b"CREF", 1, 18, 9) and math.isnan(time)
+    values = np.frombuffer(datagram, "<f8", offset=REFERENCE.size)
+    assert values.tolist() == [*pose, *rates, *[1.0] * 6]
+    assert len(reference_datagram(pose, 0, 2.0, accelerations=[1.0] * 6)) == REFERENCE.size + 18 * 8  # rates 0
+    with pytest.raises(UsageError, match="as many each"):
+        reference_datagram(pose, 0, rates=[0.0])
+
+
+def test_pacing_figures_come_from_the_steps():
+    lateness = np.array([0.0, 1e-5, 2e-5, 3e-4, 5e-3])
+    pacing = Pacing(1.0, lateness, np.array([-1e-3, -1e-3, 2e-4, -1e-4, 4e-3]), streamed=5)
+    p50, p99, largest = pacing.percentiles()
+    assert p50 == 2e-5 and largest == 5e-3 and 3e-4 < p99 <= 5e-3
+    assert pacing.overruns == 2
+    counts, edges = pacing.histogram(10)
+    assert counts.sum() == 5 and edges[-1] == 5e-3
+    assert "2 of 5 steps overran" in pacing.lines()[0] and pacing.row()["overruns"] == 2
