@@ -17,7 +17,7 @@
 # Exits non-zero on any violation, sanitizer report or difference.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-MODELS="pmsm_drive mechanics linear_motor trajectory"
+MODELS="pmsm_drive mechanics linear_motor trajectory cueing"
 CMAKE=.venv/bin/cmake
 [ -x "$CMAKE" ] || CMAKE=cmake
 "$CMAKE" -S . -B build-fuzz -DCOSIM_FUZZ=ON -DCOSIM_SANITIZE=ON -DPython3_EXECUTABLE="$PWD/.venv/bin/python" \

@@ -79,6 +79,10 @@ def data_dir(name: str) -> Path:
     return path
 
 
+# The FMUs this package builds and ships (build/fmus/, the wheel's data); CMakeLists.txt builds each.
+MODELS = ("pmsm_drive", "mechanics", "linear_motor", "trajectory", "cueing")
+
+
 def fmu_path(name: str, test: bool = False) -> Path:
     """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test-only FMU)."""
     return _check((TEST_FMU_DIR if test else FMU_DIR) / f"{name}.fmu", f"FMU '{name}'")

@@ -14,7 +14,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from cosim.platform.scene.parameter_sets import load as load_parameter_set
-from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.artifacts import MODELS, ROOT, fmu_path
 
 SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
 
@@ -80,7 +80,7 @@ def test_project_parameter_copies_equal_the_canonical_sets(name):
     assert load_parameter_set(name) == canonical
 
 
-FMUS = ["pmsm_drive", "mechanics", "linear_motor", "trajectory"]
+FMUS = list(MODELS)
 
 
 @pytest.mark.parametrize("name", FMUS)

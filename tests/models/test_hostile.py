@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from cosim.engine.artifacts import fmu_path
+from cosim.engine.artifacts import MODELS, fmu_path
 from cosim.engine.fmi import FmuError, FmuInstance
 
-FMUS = ["pmsm_drive", "mechanics", "linear_motor", "trajectory"]
+FMUS = list(MODELS)
 
 
 @contextmanager

@@ -11,13 +11,14 @@ import threading
 import numpy as np
 import pytest
 
-from cosim.engine.artifacts import fmu_path
+from cosim.engine.artifacts import MODELS, fmu_path
 from cosim.engine.fmi import FmuInstance
 
 INPUTS = {"pmsm_drive": ["angle_ref"], "linear_motor": ["position_ref"], "mechanics": ["leg[1].torque"],
-          "trajectory": []}
+          "trajectory": [], "cueing": ["specific_force.x"]}
 OUTPUTS = {"pmsm_drive": ["torque", "current.q"], "linear_motor": ["force", "current"],
-           "mechanics": ["pose.z", "leg[1].length"], "trajectory": ["pose_ref.x", "pose_ref.z"]}
+           "mechanics": ["pose.z", "leg[1].length"], "trajectory": ["pose_ref.x", "pose_ref.z"],
+           "cueing": ["pose_ref.x", "pose_ref.pitch"]}
 
 
 def run(name: str, k: int, steps: int = 200) -> np.ndarray:
@@ -56,7 +57,7 @@ def in_threads(target, count: int = 6) -> list:
     return results
 
 
-@pytest.mark.parametrize("name", ["pmsm_drive", "linear_motor", "mechanics", "trajectory"])
+@pytest.mark.parametrize("name", MODELS)
 def test_six_instances_on_six_threads_equal_sequential_runs(name):
     sequential = [run(name, k) for k in range(6)]
     for _ in range(3):

@@ -11,11 +11,11 @@ import pytest
 from fmpy import read_model_description
 
 from cosim.cli import main
-from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.artifacts import MODELS, ROOT, fmu_path
 from cosim.engine.fmi import FmuInstance
 from cosim.platform.ports import POSE
 
-FMUS = ["pmsm_drive", "mechanics", "linear_motor", "trajectory"]
+FMUS = list(MODELS)
 
 
 @pytest.mark.parametrize("name", FMUS)

@@ -1,0 +1,287 @@
+/* cueing: the classical washout (Reid and Nahon 1985; Nahon and Reid 1990) as an FMU, so that a
+ * scene can take a vehicle's motion instead of a platform pose.
+ *
+ * Inputs, vehicle frame at the occupant's head (x forward, y left, z up): specific force f and
+ * angular rate w. Per channel, scaled and clipped, then filtered (state space x' = A x + B u):
+ *
+ *   translation, a = x, y, z:  u = clip(k_a (f_a - g [a = z]))
+ *     position p_a = s / ((s^2 + 2 zeta w_n s + w_n^2)(s + w_b)) u: the acceleration high-passed
+ *     (second order, times s / (s + w_b) for the third order) and integrated twice:
+ *       z' = -w_b z + u,  y = u - w_b z,  p' = v,  v' = y - 2 zeta w_n v - w_n^2 p
+ *   rotation, r = roll, pitch, yaw:  u = clip(k_r w_r)
+ *     angle b_r = s / (s^2 + 2 zeta w_n s + w_n^2) u: the rate high-passed and integrated:
+ *       q' = b,  b' = u - 2 zeta w_n b - w_n^2 q
+ *   tilt coordination:  u = k_tilt f_x (pitch), k_tilt f_y (roll)
+ *     l = w_n^2 / (s^2 + 2 zeta w_n s + w_n^2) u, the sustained part of the specific force, stood
+ *     for by gravity: pitch_t = -asin(l_x / g), roll_t = asin(l_y / g) (R = Rz Ry Rx: a pitch theta
+ *     is felt as f_x = -g sin theta, a roll phi as f_y = g sin phi), at most tilt.limit; the tilt
+ *     follows its target at no more than tilt.rate_limit.
+ *
+ * The pose reference is the neutral pose plus p and b, with the tilt added to roll and pitch; its
+ * rate and acceleration (fmi2GetRealOutputDerivatives) are the filters' own, exact. The filters are
+ * discretised exactly at the communication step h for the input the master gives over the step
+ * (its value and rate: first-order hold): x(t + h) = e^{hA} x + h phi_1(hA) B u_0 + h^2 phi_2(hA)
+ * B u_1, the phi-functions of the shared solvers (ode.h) kept per step size as model data. The tilt's
+ * rate limit acts once a step. Angular rates are taken as the rates of roll, pitch and yaw (small
+ * angles), and the translational channel's specific force in the vehicle frame as in the platform's.
+ */
+#include "fmu_common.h"
+
+#include <math.h>
+#include <string.h>
+
+enum { N_TRANSLATION = 3, N_ROTATION = 3, N_TILT = 2, N_CHANNELS = 8, MAX_ORDER = 3 };
+
+/* A channel's filter: order n (its states at `first` in the model's state), x' = A x + B u. */
+typedef struct {
+    int n, first;
+    double a[MAX_ORDER * MAX_ORDER], b[MAX_ORDER];
+} Filter;
+
+static const int FIRST[N_CHANNELS] = {0, 3, 6, 9, 11, 13, 15, 17}; /* translation x, y, z; rotation; tilt x, y */
+
+static const int FORCE[3] = {VR_specific_force_x, VR_specific_force_y, VR_specific_force_z};
+static const int RATE[3] = {VR_angular_rate_x, VR_angular_rate_y, VR_angular_rate_z};
+static const int POSE[6] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch,
+                            VR_pose_ref_yaw};
+static const int NEUTRAL[6] = {VR_neutral_x, VR_neutral_y, VR_neutral_z, VR_neutral_roll, VR_neutral_pitch,
+                               VR_neutral_yaw};
+/* per translational axis: gain, limit, frequency, damping, break; per rotational: gain, limit, frequency, damping */
+static const int TRANSLATION[3][5] = {
+    {VR_translation_x_gain, VR_translation_x_limit, VR_translation_x_frequency, VR_translation_x_damping, VR_translation_x_break},
+    {VR_translation_y_gain, VR_translation_y_limit, VR_translation_y_frequency, VR_translation_y_damping, VR_translation_y_break},
+    {VR_translation_z_gain, VR_translation_z_limit, VR_translation_z_frequency, VR_translation_z_damping, VR_translation_z_break}};
+static const int ROTATION[3][4] = {
+    {VR_rotation_roll_gain, VR_rotation_roll_limit, VR_rotation_roll_frequency, VR_rotation_roll_damping},
+    {VR_rotation_pitch_gain, VR_rotation_pitch_limit, VR_rotation_pitch_frequency, VR_rotation_pitch_damping},
+    {VR_rotation_yaw_gain, VR_rotation_yaw_limit, VR_rotation_yaw_frequency, VR_rotation_yaw_damping}};
+
+static double clip(double value, double limit) { return value > limit ? limit : value < -limit ? -limit : value; }
+
+/* Channel c's filter from the parameters. */
+static Filter filter(FmuInstance *fmu, int c) {
+    Filter f;
+    memset(&f, 0, sizeof f);
+    f.first = FIRST[c];
+    if (c < N_TRANSLATION) { /* states z, p, v */
+        const int *k = TRANSLATION[c];
+        const double w = *fmu_real(fmu, k[2]), zeta = *fmu_real(fmu, k[3]), wb = *fmu_real(fmu, k[4]);
+        f.n = 3;
+        f.a[0] = -wb;                                          /* z' = -w_b z + u */
+        f.a[5] = 1.0;                                          /* p' = v */
+        f.a[6] = -wb, f.a[7] = -w * w, f.a[8] = -2.0 * zeta * w; /* v' = u - w_b z - w^2 p - 2 zeta w v */
+        f.b[0] = wb > 0.0 ? 1.0 : 0.0, f.b[2] = 1.0;
+    } else if (c < N_TRANSLATION + N_ROTATION) { /* states q, b */
+        const int *k = ROTATION[c - N_TRANSLATION];
+        const double w = *fmu_real(fmu, k[2]), zeta = *fmu_real(fmu, k[3]);
+        f.n = 2;
+        f.a[1] = 1.0, f.a[2] = -w * w, f.a[3] = -2.0 * zeta * w;
+        f.b[1] = 1.0;
+    } else { /* states l, l' */
+        const double w = fmu->s.v.tilt_frequency, zeta = fmu->s.v.tilt_damping;
+        f.n = 2;
+        f.a[1] = 1.0, f.a[2] = -w * w, f.a[3] = -2.0 * zeta * w;
+        f.b[1] = w * w;
+    }
+    return f;
+}
+
+/* Channel c's input at t: scaled and clipped as the channel takes it. */
+static double channel_input(FmuInstance *fmu, int c, double t) {
+    const ModelVariables *v = &fmu->s.v;
+    if (c < N_TRANSLATION) {
+        const int *k = TRANSLATION[c];
+        const double f = fmu_input_at(fmu, FORCE[c], t) - (c == 2 ? v->gravity : 0.0);
+        return clip(*fmu_real(fmu, k[0]) * f, *fmu_real(fmu, k[1]));
+    }
+    if (c < N_TRANSLATION + N_ROTATION) {
+        const int *k = ROTATION[c - N_TRANSLATION];
+        return clip(*fmu_real(fmu, k[0]) * fmu_input_at(fmu, RATE[c - N_TRANSLATION], t), *fmu_real(fmu, k[1]));
+    }
+    return v->tilt_gain * fmu_input_at(fmu, FORCE[c - N_TRANSLATION - N_ROTATION], t);
+}
+
+/* Its rate at t (0 where the clip holds it). */
+static double channel_input_rate(FmuInstance *fmu, int c, double t) {
+    const double u = channel_input(fmu, c, t);
+    if (c < N_TRANSLATION) {
+        const int *k = TRANSLATION[c];
+        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * fmu_input_rate_at(fmu, FORCE[c], t) : 0.0;
+    }
+    if (c < N_TRANSLATION + N_ROTATION) {
+        const int *k = ROTATION[c - N_TRANSLATION];
+        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * fmu_input_rate_at(fmu, RATE[c - N_TRANSLATION], t)
+                                              : 0.0;
+    }
+    return fmu->s.v.tilt_gain * fmu_input_rate_at(fmu, FORCE[c - N_TRANSLATION - N_ROTATION], t);
+}
+
+/* ---- the phi-functions per step size (derived data, outside the FMU state) ---- */
+
+enum { KEPT = 4 };
+typedef struct {
+    double h[KEPT];
+    double phi[KEPT][N_CHANNELS][3 * MAX_ORDER * MAX_ORDER]; /* phi_0, phi_1, phi_2 of each channel */
+    int next;
+} PhiCache;
+
+static void free_cache(FmuInstance *fmu, void *data) { fmu_free(fmu, data); }
+
+static const double *phi_of(FmuInstance *fmu, double h, int c) {
+    PhiCache *cache = (PhiCache *)fmu->model_data;
+    for (int e = 0; e < KEPT; e++)
+        if (cache->h[e] == h) return cache->phi[e][c];
+    const int e = cache->next;
+    cache->next = (e + 1) % KEPT;
+    cache->h[e] = h;
+    for (int k = 0; k < N_CHANNELS; k++) {
+        const Filter f = filter(fmu, k);
+        double phi[3 * MAX_ORDER * MAX_ORDER];
+        ode_phi_functions(f.n, f.a, h, 2, phi);
+        memcpy(cache->phi[e][k], phi, sizeof phi);
+    }
+    return cache->phi[e][c];
+}
+
+/* ---- the tilt: its target from the low-passed force, and the rate limit ---- */
+
+/* Target angle, rate and acceleration of tilt axis j (0: pitch from x, 1: roll from y). */
+static void tilt_target(FmuInstance *fmu, int j, double t, double out[3]) {
+    const ModelVariables *v = &fmu->s.v;
+    const double *x = fmu->s.internal.x + FIRST[N_TRANSLATION + N_ROTATION + j];
+    const double w = v->tilt_frequency, zeta = v->tilt_damping, g = v->gravity;
+    const double u = channel_input(fmu, N_TRANSLATION + N_ROTATION + j, t);
+    const double top = sin(v->tilt_limit), sign = j == 0 ? -1.0 : 1.0;
+    const double s = x[0] / g, ds = x[1] / g, dds = (w * w * (u - x[0]) - 2.0 * zeta * w * x[1]) / g;
+    if (fabs(s) >= top) {
+        out[0] = sign * copysign(v->tilt_limit, s), out[1] = out[2] = 0.0;
+        return;
+    }
+    const double c2 = 1.0 - s * s;
+    out[0] = sign * asin(s);
+    out[1] = sign * ds / sqrt(c2);
+    out[2] = sign * (dds * c2 + s * ds * ds) / (c2 * sqrt(c2));
+}
+
+/* The tilt at t after the target has moved: towards it at no more than the rate limit over h (h
+ * = 0: on it, at the start). */
+static void tilt_follow(FmuInstance *fmu, double t, double h) {
+    const double limit = fmu->s.v.tilt_rate_limit;
+    for (int j = 0; j < N_TILT; j++) {
+        double target[3], *tilt = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
+        tilt_target(fmu, j, t, target);
+        const double gap = target[0] - tilt[0];
+        if (h == 0.0 || fabs(gap) <= limit * h) { /* on its target */
+            tilt[0] = target[0];
+            tilt[1] = clip(target[1], limit);
+            tilt[2] = fabs(target[1]) < limit ? target[2] : 0.0;
+        } else {
+            tilt[0] += copysign(limit * h, gap);
+            tilt[1] = copysign(limit, gap);
+            tilt[2] = 0.0;
+        }
+    }
+}
+
+/* ---- hooks ---- */
+
+fmi2Status model_validate(FmuInstance *fmu) {
+    const ModelVariables *v = &fmu->s.v;
+    int errors = 0;
+    for (int a = 0; a < 3; a++) {
+        errors += !(*fmu_real(fmu, TRANSLATION[a][2]) > 0.0) && fmu_reject(fmu, TRANSLATION[a][2], "must be > 0");
+        errors += !(*fmu_real(fmu, TRANSLATION[a][3]) > 0.0) && fmu_reject(fmu, TRANSLATION[a][3], "must be > 0");
+        errors += !(*fmu_real(fmu, ROTATION[a][2]) > 0.0) && fmu_reject(fmu, ROTATION[a][2], "must be > 0");
+        errors += !(*fmu_real(fmu, ROTATION[a][3]) > 0.0) && fmu_reject(fmu, ROTATION[a][3], "must be > 0");
+    }
+    FMU_REQUIRE_POSITIVE(tilt_frequency);
+    FMU_REQUIRE_POSITIVE(tilt_damping);
+    FMU_REQUIRE_POSITIVE(tilt_rate_limit);
+    FMU_REQUIRE_POSITIVE(gravity);
+    if (errors) return fmi2Error;
+    if (!fmu->model_data) {
+        PhiCache *cache = (PhiCache *)fmu_calloc(fmu, 1, sizeof(PhiCache));
+        if (!cache) {
+            fmu_log(fmu, fmi2Error, "logStatusError", "cueing: out of memory");
+            return fmi2Error;
+        }
+        fmu_set_model_data(fmu, cache, free_cache);
+    }
+    PhiCache *cache = (PhiCache *)fmu->model_data;
+    for (int e = 0; e < KEPT; e++) cache->h[e] = 0.0; /* the parameters may have changed */
+    return fmi2OK;
+}
+
+/* Each filter settled for the inputs at the start (a vehicle at rest, or in steady motion, starts
+ * with its cue settled: no translational or rotational cue, the tilt on its target). */
+void model_initialize(FmuInstance *fmu) {
+    double *x = fmu->s.internal.x;
+    memset(x, 0, sizeof fmu->s.internal.x);
+    for (int c = 0; c < N_CHANNELS; c++) {
+        const Filter f = filter(fmu, c);
+        const double u = channel_input(fmu, c, fmu->s.time);
+        double *s = x + f.first;
+        if (c < N_TRANSLATION) { /* z = u / w_b (third order), p = (u - w_b z) / w^2 */
+            s[0] = f.a[0] < 0.0 ? u / -f.a[0] : 0.0;
+            s[1] = (u + f.a[6] * s[0]) / -f.a[7];
+        } else if (c < N_TRANSLATION + N_ROTATION) { /* q = u / w^2, b = 0 */
+            s[0] = u / -f.a[2];
+        } else { /* l = u */
+            s[0] = u;
+        }
+    }
+    tilt_follow(fmu, fmu->s.time, 0.0);
+}
+
+fmi2Status model_do_step(FmuInstance *fmu, double h) {
+    const double t = fmu->s.time;
+    for (int c = 0; c < N_CHANNELS; c++) {
+        const Filter f = filter(fmu, c);
+        const double *phi = phi_of(fmu, h, c);
+        const int n = f.n, nn = n * n;
+        const double u0 = channel_input(fmu, c, t), u1 = (channel_input(fmu, c, t + h) - u0) / h; /* the chord */
+        double *x = fmu->s.internal.x + f.first, next[MAX_ORDER];
+        for (int i = 0; i < n; i++) {
+            next[i] = 0.0;
+            for (int j = 0; j < n; j++)
+                next[i] += phi[i * n + j] * x[j] + (h * phi[nn + i * n + j] * u0 + h * h * phi[2 * nn + i * n + j] * u1) * f.b[j];
+        }
+        memcpy(x, next, (size_t)n * sizeof(double));
+    }
+    tilt_follow(fmu, t + h, h);
+    return fmi2OK;
+}
+
+void model_compute_outputs(FmuInstance *fmu) {
+    const double t = fmu->s.time, *x = fmu->s.internal.x;
+    double (*pose)[3] = fmu->s.internal.pose;
+    for (int a = 0; a < N_TRANSLATION; a++) { /* p, v and v' = y - 2 zeta w v - w^2 p */
+        const Filter f = filter(fmu, a);
+        const double *s = x + f.first, u = channel_input(fmu, a, t);
+        pose[a][0] = s[1], pose[a][1] = s[2];
+        pose[a][2] = u + f.a[6] * s[0] + f.a[7] * s[1] + f.a[8] * s[2];
+    }
+    for (int r = 0; r < N_ROTATION; r++) { /* b, b' and b'' */
+        const int c = N_TRANSLATION + r;
+        const Filter f = filter(fmu, c);
+        const double *s = x + f.first, u = channel_input(fmu, c, t), du = channel_input_rate(fmu, c, t);
+        const double rate = u + f.a[2] * s[0] + f.a[3] * s[1];
+        pose[3 + r][0] = s[1], pose[3 + r][1] = rate;
+        pose[3 + r][2] = du + f.a[2] * s[1] + f.a[3] * rate;
+    }
+    for (int k = 0; k < 3; k++) { /* tilt onto roll (3) and pitch (4) */
+        pose[3][k] += fmu->s.internal.tilt[0][k];
+        pose[4][k] += fmu->s.internal.tilt[1][k];
+    }
+    for (int d = 0; d < 6; d++) *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
+    fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
+    fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
+}
+
+double model_output_derivative(FmuInstance *fmu, int vr, int order) {
+    for (int d = 0; d < 6; d++)
+        if (POSE[d] == vr) return fmu->s.internal.pose[d][order];
+    if (vr == VR_tilt_roll) return fmu->s.internal.tilt[0][order];
+    if (vr == VR_tilt_pitch) return fmu->s.internal.tilt[1][order];
+    return 0.0;
+}

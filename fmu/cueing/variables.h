@@ -1,0 +1,113 @@
+/* cueing: the variable table (the one source of truth for model.c, modelDescription.xml and the
+ * documentation). The classical washout of Reid and Nahon (1985) and Nahon and Reid (1990): a
+ * vehicle's specific force and angular rate at the occupant's head in, the platform's pose
+ * reference out. Defaults: Meng's platform (its neutral height), moderate washout gains. */
+#ifndef CUEING_VARIABLES_H
+#define CUEING_VARIABLES_H
+
+#define MODEL_IDENTIFIER cueing
+#define MODEL_VERSION "0.1.0"
+#define MODEL_DESCRIPTION                                                                          \
+    "Motion cueing by the classical washout (Reid and Nahon 1985): the vehicle's specific force "  \
+    "and angular rate at the head, scaled and limited, high-passed into platform translation and " \
+    "rotation, and the low-passed specific force turned into rate-limited tilt; the pose "         \
+    "reference with its exact first and second time derivatives"
+#define MODEL_STOP_TIME 10.0
+#define MODEL_COMMUNICATION_STEP 1e-3
+#define MODEL_MAX_OUTPUT_DERIVATIVE_ORDER 2
+
+/* No state for the shared solvers: the filters are discretised exactly (model.c), their states in
+ * ModelInternal. */
+#define MODEL_N_STATES 0
+
+/* Meng 2010's neutral height (../shared/params/meng2010.toml), the default neutral.z. */
+#define CUEING_NEUTRAL_HEIGHT 1.689527733348906
+
+typedef struct {
+    /* the filters' states, each channel's in a row: per translational axis x, y, z (3: the break
+     * filter's state, position, velocity), per rotational axis roll, pitch, yaw (2), per tilt axis
+     * pitch from x, roll from y (2: the low-passed specific force and its rate) */
+    double x[19];
+    double tilt[2][3];   /* roll and pitch of the tilt coordination: angle, rate, acceleration */
+    double pose[6][3];   /* the outputs' value, rate and acceleration at the communication point */
+} ModelInternal;
+
+/* One translational axis a (x, y, z) of the vehicle's specific force into platform position. */
+#define TRANSLATION_VARIABLES(X, a, omega, limit) \
+X(Real, translation_##a##_gain, "translation." #a ".gain", parameter, fixed, "1", 0.5, 0.0, FMU_INF, \
+  "Scale of the specific force along " #a " (after gravity is taken off z)") \
+X(Real, translation_##a##_limit, "translation." #a ".limit", parameter, fixed, "m/s2", limit, 0.0, FMU_INF, \
+  "Largest scaled specific force along " #a " passed on (larger ones are clipped)") \
+X(Real, translation_##a##_frequency, "translation." #a ".frequency", parameter, fixed, "rad/s", omega, 0.0, FMU_INF, \
+  "omega_n of the second-order high-pass s^2 / (s^2 + 2 zeta omega_n s + omega_n^2) along " #a) \
+X(Real, translation_##a##_damping, "translation." #a ".damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, \
+  "zeta of that high-pass along " #a) \
+X(Real, translation_##a##_break, "translation." #a ".break", parameter, fixed, "rad/s", 0.3, 0.0, FMU_INF, \
+  "omega_b of the third order's first-order high-pass s / (s + omega_b) along " #a " (0: second order)")
+
+/* One rotational axis (roll, pitch, yaw) of the vehicle's angular rate into platform angle. */
+#define ROTATION_VARIABLES(X, r, axis) \
+X(Real, rotation_##r##_gain, "rotation." #r ".gain", parameter, fixed, "1", 0.5, 0.0, FMU_INF, \
+  "Scale of the angular rate about " #axis) \
+X(Real, rotation_##r##_limit, "rotation." #r ".limit", parameter, fixed, "rad/s", 0.5, 0.0, FMU_INF, \
+  "Largest scaled angular rate about " #axis " passed on (larger ones are clipped)") \
+X(Real, rotation_##r##_frequency, "rotation." #r ".frequency", parameter, fixed, "rad/s", 1.0, 0.0, FMU_INF, \
+  "omega_n of the second-order high-pass of the rate about " #axis ", integrated into the angle") \
+X(Real, rotation_##r##_damping, "rotation." #r ".damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, \
+  "zeta of that high-pass about " #axis)
+
+#define POSE_VARIABLES(X, dof, unit, offset, what) \
+X(Real, pose_ref_##dof, "pose_ref." #dof, output, continuous, unit, offset, -FMU_INF, FMU_INF, \
+  "Reference pose of the platform, " what " (neutral plus the washed-out motion)") \
+X(Real, neutral_##dof, "neutral." #dof, parameter, fixed, unit, offset, -FMU_INF, FMU_INF, \
+  "The platform's neutral pose, " what ": where the washout returns it")
+
+/* clang-format off */
+#define MODEL_VARIABLES(X) \
+X(Real, specific_force_x, "specific_force.x", input, continuous, "m/s2", 0.0, -FMU_INF, FMU_INF, \
+  "Vehicle's specific force at the head, x forward (vehicle frame: x forward, y left, z up)") \
+X(Real, specific_force_y, "specific_force.y", input, continuous, "m/s2", 0.0, -FMU_INF, FMU_INF, \
+  "Vehicle's specific force at the head, y left") \
+X(Real, specific_force_z, "specific_force.z", input, continuous, "m/s2", 9.80665, -FMU_INF, FMU_INF, \
+  "Vehicle's specific force at the head, z up (+g at rest)") \
+X(Real, angular_rate_x, "angular_rate.x", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "Vehicle's angular rate about x (roll)") \
+X(Real, angular_rate_y, "angular_rate.y", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "Vehicle's angular rate about y (pitch)") \
+X(Real, angular_rate_z, "angular_rate.z", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
+  "Vehicle's angular rate about z (yaw)") \
+POSE_VARIABLES(X, x, "m", 0.0, "x (surge)") \
+POSE_VARIABLES(X, y, "m", 0.0, "y (sway)") \
+POSE_VARIABLES(X, z, "m", CUEING_NEUTRAL_HEIGHT, "z (heave)") \
+POSE_VARIABLES(X, roll, "rad", 0.0, "roll") \
+POSE_VARIABLES(X, pitch, "rad", 0.0, "pitch") \
+POSE_VARIABLES(X, yaw, "rad", 0.0, "yaw") \
+X(Real, tilt_roll, "tilt.roll", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
+  "The roll of the tilt coordination (part of pose_ref.roll): gravity standing for sustained sway") \
+X(Real, tilt_pitch, "tilt.pitch", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
+  "The pitch of the tilt coordination (part of pose_ref.pitch): gravity standing for sustained surge") \
+TRANSLATION_VARIABLES(X, x, 2.0, 5.0) \
+TRANSLATION_VARIABLES(X, y, 2.0, 5.0) \
+TRANSLATION_VARIABLES(X, z, 4.0, 5.0) \
+ROTATION_VARIABLES(X, roll, x) \
+ROTATION_VARIABLES(X, pitch, y) \
+ROTATION_VARIABLES(X, yaw, z) \
+X(Real, tilt_gain, "tilt.gain", parameter, fixed, "1", 0.5, 0.0, FMU_INF, \
+  "Scale of the specific force along x and y that tilt coordination renders (0: no tilt)") \
+X(Real, tilt_frequency, "tilt.frequency", parameter, fixed, "rad/s", 2.0, 0.0, FMU_INF, \
+  "omega_n of the second-order low-pass omega_n^2 / (s^2 + 2 zeta omega_n s + omega_n^2) of that force") \
+X(Real, tilt_damping, "tilt.damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, "zeta of that low-pass") \
+X(Real, tilt_rate_limit, "tilt.rate_limit", parameter, fixed, "rad/s", 0.0523598775598299, 0.0, FMU_INF, \
+  "Largest tilt rate, below what the semicircular canals notice (default 3 deg/s)") \
+X(Real, tilt_limit, "tilt.limit", parameter, fixed, "rad", 0.349065850398866, 0.0, 1.5707963267948966, \
+  "Largest tilt angle (default 20 deg)") \
+X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.80665, 0.0, FMU_INF, \
+  "Gravity: taken off the vertical specific force, and what tilt turns into specific force") \
+FMU_LAYER_VARIABLES(X)
+/* clang-format on */
+
+/* Direct feed-through: none (the pose follows the filters' states; the inputs reach its
+ * derivatives, not its value). */
+#define MODEL_FEEDTHROUGH(D)
+
+#endif

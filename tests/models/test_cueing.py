@@ -1,0 +1,163 @@
+"""The motion-cueing FMU (the classical washout): each filter is its transfer function (against
+scipy's exact response to the same piecewise-linear input), its output derivatives are the
+filters' own, a sustained acceleration ends as tilt at no more than the tilt's rate limit, the
+platform comes back to neutral after a manoeuvre, and wrong parameters are refused by name."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from cosim.engine.artifacts import fmu_path
+from cosim.engine.fmi import FmuError, FmuInstance
+
+G = 9.80665
+INPUTS = ["specific_force.x", "specific_force.y", "specific_force.z", "angular_rate.x", "angular_rate.y",
+          "angular_rate.z"]
+POSE = ["pose_ref.x", "pose_ref.y", "pose_ref.z", "pose_ref.roll", "pose_ref.pitch", "pose_ref.yaw"]
+NEUTRAL_Z = 1.689527733348906
+
+
+@pytest.fixture
+def cueing():
+    made = []
+
+    def make(values: dict | None = None) -> FmuInstance:
+        instance = FmuInstance(fmu_path("cueing"), f"cueing{len(made)}")
+        made.append(instance)
+        instance.initialize(values or {})
+        return instance
+
+    yield make
+    for instance in made:
+        instance.free()
+
+
+def drive(instance: FmuInstance, motion, h: float, n: int, outputs=POSE):
+    """Steps the FMU through `motion(t)` (n x 6: specific force and angular rate), each step's
+    input the chord to the next sample (value and rate: the piecewise-linear input scipy's lsim
+    takes); returns the times, the outputs and their first and second derivatives."""
+    t = np.arange(n + 1) * h
+    u = motion(t)
+    inputs, out = instance.real_group(INPUTS), instance.real_group(list(outputs))
+    inputs.write(u[0])  # after the initialization (from rest: scipy's response starts from a zero state)
+    rows, rates, accelerations = [out.read().copy()], [out.read_derivatives(1)], [out.read_derivatives(2)]
+    for k in range(n):
+        inputs.write(u[k])
+        inputs.write_derivatives((u[k + 1] - u[k]) / h)
+        instance.do_step(h)
+        rows.append(out.read().copy())
+        rates.append(out.read_derivatives(1))
+        accelerations.append(out.read_derivatives(2))
+    return t, u, np.array(rows), np.array(rates), np.array(accelerations)
+
+
+def multisine(t: np.ndarray, amplitude: float) -> np.ndarray:
+    """Three frequencies across each filter's band (0.1, 0.8 and 5 rad/s)."""
+    return amplitude * (np.sin(0.1 * t) + 0.6 * np.sin(0.8 * t + 0.4) + 0.3 * np.sin(5.0 * t + 1.0))
+
+
+def test_each_filter_is_its_transfer_function(cueing):
+    values = {"translation.x.frequency": 2.0, "translation.x.damping": 0.8, "translation.x.break": 0.4,
+              "translation.z.frequency": 3.0, "translation.z.damping": 1.1, "translation.z.break": 0.0,
+              "rotation.roll.frequency": 1.5, "rotation.roll.damping": 0.7, "tilt.frequency": 2.5,
+              "tilt.damping": 0.9, "tilt.rate_limit": 10.0}
+    k = 0.5  # every channel's default gain
+
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 0] = multisine(t, 0.4)      # surge: translation and tilt (pitch)
+        u[:, 2] = G + multisine(t, 0.3)  # heave
+        u[:, 3] = multisine(t, 0.05)     # roll rate
+        return u
+
+    h = 2e-3
+    t, u, rows, rates, accelerations = drive(cueing(values), motion, h, 10000)
+
+    def response(numerator, denominator, column):
+        return signal.lsim((numerator, denominator), k * u[:, column] - (k * G if column == 2 else 0.0), t)[1]
+
+    def scale(x):
+        return np.abs(x).max()
+
+    w, z, b = 2.0, 0.8, 0.4
+    surge = np.polymul([1, 2 * z * w, w * w], [1, b])
+    x = response([1, 0], surge, 0)  # p = s / ((s^2 + 2 zeta w s + w^2)(s + w_b)) u
+    assert np.abs(rows[:, 0] - x).max() < 1e-9 * scale(x)
+    x_rate, x_acceleration = response([1, 0, 0], surge, 0), response([1, 0, 0, 0], surge, 0)
+    assert np.abs(rates[:, 0] - x_rate).max() < 1e-9 * scale(x_rate)
+    assert np.abs(accelerations[:, 0] - x_acceleration).max() < 1e-9 * scale(x_acceleration)
+    heave = response([1], [1, 2 * 1.1 * 3.0, 9.0], 2)  # second order: p = u / (s^2 + 2 zeta w s + w^2)
+    assert np.abs(rows[:, 2] - NEUTRAL_Z - heave).max() < 1e-9 * scale(heave)
+    roll_rate_cue = response([1, 0], [1, 2 * 0.7 * 1.5, 1.5 ** 2], 3)  # b = s / (s^2 + ...) u
+    tilt = np.arcsin(response([6.25], [1, 2 * 0.9 * 2.5, 6.25], 0) / G)  # pitch = -asin(l_x / g)
+    assert np.abs(rows[:, 3] - roll_rate_cue).max() < 1e-9 * scale(roll_rate_cue)
+    assert np.abs(rows[:, 4] + tilt).max() < 1e-9 * scale(tilt)
+
+
+def test_the_output_derivatives_are_the_outputs_own(cueing):
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 1], u[:, 2] = multisine(t, 1.0), G + multisine(t, 0.5)
+        u[:, 4], u[:, 5] = multisine(t, 0.1), multisine(t, 0.2)
+        return u
+
+    h = 1e-3
+    t, _, rows, rates, accelerations = drive(cueing({"tilt.rate_limit": 10.0}), motion, h, 8000)
+    central = (rows[2:] - rows[:-2]) / (2 * h)
+    second = (rows[2:] - 2 * rows[1:-1] + rows[:-2]) / h ** 2
+    for d in range(6):
+        span = np.abs(rates[:, d]).max()
+        assert np.abs(central[:, d] - rates[1:-1, d]).max() < 1e-4 * span + 1e-12, POSE[d]
+        span = np.abs(accelerations[:, d]).max()
+        # the input's rate is piecewise constant (a chord a step): the acceleration jumps by about h u'' a step
+        assert np.abs(second[:, d] - accelerations[1:-1, d]).max() < 5e-3 * span + 1e-9, POSE[d]
+
+
+def test_a_sustained_acceleration_ends_as_tilt_within_its_rate_limit(cueing):
+    """A car accelerating at 2 m/s^2 from t = 1 s on: the surge cue washes out, and the tilt takes
+    over until gravity gives the occupant the scaled acceleration, never turning faster than 3 deg/s."""
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 0], u[:, 2] = np.where(t >= 1.0, 2.0, 0.0), G
+        return u
+
+    h = 1e-3
+    t, _, rows, rates, _ = drive(cueing({"translation.x.gain": 1.0, "tilt.gain": 1.0}), motion, h, 40000,
+                                 POSE + ["tilt.pitch"])
+    limit = np.radians(3.0)
+    assert np.abs(np.diff(rows[:, 6]) / h).max() <= limit * (1 + 1e-12)  # the tilt's rate limit, every step
+    assert np.abs(rates[:, 6]).max() <= limit * (1 + 1e-12)
+    assert np.abs(rates[:, 6]).max() > 0.99 * limit  # and it is what holds it back here
+    felt = -G * np.sin(rows[-1, 4])  # a pitch theta is felt as f_x = -g sin(theta)
+    assert abs(felt - 2.0) < 1e-6  # the whole acceleration, through tilt alone
+    assert abs(rows[-1, 0]) < 1e-3 and rows[:, 0].max() > 0.05  # the surge cue moved forward, then washed out
+    assert np.abs(rows[:, 1:4] - [0.0, NEUTRAL_Z, 0.0]).max() == 0.0  # nothing else moved
+
+
+def test_the_platform_comes_back_to_neutral_after_a_manoeuvre(cueing):
+    """Braking, a lane change and a curve, then driving straight on: every cue washes out."""
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 0] = -4.0 * ((t > 1) & (t < 3))                                      # braking
+        u[:, 1] = 3.0 * np.sin(2 * np.pi * 0.4 * (t - 4)) * ((t > 4) & (t < 6.5))  # lane change
+        u[:, 5] = 0.3 * ((t > 8) & (t < 12))                                      # a curve's yaw rate
+        u[:, 1] += 3.0 * ((t > 8) & (t < 12))                                     # and its lateral force
+        u[:, 2] = G
+        return u
+
+    h = 2e-3
+    t, _, rows, rates, _ = drive(cueing(), motion, h, 40000)
+    neutral = np.array([0.0, 0.0, NEUTRAL_Z, 0.0, 0.0, 0.0])
+    assert np.abs(rows[t < 20] - neutral).max() > 0.05  # it moved
+    assert np.abs(rows[-1] - neutral).max() < 1e-3  # and is back
+    assert np.abs(rates[-1]).max() < 1e-3
+
+
+@pytest.mark.parametrize("name, value", [("translation.y.frequency", 0.0), ("rotation.yaw.damping", -1.0),
+                                         ("tilt.rate_limit", 0.0), ("tilt.frequency", float("nan"))])
+def test_wrong_parameters_are_refused_by_name(cueing, name, value):
+    with pytest.raises(FmuError) as caught:
+        cueing({name: value})
+    assert name in str(caught.value)
