@@ -24,8 +24,10 @@
  * B u_1, the phi-functions of the shared solvers (ode.h) kept per step size as model data. The tilt's
  * rate limit acts once a step. Angular rates are taken as the rates of roll, pitch and yaw (small
  * angles), and the translational channel's specific force in the vehicle frame as in the platform's.
+ * The motion is the inputs', or a recorded one's from vehicle.file (linear between its rows).
  */
 #include "fmu_common.h"
+#include "table.h"
 
 #include <math.h>
 #include <string.h>
@@ -55,6 +57,32 @@ static const int ROTATION[3][4] = {
     {VR_rotation_roll_gain, VR_rotation_roll_limit, VR_rotation_roll_frequency, VR_rotation_roll_damping},
     {VR_rotation_pitch_gain, VR_rotation_pitch_limit, VR_rotation_pitch_frequency, VR_rotation_pitch_damping},
     {VR_rotation_yaw_gain, VR_rotation_yaw_limit, VR_rotation_yaw_frequency, VR_rotation_yaw_damping}};
+
+/* ---- the vehicle's motion: the inputs, or vehicle.file's columns where it has them ---- */
+
+static const char *const MOTION_NAMES[6] = {"specific_force.x", "specific_force.y", "specific_force.z",
+                                            "angular_rate.x", "angular_rate.y", "angular_rate.z"};
+
+/* The model data: the phi-functions per step size (derived) and the vehicle table (read once). */
+typedef struct PhiCache PhiCache;
+typedef struct {
+    PhiCache *cache;
+    FmuTable *vehicle;
+} ModelData;
+
+/* Motion k (0-2 specific force, 3-5 angular rate) at t, and its rate into *rate. */
+static double motion(FmuInstance *fmu, int k, double t, double *rate) {
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    const int vr = k < 3 ? FORCE[k] : RATE[k - 3];
+    if (data && data->vehicle && data->vehicle->column_of[k] >= 0) {
+        double out[3];
+        fmu_table_at(data->vehicle, data->vehicle->column_of[k], 1, t, out);
+        if (rate) *rate = out[1];
+        return out[0];
+    }
+    if (rate) *rate = fmu_input_rate_at(fmu, vr, t);
+    return fmu_input_at(fmu, vr, t);
+}
 
 static double clip(double value, double limit) { return value > limit ? limit : value < -limit ? -limit : value; }
 
@@ -91,44 +119,52 @@ static double channel_input(FmuInstance *fmu, int c, double t) {
     const ModelVariables *v = &fmu->s.v;
     if (c < N_TRANSLATION) {
         const int *k = TRANSLATION[c];
-        const double f = fmu_input_at(fmu, FORCE[c], t) - (c == 2 ? v->gravity : 0.0);
+        const double f = motion(fmu, c, t, NULL) - (c == 2 ? v->gravity : 0.0);
         return clip(*fmu_real(fmu, k[0]) * f, *fmu_real(fmu, k[1]));
     }
     if (c < N_TRANSLATION + N_ROTATION) {
         const int *k = ROTATION[c - N_TRANSLATION];
-        return clip(*fmu_real(fmu, k[0]) * fmu_input_at(fmu, RATE[c - N_TRANSLATION], t), *fmu_real(fmu, k[1]));
+        return clip(*fmu_real(fmu, k[0]) * motion(fmu, 3 + c - N_TRANSLATION, t, NULL), *fmu_real(fmu, k[1]));
     }
-    return v->tilt_gain * fmu_input_at(fmu, FORCE[c - N_TRANSLATION - N_ROTATION], t);
+    return v->tilt_gain * motion(fmu, c - N_TRANSLATION - N_ROTATION, t, NULL);
 }
 
 /* Its rate at t (0 where the clip holds it). */
 static double channel_input_rate(FmuInstance *fmu, int c, double t) {
     const double u = channel_input(fmu, c, t);
+    double rate;
     if (c < N_TRANSLATION) {
         const int *k = TRANSLATION[c];
-        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * fmu_input_rate_at(fmu, FORCE[c], t) : 0.0;
+        motion(fmu, c, t, &rate);
+        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * rate : 0.0;
     }
     if (c < N_TRANSLATION + N_ROTATION) {
         const int *k = ROTATION[c - N_TRANSLATION];
-        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * fmu_input_rate_at(fmu, RATE[c - N_TRANSLATION], t)
-                                              : 0.0;
+        motion(fmu, 3 + c - N_TRANSLATION, t, &rate);
+        return fabs(u) < *fmu_real(fmu, k[1]) ? *fmu_real(fmu, k[0]) * rate : 0.0;
     }
-    return fmu->s.v.tilt_gain * fmu_input_rate_at(fmu, FORCE[c - N_TRANSLATION - N_ROTATION], t);
+    motion(fmu, c - N_TRANSLATION - N_ROTATION, t, &rate);
+    return fmu->s.v.tilt_gain * rate;
 }
 
 /* ---- the phi-functions per step size (derived data, outside the FMU state) ---- */
 
 enum { KEPT = 4 };
-typedef struct {
+struct PhiCache {
     double h[KEPT];
     double phi[KEPT][N_CHANNELS][3 * MAX_ORDER * MAX_ORDER]; /* phi_0, phi_1, phi_2 of each channel */
     int next;
-} PhiCache;
+};
 
-static void free_cache(FmuInstance *fmu, void *data) { fmu_free(fmu, data); }
+static void free_data(FmuInstance *fmu, void *data) {
+    ModelData *d = (ModelData *)data;
+    fmu_free(fmu, d->cache);
+    fmu_table_free(fmu, d->vehicle);
+    fmu_free(fmu, d);
+}
 
 static const double *phi_of(FmuInstance *fmu, double h, int c) {
-    PhiCache *cache = (PhiCache *)fmu->model_data;
+    PhiCache *cache = ((ModelData *)fmu->model_data)->cache;
     for (int e = 0; e < KEPT; e++)
         if (cache->h[e] == h) return cache->phi[e][c];
     const int e = cache->next;
@@ -199,16 +235,27 @@ fmi2Status model_validate(FmuInstance *fmu) {
     FMU_REQUIRE_POSITIVE(tilt_rate_limit);
     FMU_REQUIRE_POSITIVE(gravity);
     if (errors) return fmi2Error;
-    if (!fmu->model_data) {
-        PhiCache *cache = (PhiCache *)fmu_calloc(fmu, 1, sizeof(PhiCache));
-        if (!cache) {
+    ModelData *data = (ModelData *)fmu->model_data;
+    if (!data) {
+        data = (ModelData *)fmu_calloc(fmu, 1, sizeof(ModelData));
+        if (data) data->cache = (PhiCache *)fmu_calloc(fmu, 1, sizeof(PhiCache));
+        if (!data || !data->cache) {
+            if (data) fmu_free(fmu, data);
             fmu_log(fmu, fmi2Error, "logStatusError", "cueing: out of memory");
             return fmi2Error;
         }
-        fmu_set_model_data(fmu, cache, free_cache);
+        fmu_set_model_data(fmu, data, free_data);
     }
-    PhiCache *cache = (PhiCache *)fmu->model_data;
-    for (int e = 0; e < KEPT; e++) cache->h[e] = 0.0; /* the parameters may have changed */
+    for (int e = 0; e < KEPT; e++) data->cache->h[e] = 0.0; /* the parameters may have changed */
+    const char *path = v->vehicle_file.text;
+    if (!path[0]) {
+        fmu_table_free(fmu, data->vehicle);
+        data->vehicle = NULL;
+    } else if (!data->vehicle || strcmp(data->vehicle->path, path) != 0) {
+        fmu_table_free(fmu, data->vehicle);
+        data->vehicle = fmu_table_read(fmu, VR_vehicle_file, path, MOTION_NAMES, 6);
+        if (!data->vehicle) return fmi2Error;
+    }
     return fmi2OK;
 }
 
@@ -276,6 +323,8 @@ void model_compute_outputs(FmuInstance *fmu) {
     for (int d = 0; d < 6; d++) *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
     fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
     fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    fmu->s.v.vehicle_rows = data && data->vehicle ? data->vehicle->rows : 0;
 }
 
 double model_output_derivative(FmuInstance *fmu, int vr, int order) {

@@ -101,6 +101,12 @@ X(Real, tilt_rate_limit, "tilt.rate_limit", parameter, fixed, "rad/s", 0.0523598
   "Largest tilt rate, below what the semicircular canals notice (default 3 deg/s)") \
 X(Real, tilt_limit, "tilt.limit", parameter, fixed, "rad", 0.349065850398866, 0.0, 1.5707963267948966, \
   "Largest tilt angle (default 20 deg)") \
+X(String, vehicle_file, "vehicle.file", parameter, fixed, "", 0, 0, 0, \
+  "CSV file of the vehicle's motion (empty: the inputs). First line: 'time' and any of specific_force.x, " \
+  "specific_force.y, specific_force.z, angular_rate.x, angular_rate.y, angular_rate.z, comma separated; then rows " \
+  "of numbers in s, m/s2 and rad/s with time increasing, linear between them; lines starting with # are skipped. A " \
+  "column given there replaces its input; before the first and after the last row the end values are held.") \
+X(Integer, vehicle_rows, "vehicle.rows", output, discrete, "", 0, -FMU_INF, FMU_INF, "Rows read from vehicle.file") \
 X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.80665, 0.0, FMU_INF, \
   "Gravity: taken off the vertical specific force, and what tilt turns into specific force") \
 FMU_LAYER_VARIABLES(X)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from cosim.engine.artifacts import fmu_path
+from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.engine.fmi import FmuError, FmuInstance
 
 G = 9.80665
@@ -161,3 +161,49 @@ def test_wrong_parameters_are_refused_by_name(cueing, name, value):
     with pytest.raises(FmuError) as caught:
         cueing({name: value})
     assert name in str(caught.value)
+
+
+DRIVE = ROOT / "examples" / "vehicle" / "drive.csv"
+
+
+def test_the_shipped_drive_is_what_its_generator_writes():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("drive", ROOT / "examples" / "vehicle" / "drive.py")
+    generator = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generator)
+    shipped = np.loadtxt(DRIVE, delimiter=",", comments="#", skiprows=2)
+    assert DRIVE.read_text().splitlines()[1] == ",".join(generator.COLUMNS)
+    np.testing.assert_allclose(shipped, generator.drive(), rtol=1e-9, atol=1e-12)
+
+
+def test_a_recorded_drive_runs_as_the_same_motion_given_through_the_inputs(cueing):
+    table = np.loadtxt(DRIVE, delimiter=",", comments="#", skiprows=2)
+
+    def motion(t):
+        return np.column_stack([np.interp(t, table[:, 0], table[:, 1 + k]) for k in range(6)])
+
+    h = 2e-3
+    recorded = cueing({"vehicle.file": str(DRIVE)})
+    assert recorded.get("vehicle.rows") == len(table)
+    _, _, from_file, rates_file, _ = drive(recorded, lambda t: np.zeros((len(t), 6)), h, 5000)
+    _, _, from_inputs, rates_inputs, _ = drive(cueing(), motion, h, 5000)
+    scale = np.abs(from_inputs - from_inputs[0]).max(axis=0) + 1e-300
+    assert np.all(np.abs(from_file - from_inputs).max(axis=0) <= 1e-9 * scale)
+    assert np.abs(from_inputs[:, 4]).max() > 0.01  # the braking tilted it
+
+
+@pytest.mark.parametrize("text, message", [
+    ("time,specific_force.w\n0,1\n", ":1: column 'specific_force.w' is unknown (use specific_force.x, specific_force.y, "
+                                     "specific_force.z, angular_rate.x, angular_rate.y, angular_rate.z, each once)"),
+    ("time,specific_force.x\n0,1\n0,2\n", ":3: time 0 does not increase"),
+    ("time,specific_force.x\n0,1\n0.1,fast\n", ":3: expected 2 finite numbers separated by commas"),
+    ("time,angular_rate.z\n", ": no rows after the header"),
+    ("speed,angular_rate.z\n0,1\n", ":1: the first column must be 'time'"),
+])
+def test_bad_vehicle_tables_are_one_line_each(cueing, tmp_path, text, message):
+    path = tmp_path / "drive.csv"
+    path.write_text(text)
+    with pytest.raises(FmuError) as caught:
+        cueing({"vehicle.file": str(path)})
+    logged = [m.text for m in caught.value.messages if "vehicle.file" in m.text]
+    assert len(logged) == 1 and message in logged[0] and str(path) in logged[0]
