@@ -5,6 +5,7 @@ plan of the run."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from ...engine import Experiment, SystemStructure
@@ -12,7 +13,7 @@ from ...engine.artifacts import fmu_path
 from ...engine.checks import variables
 from ...engine.run import Plan
 from ...engine.settings import output_settings, to_strings
-from ..ports import DRIVES, LEGS
+from ..ports import DRIVES, LEGS, POSE
 from ..scene import Scene, SceneError
 from ..scene.parameter_sets import drive_set, scene_mechanics
 from ..scene.signals import scene_trajectory
@@ -33,7 +34,8 @@ def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
     else:
         has = [variables(fmu) for fmu in set(drive_fmus(scene))]
         drive_outputs = [n for n in DRIVES[scene.drive].outputs if all(n in found for found in has)]
-    return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian)
+    return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian,
+                   cueing=scene.vehicle is not None)
 
 
 def scene_values(scene: Scene) -> tuple[dict, dict]:
@@ -116,14 +118,33 @@ def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemS
         designed = scene_design(scene)[0]
     structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
-                                   interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene))
-    structure.settings = {**to_strings(scene.algorithm, scene.control),
+                                   interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene),
+                                   cueing_values=scene_cueing(scene, mechanics_values))
+    structure.settings = {**to_strings(scene_algorithm(scene), scene.control),
                           **output_settings(*scene_record(scene), scene.output_interval)}
     return structure
+
+
+def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
+    """The cueing FMU's values for a scene with a [motion] vehicle (None without): the vehicle's
+    file, the platform's neutral pose (where the washout returns it), then [cueing.parameters]."""
+    if scene.vehicle is None:
+        return None
+    from ..core import neutral_pose
+    neutral = dict(zip((f"neutral.{a}" for a in POSE), neutral_pose(mechanics_values).tolist()))
+    return {"vehicle.file": scene.vehicle, **neutral, **scene.cueing_parameters}
+
+
+def scene_algorithm(scene: Scene):
+    """The scene's coupling, with the cueing FMU first in a Gauss-Seidel sequence where it has one."""
+    algorithm = scene.algorithm
+    if scene.vehicle is not None and algorithm.sequence:
+        algorithm = replace(algorithm, sequence=("cueing", *algorithm.sequence))
+    return algorithm
 
 
 def scene_plan(scene: Scene, structure: SystemStructure) -> Plan:
     """The engine's plan of the scene's run: its coupling, step control, duration and recording,
     the results carrying the mechanics' time."""
-    return Plan(structure, scene.algorithm, scene.control, scene.duration, *scene_record(scene), scene.output_interval,
-                clock="mechanics")
+    return Plan(structure, scene_algorithm(scene), scene.control, scene.duration, *scene_record(scene),
+                scene.output_interval, clock="mechanics")

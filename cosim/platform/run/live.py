@@ -62,7 +62,8 @@ def live_input(scene: Scene, mechanics_values: dict) -> LiveInput:
               for end in ("min", "max")]
     stroke = PlatformStroke(core.p, *limits)
     check = ctypes.cast(core.dll.platform_pose_within_stroke, ctypes.c_void_p)
-    return LiveInput("trajectory", [f"pose_ref.{a}" for a in POSE],
+    from .system import pose_source
+    return LiveInput(pose_source(scene.vehicle is not None), [f"pose_ref.{a}" for a in POSE],
                      rate_max=[value("velocity_max")] * 3 + [value("angular_velocity_max")] * 3,
                      acceleration_max=[value("acceleration_max")] * 3 + [value("angular_acceleration_max")] * 3,
                      neutral=core.neutral_pose.tolist(), late_after=value("late_after"), watchdog=value("watchdog"),

@@ -23,14 +23,17 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
                        trajectory_values: Mapping[str, object] | None = None,
                        leg_values: Sequence[Mapping[str, object]] | None = None, name: str = "platform",
                        experiment: Experiment | None = None, interface_jacobian: bool = False,
-                       drive_fmus: Sequence[Path] | None = None) -> SystemStructure:
+                       drive_fmus: Sequence[Path] | None = None,
+                       cueing_values: Mapping[str, object] | None = None) -> SystemStructure:
     """Trajectory, mechanics and six drives of one kind with these parameter values (leg_values:
     per drive, on top of drive_values, e.g. each leg's force feedforward). drive_fmus: per leg, the
     drive's FMU (default: ours for the kind); a drive's optional ports (the reference's rate, the
     slope) are wired where its FMU has them. interface_jacobian: each drive's slope d effort / d
     flow feeds the mechanics, with the flow the drive was given (the mechanics' own flow output
     wired back to its `*_seen` input: every coupling algorithm hands both the same
-    extrapolation), so the mechanics integrates the drives' damping implicitly."""
+    extrapolation), so the mechanics integrates the drives' damping implicitly. cueing_values: the
+    pose reference comes from a cueing FMU with these values (a vehicle's motion through the
+    classical washout), the trajectory's giving the loads alone."""
     from ...engine.checks import variables
     if drive not in DRIVES:
         raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
@@ -43,8 +46,11 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
         wired = {key: value for key, value in wiring.wired_parameters if key in has[fmus[k]]}
         components.append(Component(instance, fmus[k], {**wired, **(drive_values or {}),
                                                         **(leg_values[k] if leg_values else {})}))
-    connections = [Connection(("trajectory", n), ("mechanics", n))
-                   for n in [*[f"pose_ref.{a}" for a in POSE], *WRENCH, *BODY_WRENCH]]
+    if cueing_values is not None:
+        components.insert(1, Component("cueing", fmu_path("cueing"), dict(cueing_values)))
+    source = pose_source(cueing_values is not None)
+    connections = [*(Connection((source, f"pose_ref.{a}"), ("mechanics", f"pose_ref.{a}")) for a in POSE),
+                   *(Connection(("trajectory", n), ("mechanics", n)) for n in [*WRENCH, *BODY_WRENCH])]
     bonds = []
     for i, instance, fmu in zip(LEGS, drive_names(drive), fmus):
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
@@ -65,17 +71,27 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     return SystemStructure(name, components, connections, bonds, experiment or Experiment())
 
 
+def pose_source(cueing: bool) -> str:
+    """The component that gives the mechanics its pose reference: the cueing FMU for a vehicle's
+    motion, the trajectory otherwise."""
+    return "cueing" if cueing else "trajectory"
+
+
 def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Sequence[str] = (),
-            applied: bool = False) -> tuple[list[tuple[str, str]], list[str]]:
+            applied: bool = False, cueing: bool = False) -> tuple[list[tuple[str, str]], list[str]]:
     """What a platform run records and how the columns are named: pose_ref.<dof> (trajectory),
     pose.<dof> and the chosen mechanics outputs (mechanics), <output>[i] for each drive output;
     with `applied` (the interface-Jacobian coupling, where the legs feel the drives' efforts
-    corrected by their slopes) the efforts the mechanics applied, <effort>_applied[i]."""
+    corrected by their slopes) the efforts the mechanics applied, <effort>_applied[i]; with
+    `cueing` the pose reference from the cueing FMU and its tilt, tilt.roll and tilt.pitch."""
     effort = DRIVES[drive].effort[0]
-    record = [*[("trajectory", f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
+    record = [*[(pose_source(cueing), f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
               *[("mechanics", n) for n in mechanics_outputs],
               *[(instance, n) for n in drive_outputs for instance in drive_names(drive)],
               *[("mechanics", f"leg[{i}].{effort}_applied") for i in LEGS if applied]]
     names = [*[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *mechanics_outputs,
              *[f"{n}[{i}]" for n in drive_outputs for i in LEGS], *[f"{effort}_applied[{i}]" for i in LEGS if applied]]
+    if cueing:
+        record += [("cueing", "tilt.roll"), ("cueing", "tilt.pitch")]
+        names += ["tilt.roll", "tilt.pitch"]
     return record, names

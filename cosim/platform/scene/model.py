@@ -93,6 +93,8 @@ class Scene:
     trajectory: dict[str, Signal] = field(init=False)  # per DOF
     neutral: tuple[str, ...] = field(init=False)  # the DOFs whose offset is the platform's neutral pose
     table: Path | None = field(init=False)  # [trajectory] table
+    vehicle: Path | None = field(init=False)  # [motion] vehicle: the pose reference from motion cueing
+    cueing_parameters: dict[str, Any] = field(init=False)  # [cueing.parameters]
     interpolation: str = field(init=False)
     pulses: tuple[Pulse, ...] = field(init=False)
     outputs_mechanics: tuple[str, ...] = field(init=False)

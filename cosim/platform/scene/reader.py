@@ -73,6 +73,7 @@ def derive(scene: Scene) -> dict[str, Any]:
     out.update(_platform(doc, out))
     out["trajectory"], out["neutral"] = _signals(doc)
     out["table"], out["interpolation"] = _table(doc), doc.value("trajectory", "interpolation")
+    out["vehicle"], out["cueing_parameters"] = _vehicle(doc), _parameters(doc, "cueing", "cueing")
     out["pulses"] = _pulses(doc)
     out["algorithm"], out["control"] = _settings(doc, out["drive"], out["duration"], out["pulses"])
     out["interface_jacobian"] = doc.value("coupling", "interface_jacobian")
@@ -204,6 +205,24 @@ def _table(doc: Document) -> Path | None:
         return None
     if not (doc.path.parent / given).is_file():
         raise doc.fail("trajectory.table", "no such file (relative to the scene's folder)", given)
+    return (doc.path.parent / given).resolve()
+
+
+def _vehicle(doc: Document) -> Path | None:
+    """[motion] vehicle: the recorded motion cueing turns into the pose reference, which then
+    comes from nowhere else."""
+    given = doc.value("motion", "vehicle")
+    if given is None:
+        if doc.table("cueing"):
+            raise doc.fail("cueing", "tunes the motion cueing of a [motion] vehicle, and this scene has none")
+        return None
+    if not (doc.path.parent / given).is_file():
+        raise doc.fail("motion.vehicle", "no such file (relative to the scene's folder)", given)
+    posed = [f"trajectory.{dof}" for dof in doc.family("trajectory.<dof>")] + \
+        (["trajectory.table"] if doc.value("trajectory", "table") is not None else [])
+    if posed:
+        raise doc.fail("motion.vehicle", f"gives the pose reference through motion cueing, and [{posed[0]}] gives one "
+                       "too: keep one", given)
     return (doc.path.parent / given).resolve()
 
 

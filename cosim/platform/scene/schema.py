@@ -102,6 +102,14 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("mechanics", ListOf(Text()), "mechanics outputs"),
         Key("drive", ListOf(Text()), "per drive (default: its effort, speed or velocity and current)"),
         Key("interval", SECONDS, "results written every interval (default: every macro step)"))),
+    Table("motion", "A vehicle's motion instead of a pose reference (docs/guide/fmus.md, cueing): the cueing FMU, "
+          "the classical washout, turns it into the platform's pose reference; the trajectory then gives the loads "
+          "alone.", (
+        Key("vehicle", Text(path=True), "a CSV of the vehicle's motion at the occupant's head: time, then any of "
+            "specific_force.x/y/z [m/s^2] and angular_rate.x/y/z [rad/s] (vehicle frame: x forward, y left, z up)"),)),
+    Table("cueing", "The motion cueing of a [motion] vehicle.", (
+        Key("parameters", Free("cueing FMU variable = value"), "values of the cueing FMU's parameters (gains, limits, "
+            "filter frequencies and dampings, the tilt's rate limit), checked against its modelDescription"),)),
     Table("live", "A live input's limits (`cosim run SCENE --listen udp://HOST:PORT`, docs/guide/realtime.md): the "
           "reference moves towards each pose received, braking in time, within these; refused packets and a silent "
           "sender leave it where it is going.", (

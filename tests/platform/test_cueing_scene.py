@@ -1,0 +1,88 @@
+"""A scene from a vehicle's recorded motion ([motion] vehicle, examples/vehicle/car_drive.toml): the
+cueing FMU gives the pose reference the drives and platform follow, exactly what the FMU gives on
+its own at the same steps; the platform stays in its stroke and follows; the whole system exports
+to SSP with the vehicle's file inside and runs the same from there; a wrong [motion] or [cueing]
+is one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cosim
+from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.fmi import FmuInstance
+from cosim.platform.core import Core
+from cosim.platform.ports import POSE
+from cosim.platform.run.compile import scene_cueing, scene_values
+from cosim.platform.scene import SceneError, load_scene
+
+EXAMPLE = ROOT / "examples" / "vehicle" / "car_drive.toml"
+
+
+@pytest.fixture(scope="module")
+def drive_run():
+    return cosim.simulate(EXAMPLE)
+
+
+def test_the_cueing_fmu_gives_the_reference_the_platform_follows(drive_run):
+    scene = load_scene(EXAMPLE)
+    values = scene_cueing(scene, scene_values(scene)[0])
+    alone = FmuInstance(fmu_path("cueing"), "alone")
+    try:
+        alone.initialize({k: str(v) if k == "vehicle.file" else v for k, v in values.items()})
+        group = alone.real_group([f"pose_ref.{a}" for a in POSE])
+        rows = [group.read().copy()]
+        for h in np.diff(drive_run["time"]):  # the run's own steps: its finer start, then 1 ms
+            alone.do_step(scene.control.startup_step if h < 5e-4 else scene.step)
+            rows.append(group.read().copy())
+    finally:
+        alone.free()
+    reference = np.column_stack([drive_run[f"pose_ref.{a}"] for a in POSE])
+    assert np.array_equal(reference, np.array(rows))  # bit for bit: the scene wires the FMU, nothing in between
+    assert np.abs(reference[:, 4]).max() > 0.1 and np.abs(reference[:, 1]).max() > 0.1  # braking tilts, lanes sway
+
+
+def test_a_drive_stays_in_the_stroke_and_the_platform_follows(drive_run):
+    pose = np.column_stack([drive_run[f"pose.{a}"] for a in POSE])
+    lengths = Core().leg_lengths
+    legs = np.array([lengths(p) for p in pose[::20]])
+    assert legs.min() > 1.535 and legs.max() < 2.2  # Meng's stroke
+    late = drive_run["time"] > 0.1
+    error = np.abs(pose - np.column_stack([drive_run[f"pose_ref.{a}"] for a in POSE]))[late]
+    assert error[:, :3].max() < 5e-3 and error[:, 3:].max() < 5e-3  # m, rad: the drives track the cues
+    tilt_rate = np.abs(np.diff(drive_run["tilt.pitch"]) / np.diff(drive_run["time"]))
+    assert tilt_rate.max() <= np.radians(3.0) * (1 + 1e-9)
+    assert not drive_run.report.warnings
+
+
+def test_the_exported_system_carries_the_vehicle_and_runs_the_same(tmp_path, drive_run):
+    scene = load_scene(EXAMPLE, {"scene.duration": 3.0})
+    archive = cosim.export_ssp(scene, tmp_path / "drive.ssp")
+    import zipfile
+    assert any(name.endswith("drive.csv") for name in zipfile.ZipFile(archive).namelist())
+    (tmp_path / "elsewhere").mkdir()
+    moved = (tmp_path / "elsewhere" / "drive.ssp")
+    archive.rename(moved)
+    run = cosim.simulate(moved)
+    rows = len(run["time"])
+    for a in POSE:
+        assert np.array_equal(run[f"pose_ref.{a}"], drive_run[f"pose_ref.{a}"][:rows])
+        assert np.array_equal(run[f"pose.{a}"], drive_run[f"pose.{a}"][:rows])
+
+
+@pytest.mark.parametrize("text, message", [
+    ('[motion]\nvehicle = "nowhere.csv"\n', "'motion.vehicle' = 'nowhere.csv': no such file"),
+    ('[motion]\nvehicle = "drive.csv"\n[trajectory.x]\nsines = [{amplitude = 0.1, frequency = 1.0}]\n',
+     "gives the pose reference through motion cueing, and [trajectory.x] gives one too"),
+    ('[cueing.parameters]\n"tilt.gain" = 1.0\n', "'cueing' tunes the motion cueing of a [motion] vehicle"),
+    ('[motion]\nvehicle = "drive.csv"\n[cueing.parameters]\n"tilt.gian" = 1.0\n', 'cueing.parameters."tilt.gian" = 1.0: no such variable (cueing)'),
+    ('[motion]\nvehicle = "drive.csv"\n[cueing.parameters]\n"tilt.rate_limit" = -1.0\n', "outside"),
+])
+def test_a_wrong_motion_or_cueing_is_one_line(tmp_path, text, message):
+    (tmp_path / "drive.csv").write_text((ROOT / "examples" / "vehicle" / "drive.csv").read_text())
+    path = tmp_path / "scene.toml"
+    path.write_text('[scene]\nduration = 1.0\n' + text)
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    assert message in str(caught.value) and "\n" not in str(caught.value) and str(path) in str(caught.value)
