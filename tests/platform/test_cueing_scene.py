@@ -54,6 +54,8 @@ def test_a_drive_stays_in_the_stroke_and_the_platform_follows(drive_run):
     tilt_rate = np.abs(np.diff(drive_run["tilt.pitch"]) / np.diff(drive_run["time"]))
     assert tilt_rate.max() <= np.radians(3.0) * (1 + 1e-9)
     assert not drive_run.report.warnings
+    line = next(n for n in drive_run.report.notes() if n.startswith("motion cueing: tilt up to"))
+    assert "turning at most 3.00 deg/s (its limit 3.00 deg/s)" in line  # the braking's tilt is rate-limited
 
 
 def test_the_exported_system_carries_the_vehicle_and_runs_the_same(tmp_path, drive_run):

@@ -103,7 +103,22 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
     report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
                           tuning=tuning, diverged=outcome.diverged)
     report.name = scene.name
+    if scene.vehicle is not None and len(result) > 1:
+        report.remarks.append(tilt_line(scene, result))
     return report
+
+
+def tilt_line(scene: Scene, result: np.ndarray) -> str:
+    """What the tilt coordination of a scene's motion cueing did: its largest roll and pitch and
+    its peak rate against its limit (below which the semicircular canals do not notice it)."""
+    from ...engine.artifacts import fmu_path
+    from ...engine.checks import variables
+    limit = float(scene.cueing_parameters.get("tilt.rate_limit", variables(fmu_path("cueing"))["tilt.rate_limit"].start))
+    dt = np.diff(result["time"])
+    rates = [np.abs(np.diff(result[f"tilt.{a}"]) / dt).max() for a in ("roll", "pitch")]
+    largest = [np.abs(result[f"tilt.{a}"]).max() for a in ("roll", "pitch")]
+    return (f"motion cueing: tilt up to {np.degrees(largest[0]):.2f} deg in roll and {np.degrees(largest[1]):.2f} deg "
+            f"in pitch, turning at most {np.degrees(max(rates)):.2f} deg/s (its limit {np.degrees(limit):.2f} deg/s)")
 
 
 def write_figures(scene: Scene, result: np.ndarray, report: RunReport, outcome: Outcome, folder: Path) -> Path:
