@@ -149,9 +149,10 @@ def test_a_pose_sent_at_t_drives_the_platform_from_the_next_macro_step_within_it
     t, ref = run["time"], np.column_stack([run[f"pose_ref.{a}"] for a in cosim.platform.ports.POSE])
     scene_x = 0.02 * np.sin(2 * np.pi * 0.5 * t)
     moved = np.flatnonzero(np.abs(ref[:, 1] - neutral[1]) > 0)[0]  # y: the scene keeps it at 0
-    # sent on seeing the sample at `seen`, it arrives before the step from seen + h ends, is taken then and moves the
-    # reference over the next step: the first row it changes is at seen + 2 h (two steps more on a busy machine)
-    assert seen + 2 * H - 1e-9 <= t[moved] <= seen + 4 * H + 1e-9
+    # sent on seeing the sample at `seen`, it arrives at the earliest during the step from seen + h, is taken after it
+    # and moves the reference over the next step: the first row it changes is at seen + 2 h at the earliest (here,
+    # where the sender answers within the millisecond, exactly; a busy machine may delay the sender a few steps)
+    assert seen + 2 * H - 1e-9 <= t[moved] <= seen + 20 * H + 1e-9
     assert np.array_equal(ref[:moved, 0], scene_x[:moved])  # the scene's own reference until then
     assert run.report.pacing.live["accepted"] == 1
     rate = np.diff(ref[moved - 1:], axis=0) / H
@@ -192,7 +193,7 @@ def test_bad_packets_are_counted_by_kind_and_refused(tmp_path):
         for _ in samples:
             pass
 
-    run, _ = follow(tmp_path, send, duration=0.4)
+    run, _ = follow(tmp_path, send, duration=0.8, watchdog=5.0)  # time to spare after the last packet
     live = run.report.pacing.live
     assert {k: live[k] for k in live} == {"accepted": 2, "late": 1, "repeated": 1, "out_of_order": 1, "malformed": 5,
                                           "non_finite": 1, "outside": 1, "watchdog": 0}
@@ -223,7 +224,7 @@ def test_any_bytes_are_taken_or_refused_none_lost_and_the_run_goes_on(tmp_path):
         for _ in samples:
             pass
 
-    run, _ = follow(tmp_path, send, duration=0.3)
+    run, _ = follow(tmp_path, send, duration=0.6)
     live = run.report.pacing.live
     assert sum(v for k, v in live.items() if k != "watchdog") == sent  # every datagram counted once
     assert live["malformed"] > 0.3 * sent and live["non_finite"] + live["outside"] + live["repeated"] > 0
@@ -246,7 +247,7 @@ def test_a_silent_sender_brings_the_platform_back_to_neutral(tmp_path):
 
     run, _ = follow(tmp_path, send, duration=0.7, watchdog=0.15)
     pacing = run.report.pacing
-    assert pacing.live["watchdog"] == 1 and 0.15 < pacing.watchdog_time < 0.4
+    assert pacing.live["watchdog"] == 1 and 0.15 < pacing.watchdog_time < 0.6
     z = run["pose_ref.z"]
     assert z.max() - neutral[2] > 0.01  # it went up ...
     assert abs(z[-1] - neutral[2]) < 1e-12  # ... and came back
