@@ -57,6 +57,8 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     probes for a step that holds. Raises RunStopped (its report and the results up to then) when
     an FMU failed or the coupling diverged; before a step, what makes the run impossible
     (ParameterError, NoStep, an FmuError at set-up)."""
+    if out is not None:
+        refuse_overwriting_inputs(plan.structure, Path(out), stem or plan.structure.name)
     observers = [*([DivergenceMonitor(ratio=plan.divergence)] if plan.divergence else []),
                  *([Progress(plan.structure.name)] if progress else [])]
     with folder_lock(out) if out is not None else nullcontext(), deferred():  # one run's files at a time in a
@@ -70,6 +72,21 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     if outcome.failure is not None:
         raise RunStopped(made, result, outcome.diverged)
     return result, made
+
+
+def refuse_overwriting_inputs(structure: SystemStructure, out: Path, stem: str) -> None:
+    """A UsageError, before anything runs, when a file the run reads (a parameter that names one:
+    a table, a vehicle's motion) is where its results would go (<stem>.csv, .mat, .log and the
+    application's <stem>_*.png, <stem>.html in `out`)."""
+    from .errors import UsageError
+    for component in structure.components:
+        for name, value in component.parameters.items():
+            if not isinstance(value, Path):
+                continue
+            read = value.resolve()
+            if read.parent == out.resolve() and (read.stem == stem or read.name.startswith(f"{stem}_")):
+                raise UsageError(f"--out {out}: the results {stem}.* would overwrite {read.name}, which this run reads "
+                                 f"({component.name}'s {name}): write them to another folder")
 
 
 def write_files(result: np.ndarray, report: Report, outcome: Outcome, out: Path, stem: str,

@@ -88,3 +88,15 @@ def test_a_wrong_motion_or_cueing_is_one_line(tmp_path, text, message):
     with pytest.raises(SceneError) as caught:
         load_scene(path)
     assert message in str(caught.value) and "\n" not in str(caught.value) and str(path) in str(caught.value)
+
+
+def test_results_never_overwrite_what_the_run_reads(tmp_path):
+    """A scene named like its vehicle's file, its results written beside it: refused before it runs."""
+    motion = (ROOT / "examples" / "vehicle" / "drive.csv").read_text()
+    (tmp_path / "drive.csv").write_text(motion)
+    scene = tmp_path / "drive.toml"
+    scene.write_text('[scene]\nduration = 0.01\n[motion]\nvehicle = "drive.csv"\n')
+    from cosim.cli import main
+    assert main(["run", str(scene), "--no-plots", "--out", str(tmp_path)]) == 2
+    assert (tmp_path / "drive.csv").read_text() == motion
+    assert main(["run", str(scene), "--no-plots", "--out", str(tmp_path / "results")]) == 0
