@@ -18,11 +18,20 @@ cleanup() {
 trap cleanup EXIT
 
 echo "wheel: building"
-.venv/bin/python -m pip wheel --quiet --no-deps --wheel-dir "$WORK/wheel" "$CHECKOUT" > "$WORK/wheel.log" 2>&1 \
+.venv/bin/python -m pip wheel --quiet --no-deps --wheel-dir "$WORK/built" "$CHECKOUT" > "$WORK/wheel.log" 2>&1 \
   || { cat "$WORK/wheel.log"; exit 1; }
+# a wheel the package index takes: auditwheel gives it the manylinux tag its binaries allow (they need
+# libc and libm alone, nothing to vendor; tests/models/test_fmu_packages.py holds the FMUs to that)
+PATH="$CHECKOUT/.venv/bin:$PATH" .venv/bin/auditwheel repair --wheel-dir "$WORK/wheel" "$WORK"/built/*.whl \
+  >> "$WORK/wheel.log" 2>&1 || { cat "$WORK/wheel.log"; exit 1; }
+WHEEL=$(ls "$WORK"/wheel/*.whl)
+case "$WHEEL" in
+  *-manylinux_*_x86_64.whl) echo "wheel: $(basename "$WHEEL")" ;;
+  *) echo "the repaired wheel $(basename "$WHEEL") has no manylinux tag" >&2; exit 1 ;;
+esac
 "$PYTHON" -m venv "$WORK/venv"
 # the wheel's own dependencies, at the versions the tests were run with
-"$WORK/venv/bin/python" -m pip install --quiet "$WORK"/wheel/*.whl -c requirements.txt
+"$WORK/venv/bin/python" -m pip install --quiet "$WHEEL" -c requirements.txt
 rm -rf "$WORK/venv/src" 2> /dev/null || true
 
 mkdir -p "$WORK/user" "$WORK/cluster"

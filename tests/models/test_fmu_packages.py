@@ -207,3 +207,22 @@ def test_a_whole_scene_runs_in_libcosim():
     final = np.array([ours[f"pose.{a}"][-1] for a in ("x", "y", "z", "roll", "pitch", "yaw")])
     np.testing.assert_allclose(peer.pose, peer.pose_ref, atol=5e-3)
     np.testing.assert_allclose(peer.pose, final, atol=5e-3)
+
+
+@pytest.mark.parametrize("name", FMUS)
+def test_an_fmu_binary_needs_libc_and_libm_alone_and_no_newer_glibc_than_2_33(name, tmp_path):
+    """What a manylinux wheel and an FMI tool on an older Linux need of an FMU's binary: only the C
+    library and libm (nothing to ship beside it), at glibc symbol versions up to 2.33 (the wheel's
+    manylinux tag follows the newest symbol any of its binaries uses; scripts/check_wheel.sh repairs
+    it with auditwheel)."""
+    import re
+    import subprocess
+    with zipfile.ZipFile(fmu_path(name)) as z:
+        binary = tmp_path / f"{name}.so"
+        binary.write_bytes(z.read(f"binaries/linux64/{name}.so"))
+    headers = subprocess.run(["objdump", "-p", str(binary)], capture_output=True, text=True, check=True).stdout
+    needed = set(re.findall(r"NEEDED\s+(\S+)", headers))
+    assert needed <= {"libc.so.6", "libm.so.6"}, needed
+    symbols = subprocess.run(["objdump", "-T", str(binary)], capture_output=True, text=True, check=True).stdout
+    versions = {tuple(map(int, v.split("."))) for v in re.findall(r"GLIBC_([0-9.]+)", symbols)}
+    assert versions and max(versions) <= (2, 33), max(versions)
