@@ -453,7 +453,8 @@ void ode_phi_functions(int n, const double *a, double h, int count, double *phi)
         for (int i = 0; i < n; i++) column += fabs(h * a[i * n + j]);
         norm = fmax(norm, column);
     }
-    if (!isfinite(norm)) { /* no exponential: NaN, which the caller's steps refuse */
+    if (!(norm <= 0x1p500)) { /* no exponential (NaN, or past what 500 squarings hold): NaN, which the
+                                 caller's steps refuse */
         for (int i = 0; i < (count + 1) * nn; i++) phi[i] = NAN;
         return;
     }

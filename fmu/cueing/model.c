@@ -286,6 +286,11 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
         const Filter f = filter(fmu, c);
         const double *phi = phi_of(fmu, h, c);
         const int n = f.n, nn = n * n;
+        if (!isfinite(phi[0])) {
+            fmu_log(fmu, fmi2Error, "logStatusError", "fmi2DoStep: a step of %g s is beyond what the filters' "
+                    "frequencies allow to be taken exactly (e^(hA) overflows)", h);
+            return fmi2Error;
+        }
         const double u0 = channel_input(fmu, c, t), u1 = (channel_input(fmu, c, t + h) - u0) / h; /* the chord */
         double *x = fmu->s.internal.x + f.first, next[MAX_ORDER];
         for (int i = 0; i < n; i++) {
