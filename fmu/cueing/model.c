@@ -44,6 +44,8 @@ static const int FIRST[N_CHANNELS] = {0, 3, 6, 9, 11, 13, 15, 17}; /* translatio
 
 static const int FORCE[3] = {VR_specific_force_x, VR_specific_force_y, VR_specific_force_z};
 static const int RATE[3] = {VR_angular_rate_x, VR_angular_rate_y, VR_angular_rate_z};
+static const int VEHICLE[6] = {VR_vehicle_specific_force_x, VR_vehicle_specific_force_y, VR_vehicle_specific_force_z,
+                               VR_vehicle_angular_rate_x, VR_vehicle_angular_rate_y, VR_vehicle_angular_rate_z};
 static const int POSE[6] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch,
                             VR_pose_ref_yaw};
 static const int NEUTRAL[6] = {VR_neutral_x, VR_neutral_y, VR_neutral_z, VR_neutral_roll, VR_neutral_pitch,
@@ -326,6 +328,7 @@ void model_compute_outputs(FmuInstance *fmu) {
         pose[4][k] += fmu->s.internal.tilt[1][k];
     }
     for (int d = 0; d < 6; d++) *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
+    for (int k = 0; k < 6; k++) *fmu_real(fmu, VEHICLE[k]) = motion(fmu, k, t, NULL);
     fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
     fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
     const ModelData *data = (const ModelData *)fmu->model_data;

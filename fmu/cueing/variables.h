@@ -62,6 +62,12 @@ X(Real, pose_ref_##dof, "pose_ref." #dof, output, continuous, unit, offset, -FMU
 X(Real, neutral_##dof, "neutral." #dof, parameter, fixed, unit, offset, -FMU_INF, FMU_INF, \
   "The platform's neutral pose, " what ": where the washout returns it")
 
+/* The vehicle's motion the cueing took (its input, or vehicle.file's column): what a run records to
+ * judge the platform's motion against (cosim.platform.cueing). */
+#define VEHICLE_VARIABLES(X, quantity, a, unit, start, what) \
+X(Real, vehicle_##quantity##_##a, "vehicle." #quantity "." #a, output, continuous, unit, start, -FMU_INF, FMU_INF, \
+  "The vehicle's " what " at the head that the cueing took (its input, or vehicle.file's column)")
+
 /* clang-format off */
 #define MODEL_VARIABLES(X) \
 X(Real, specific_force_x, "specific_force.x", input, continuous, "m/s2", 0.0, -FMU_INF, FMU_INF, \
@@ -82,6 +88,12 @@ POSE_VARIABLES(X, z, "m", CUEING_NEUTRAL_HEIGHT, "z (heave)") \
 POSE_VARIABLES(X, roll, "rad", 0.0, "roll") \
 POSE_VARIABLES(X, pitch, "rad", 0.0, "pitch") \
 POSE_VARIABLES(X, yaw, "rad", 0.0, "yaw") \
+VEHICLE_VARIABLES(X, specific_force, x, "m/s2", 0.0, "specific force along x") \
+VEHICLE_VARIABLES(X, specific_force, y, "m/s2", 0.0, "specific force along y") \
+VEHICLE_VARIABLES(X, specific_force, z, "m/s2", 9.80665, "specific force along z") \
+VEHICLE_VARIABLES(X, angular_rate, x, "rad/s", 0.0, "angular rate about x") \
+VEHICLE_VARIABLES(X, angular_rate, y, "rad/s", 0.0, "angular rate about y") \
+VEHICLE_VARIABLES(X, angular_rate, z, "rad/s", 0.0, "angular rate about z") \
 X(Real, tilt_roll, "tilt.roll", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
   "The roll of the tilt coordination (part of pose_ref.roll): gravity standing for sustained sway") \
 X(Real, tilt_pitch, "tilt.pitch", output, continuous, "rad", 0.0, -FMU_INF, FMU_INF, \
@@ -112,8 +124,11 @@ X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.80665, 0.0, FMU_INF, \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
-/* Direct feed-through: none (the pose follows the filters' states; the inputs reach its
- * derivatives, not its value). */
-#define MODEL_FEEDTHROUGH(D)
+/* Direct feed-through: the vehicle's motion taken, from its input (the pose follows the filters'
+ * states; the inputs reach its derivatives, not its value). */
+#define MODEL_FEEDTHROUGH(D) \
+D(vehicle_specific_force_x, VR_specific_force_x) D(vehicle_specific_force_y, VR_specific_force_y) \
+D(vehicle_specific_force_z, VR_specific_force_z) D(vehicle_angular_rate_x, VR_angular_rate_x) \
+D(vehicle_angular_rate_y, VR_angular_rate_y) D(vehicle_angular_rate_z, VR_angular_rate_z)
 
 #endif

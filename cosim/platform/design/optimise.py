@@ -58,22 +58,31 @@ def optimise(study: Study, actuator: Actuator, workers: int | None = 0, schedule
     evolution (one objective, the worst margin, for one actuator; pareto.py trades several
     objectives and the actuator's choice). Its evaluations run on Dask when workers/scheduler say
     so (each a design of the map), in this process otherwise; the same seed gives the same design."""
-    from contextlib import nullcontext
     from functools import partial
-    from scipy.optimize import differential_evolution
-    from ...engine.sweep.dask_run import dask_client
     keys = tuple(study.axes)
     bounds = [(float(v[0]), float(v[-1])) for v in study.axes.values()]
     start = time.perf_counter()
     objective = partial(_negative_margin, study=study, keys=keys, actuator=actuator)
+    result = evolve(objective, bounds, workers, scheduler, seed, max_iterations)
+    point = dict(zip(keys, map(float, result.x)))
+    return Optimum(point, margins(study, point, actuator), int(result.nfev), time.perf_counter() - start)
+
+
+def evolve(objective, bounds: list[tuple[float, float]], workers: int | None, scheduler: str | None, seed: int,
+           max_iterations: int, population: int = 15):
+    """scipy's differential evolution of `objective` (a picklable function of a point) within
+    `bounds`, each generation's points evaluated on Dask when workers/scheduler say so (in this
+    process for workers = 0 and no scheduler); the same seed gives the same answer. Returns
+    scipy's OptimizeResult."""
+    from contextlib import nullcontext
+    from scipy.optimize import differential_evolution
+    from ...engine.sweep.dask_run import dask_client
     with (dask_client(workers, scheduler) if workers != 0 or scheduler else nullcontext()) as client:
 
         def mapper(function, points):  # what differential_evolution evaluates its population through
             return client.gather(client.map(function, list(points), pure=False)) if client else list(map(function, points))
-        result = differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, tol=1e-6, polish=False,
-                                        updating="deferred", workers=mapper)
-    point = dict(zip(keys, map(float, result.x)))
-    return Optimum(point, margins(study, point, actuator), int(result.nfev), time.perf_counter() - start)
+        return differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, popsize=population,
+                                      tol=1e-6, polish=False, updating="deferred", workers=mapper)
 
 
 def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None = None) -> Optimum | None:

@@ -160,18 +160,22 @@ def _motion(doc: Document) -> tuple[Motion | None, Recorded | None]:
     """[motion]: the basic motions (half ranges and limits), or one motion as a time series."""
     motion = doc.table("motion")
     if set(RECORDED) & set(motion):
-        sources = [k for k in ("scene", "table") if k in motion]
+        sources = [k for k in ("scene", "table", "vehicle") if k in motion]
         if len(sources) != 1:
-            raise doc.fail(f"motion.{'samples' if not sources else sources[1]}", "needs one of 'scene' (a scene's "
-                           "reference motion) or 'table' (a recorded motion), not " + ("neither" if not sources else
-                                                                                      "both"))
+            raise doc.fail(f"motion.{(sorted(set(motion) & set(RECORDED)) or ['samples'])[0] if not sources else sources[1]}",
+                           "needs one of 'scene' (a scene's reference motion), 'table' (a recorded motion) or "
+                           "'vehicle' (a vehicle's motion through the cueing), not " + ("none" if not sources else
+                                                                                      "several"))
         others = sorted(set(motion) - set(RECORDED))
         if others:
             raise doc.fail(f"motion.{others[0]}", f"belongs to the basic motions; the motion here is the "
                            f"{sources[0]}'s")
+        if "cueing" in motion and sources[0] != "vehicle":
+            raise doc.fail("motion.cueing", "tunes the motion cueing of a vehicle's motion (motion.vehicle)")
         source = motion[sources[0]]
+        cueing = _cueing(doc) if sources[0] == "vehicle" else {}
         try:
-            return None, recorded_motion(doc.path, sources[0], source, int(doc.value("motion", "samples")))
+            return None, recorded_motion(doc.path, sources[0], source, int(doc.value("motion", "samples")), cueing)
         except StudyError as error:
             raise doc.fail(f"motion.{sources[0]}", str(error), source) from None
     ranges = {d: float(doc.value("motion", d)) for d in DOFS if d not in ROTATIONS}
@@ -287,13 +291,27 @@ def _confirm(doc: Document, axes: dict[str, np.ndarray], actuators: list[str]) -
                        doc.value("confirm", "drive"))
 
 
-def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> Recorded:
+def _cueing(doc: Document) -> dict[str, Any]:
+    """[motion] cueing: the cueing FMU's parameter values, checked against its modelDescription."""
+    from ...engine.artifacts import fmu_path
+    from ...engine.checks import ParameterError, check_values
+    given = doc.value("motion", "cueing", {})
+    try:
+        check_values("motion.cueing", fmu_path("cueing"), given)
+    except ParameterError as error:
+        raise doc.fail(f'motion.cueing."{error.variable}"', f"{error.reason} (cueing)", error.value) from None
+    return dict(given)
+
+
+def recorded_motion(study_path: Path, kind: str, source: Any, samples: int, cueing: dict | None = None) -> Recorded:
     """[motion] scene = "<name or path>": the scene's reference motion less its platform's neutral
     pose; [motion] table = "<csv>": a recorded motion (columns time and any of x, y, z, roll, pitch,
     yaw: displacements from the neutral pose, m and rad), played by the trajectory FMU (cubic
-    interpolation), the one reader of tables. Either sampled `samples` times evenly over its
-    duration (at least 4); the rates and accelerations are the samples' second-order differences.
-    Raises StudyError with the reason (the caller adds the file and line)."""
+    interpolation), the one reader of tables; [motion] vehicle = "<csv>": a vehicle's motion at
+    the head through the cueing FMU with `cueing` values (played at 1 ms, the displacements its
+    pose reference less its neutral pose). Each sampled `samples` times evenly over its duration (at
+    least 4); the rates and accelerations are the samples' second-order differences. Raises
+    StudyError with the reason (the caller adds the file and line)."""
     from ..core import neutral_pose
     from ..run.compile import scene_values
     from ..scene import SceneError, Signal, load_scene, shipped
@@ -313,23 +331,39 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int) -> R
         if not given.is_file():
             raise StudyError("no such file (relative to the study's folder)")
         lines = [line for line in given.read_text(errors="replace").splitlines() if line.strip()]
+        columns = "the vehicle's motion" if kind == "vehicle" else f"any of {', '.join(POSE)}"
         try:
             duration = float(lines[-1].split(",")[0])
         except (IndexError, ValueError):
-            raise StudyError(f"its last line gives no time (a CSV with columns time and any of "
-                             f"{', '.join(POSE)})") from None
+            raise StudyError(f"its last line gives no time (a CSV with columns time and {columns})") from None
         values = trajectory_parameters({axis: Signal(offset=0.0) for axis in POSE}, table=given, interpolation="cubic")
         neutral, name = np.zeros(6), given.stem
     if not duration > 0:
         raise StudyError(f"lasts {duration:g} s; a motion needs a positive duration")
     step = duration / (samples - 1)
     try:
-        times, poses, _ = play(values, duration, step)
-    except Exception as error:  # the trajectory FMU's refusal (a bad table: its file and line)
+        if kind == "vehicle":
+            times, poses = _through_cueing(given, cueing or {}, duration, step)
+        else:
+            times, poses, _ = play(values, duration, step)
+    except StudyError:
+        raise
+    except Exception as error:  # the FMU's refusal (a bad table: its file and line)
         raise StudyError(str(error)) from None
     displacement = poses - neutral
     return Recorded(name, times, displacement, np.gradient(displacement, step, axis=0, edge_order=2),
                     second_difference(displacement, step))
+
+
+def _through_cueing(vehicle: Path, cueing: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """A vehicle's motion through the cueing FMU (its neutral pose at zero: the pose reference is
+    the displacement), played at 1 ms (or `step`, if finer) and taken at every `step`."""
+    from ..scene.signals import play_cueing
+    values = {**cueing, "vehicle.file": vehicle.resolve(), **{f"neutral.{a}": 0.0 for a in POSE}}
+    fine = min(step, 1e-3)
+    times, poses, _, _ = play_cueing(values, duration, fine)
+    at = np.linspace(0.0, duration, int(round(duration / step)) + 1)
+    return at, np.column_stack([np.interp(at, times, poses[:, k]) for k in range(6)])
 
 
 def second_difference(x: np.ndarray, step: float) -> np.ndarray:

@@ -21,7 +21,7 @@ DRIVEN = {"force": "ideal force sources (linear-motor FMUs, electrical model off
 POSITIVE = Number(low=0, above=True)
 NON_NEGATIVE = Number(low=0)
 FRACTION = Number(low=0, high=1, below=True)
-RECORDED = ("scene", "table", "samples")  # [motion] keys of a motion given as a time series
+RECORDED = ("scene", "table", "vehicle", "cueing", "samples")  # [motion] keys of a motion given as a time series
 
 SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY`): which platform of a family "
                 "carries a motion, after Halder et al. Section V (docs/guide/design.md). Paths are relative to the "
@@ -71,6 +71,10 @@ SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY
             "or a shipped scene's name)"),
         Key("table", Text(path=True), "a CSV of displacements from the neutral pose: a time column and any of x, y, "
             "z, roll, pitch, yaw [m, rad]"),
+        Key("vehicle", Text(path=True), "a CSV of a vehicle's motion at the occupant's head (as a scene's [motion] "
+            "vehicle): the motion is the platform's through the motion cueing (docs/guide/cueing.md)"),
+        Key("cueing", Free("cueing FMU variable = value"), "with vehicle: the cueing's parameters (as a scene's "
+            "[cueing.parameters])"),
         Key("samples", Number(low=4, high=100001, whole=True), "samples of the time series over its duration", 1001)),
           required=True),
     Table("actuator", "An actuator the designs are judged with; a rotary one may be given by its motor (torques and "

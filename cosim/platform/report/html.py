@@ -121,6 +121,7 @@ border:1px solid #c00;padding:0.5em 1em}} .plot{{margin-top:1em}} h3{{margin:0.3
 <h2>Scene</h2>{_table(_scene_rows(scene))}
 <h2>Run</h2>{_table(_summary_rows(report))}
 {_pacing(report.pacing) if report.pacing is not None else ""}
+{_perception(report.perceived) if getattr(report, "perceived", None) is not None else ""}
 <h2>Power bonds: largest energy residual in one step</h2>{_table(bonds)}
 <h2>Warnings and errors from the FMUs ({len(warnings)})</h2>
 <table class="warnings"><tr><th>step start [s]</th><th>instance</th><th>message</th></tr>{warning_rows}</table>
@@ -174,6 +175,35 @@ def _pacing(pacing) -> str:
         histogram = ""
     return (f'<h2>Real time: paced at {pacing.factor:g} x the wall clock</h2>' if pacing.factor is not None
             else "<h2>Real time</h2>") + _table(rows) + histogram
+
+
+def _perception(perceived) -> str:
+    """A cueing run judged by perception (cosim.platform.perception): per channel the rms error,
+    correlation and false cues, and the vehicle's motion against what the occupant perceives of it
+    and of the platform's."""
+    import plotly.graph_objects as go
+    import plotly.io as pio
+    from ..perception import CHANNELS, UNITS, perceived_error, quality
+    channels = quality(perceived)
+    rows = [(f"{q.channel} [{q.unit}]: rms error / the vehicle's / correlation / false cues [s]",
+             f"{q.rms_error:.3g} / {q.rms_vehicle:.3g} / "
+             f"{'constant' if np.isnan(q.correlation) else f'{q.correlation:.2f}'} / {q.false_cue_time:.2f}",
+             repr(q.rms_error)) for q in channels]
+    total = perceived_error(channels)
+    rows.append(("perceived error (rms per channel in thresholds, summed)", f"{total:.3f}", repr(total)))
+    t, plots = perceived.times, []
+    for c, (channel, unit) in enumerate(zip(CHANNELS, UNITS)):
+        figure = go.Figure([_trace(t, perceived.vehicle[:, c], "vehicle", color="#999"),
+                            _trace(t, perceived.vehicle_perceived[:, c], "perceived in the vehicle", dash="dash",
+                                   color="black"),
+                            _trace(t, perceived.platform_perceived[:, c], "perceived on the platform")])
+        figure.update_layout(height=300, margin=dict(l=60, r=20, t=30, b=40), xaxis_title="time [s]",
+                             yaxis_title=f"{channel}{' - g' if c == 2 else ''} [{unit}]", template="plotly_white")
+        plots.append(f'<section class="plot"><h3>perceived {html.escape(channel)}</h3>'
+                     f'{pio.to_html(figure, full_html=False, include_plotlyjs=False, config=dict(responsive=True))}'
+                     f'</section>')
+    return ('<h2>Motion cueing: what the occupant feels (otoliths and semicircular canals, the vehicle against the '
+            'platform at the head)</h2>' + _table(rows) + "\n".join(plots))
 
 
 def _scene_rows(scene) -> list[tuple[str, str, str]]:

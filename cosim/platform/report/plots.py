@@ -130,3 +130,26 @@ def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: 
         axes[2].grid(True, alpha=0.3)
     fig.suptitle(title)
     save_figure(fig, path)
+
+
+def plot_perception(perceived, path: Path, title: str) -> None:
+    """Motion cueing judged by perception (cosim.platform.perception.Perceived): per channel the
+    vehicle's motion, what the occupant would perceive of it, and what the occupant perceives of
+    the platform's motion at the head."""
+    from ..perception import CHANNELS, UNITS
+    fig, axes = plt.subplots(3, 2, figsize=(12, 10), sharex=True)
+    t = perceived.times
+    for c, (channel, unit) in enumerate(zip(CHANNELS, UNITS)):
+        ax = axes[c % 3, c // 3]
+        ax.plot(t, perceived.vehicle[:, c], color="0.6", lw=1, label="vehicle")
+        ax.plot(t, perceived.vehicle_perceived[:, c], "k--", lw=1.2, label="perceived in the vehicle")
+        ax.plot(t, perceived.platform_perceived[:, c], color="tab:blue", lw=1.2, label="perceived on the platform")
+        ax.set_ylabel(f"{channel}{' - g' if channel.endswith('force.z') else ''} [{unit}]")
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    axes[0, 0].set_title("specific force (otoliths)")
+    axes[0, 1].set_title("angular velocity (semicircular canals)")
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    fig.suptitle(title)
+    save_figure(fig, path)

@@ -16,6 +16,8 @@ import numpy as np
 
 from ...engine.outcome import Outcome, Report
 from ...engine.run import run
+from ..core import mechanics_value
+from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines, vehicle_motion
 from ..ports import DRIVES, POSE, per_leg
 from ..report.plots import units
 from ..scene import Scene
@@ -38,6 +40,7 @@ class RunReport(Report):
     # against the run's converged twin (run_scene(twin=True)): per window (start-up, each load pulse
     # with the 0.2 s after it, steady tracking) the pose's and the efforts' largest difference
     windows: list = field(default_factory=list)  # (window, pose error, effort error, effort error / own change)
+    perceived: Perceived | None = None  # a cueing scene's: vehicle and platform as the occupant feels them
 
     @property
     def scene(self) -> str:
@@ -105,15 +108,37 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
     report.name = scene.name
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
+        if len(result) > 3:
+            report.perceived = perceived_motion(scene, result)
+            report.remarks += quality_lines(quality(report.perceived))
     return report
+
+
+def perceived_motion(scene: Scene, result: np.ndarray) -> Perceived:
+    """A cueing scene's vehicle and platform motion at the occupant's head ([cueing] head) and
+    what the occupant perceives of each (cosim.platform.perception)."""
+    mechanics_values, _ = scene_values(scene)
+    gravity = np.array([float(mechanics_value(mechanics_values, f"environment.gravity_{a}")) for a in "xyz"])
+    times = result["time"]
+    keep = np.r_[True, np.diff(times) > 0]
+    poses = np.column_stack([result[f"pose.{a}"] for a in POSE])[keep]
+    twist = np.column_stack([result[n] for n in TWIST])[keep]
+    taken = np.column_stack([result[f"vehicle.{c}"] for c in CHANNELS])[keep]
+    vehicle = vehicle_motion(taken[:, :3], taken[:, 3:], cueing_value(scene, "gravity"))
+    return perceive(times[keep], vehicle, platform_motion(times[keep], poses, twist, np.array(scene.head), gravity))
+
+
+def cueing_value(scene: Scene, name: str) -> float:
+    """A cueing scene's value of a cueing FMU parameter: its [cueing.parameters] or the FMU's start."""
+    from ...engine.artifacts import fmu_path
+    from ...engine.checks import variables
+    return float(scene.cueing_parameters.get(name, variables(fmu_path("cueing"))[name].start))
 
 
 def tilt_line(scene: Scene, result: np.ndarray) -> str:
     """What the tilt coordination of a scene's motion cueing did: its largest roll and pitch and
     its peak rate against its limit (below which the semicircular canals do not notice it)."""
-    from ...engine.artifacts import fmu_path
-    from ...engine.checks import variables
-    limit = float(scene.cueing_parameters.get("tilt.rate_limit", variables(fmu_path("cueing"))["tilt.rate_limit"].start))
+    limit = cueing_value(scene, "tilt.rate_limit")
     dt = np.diff(result["time"])
     rates = [np.abs(np.diff(result[f"tilt.{a}"]) / dt).max() for a in ("roll", "pitch")]
     largest = [np.abs(result[f"tilt.{a}"]).max() for a in ("roll", "pitch")]
@@ -125,13 +150,16 @@ def write_figures(scene: Scene, result: np.ndarray, report: RunReport, outcome: 
     """The tracking and drive plots (like the paper's figures) and the interactive report, which
     this returns."""
     from ..report.html import write_report
-    from ..report.plots import plot_drives, plot_tracking
+    from ..report.plots import plot_drives, plot_perception, plot_tracking
     effort, speed = DRIVES[scene.drive].outputs[:2]
     if scene.interface_jacobian:  # the legs feel the drives' efforts corrected by their slopes: plot what they feel
         effort = f"{effort}_applied"
     tracking, drives = FIGURES.get(scene.parameter_set, ("", ""))
     impacts = sorted({(p.start, p.end) for p in scene.pulses})
     plot_tracking(result, folder / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
+    if report.perceived is not None:
+        plot_perception(report.perceived, folder / f"{scene.path.stem}_perception.png",
+                        f"{scene.name}: vehicle and platform as the occupant perceives them")
     if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
         plot_drives(result, folder / f"{scene.path.stem}_drives.png", scene.name, effort, speed, units(scene.drive),
                     drives, impacts)

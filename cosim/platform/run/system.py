@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 from ...engine import Bond, Component, Connection, Experiment, SystemStructure, fmu_path
+from ..perception import CHANNELS, TWIST
 from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH, drive_names
 
 
@@ -83,7 +84,9 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
     pose.<dof> and the chosen mechanics outputs (mechanics), <output>[i] for each drive output;
     with `applied` (the interface-Jacobian coupling, where the legs feel the drives' efforts
     corrected by their slopes) the efforts the mechanics applied, <effort>_applied[i]; with
-    `cueing` the pose reference from the cueing FMU and its tilt, tilt.roll and tilt.pitch."""
+    `cueing` the pose reference from the cueing FMU, its tilt (tilt.roll, tilt.pitch), the vehicle's
+    motion it took (vehicle.<channel>) and the platform's twist: what the occupant's perception is
+    judged by (cosim.platform.perception)."""
     effort = DRIVES[drive].effort[0]
     record = [*[(pose_source(cueing), f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
               *[("mechanics", n) for n in mechanics_outputs],
@@ -92,6 +95,9 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
     names = [*[f"pose_ref.{a}" for a in POSE], *[f"pose.{a}" for a in POSE], *mechanics_outputs,
              *[f"{n}[{i}]" for n in drive_outputs for i in LEGS], *[f"{effort}_applied[{i}]" for i in LEGS if applied]]
     if cueing:
-        record += [("cueing", "tilt.roll"), ("cueing", "tilt.pitch")]
-        names += ["tilt.roll", "tilt.pitch"]
+        taken = [f"vehicle.{c}" for c in CHANNELS]
+        twist = [n for n in TWIST if n not in mechanics_outputs]
+        record += [("cueing", "tilt.roll"), ("cueing", "tilt.pitch"), *[("cueing", n) for n in taken],
+                   *[("mechanics", n) for n in twist]]
+        names += ["tilt.roll", "tilt.pitch", *taken, *twist]
     return record, names

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ...engine.artifacts import fmu_path
-from ...engine.checks import ParameterError, capability_problem, check_values
+from ...engine.checks import ParameterError, capability_problem, check_values, variables
 from ...engine.schema import Document, read
 from ...engine.settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
 from ..ports import DRIVES, POSE, platform_algorithm
@@ -74,6 +74,9 @@ def derive(scene: Scene) -> dict[str, Any]:
     out["trajectory"], out["neutral"] = _signals(doc)
     out["table"], out["interpolation"] = _table(doc), doc.value("trajectory", "interpolation")
     out["vehicle"], out["cueing_parameters"] = _vehicle(doc), _parameters(doc, "cueing", "cueing")
+    out["head"] = tuple(float(c) for c in doc.value("cueing", "head"))
+    out["cueing_ranges"] = _cueing_ranges(doc)
+    out["cueing_search"] = tuple(int(doc.value("cueing.tune", k)) for k in ("iterations", "population", "seed"))
     out["pulses"] = _pulses(doc)
     out["algorithm"], out["control"] = _settings(doc, out["drive"], out["duration"], out["pulses"])
     out["interface_jacobian"] = doc.value("coupling", "interface_jacobian")
@@ -224,6 +227,35 @@ def _vehicle(doc: Document) -> Path | None:
         raise doc.fail("motion.vehicle", f"gives the pose reference through motion cueing, and [{posed[0]}] gives one "
                        "too: keep one", given)
     return (doc.path.parent / given).resolve()
+
+
+def _cueing_ranges(doc: Document) -> dict[str, tuple[float, float]] | None:
+    """[cueing.tune] ranges: Real parameters of the cueing FMU, each [low, high] with both ends
+    values the FMU takes (checked against its modelDescription) and low < high."""
+    given = doc.value("cueing.tune", "ranges")
+    if given is None:
+        return None
+    fmu = variables(fmu_path("cueing"))
+    out = {}
+    for name, span in given.items():
+        key = f'cueing.tune.ranges."{name}"'
+        variable = fmu.get(name)
+        if variable is None or variable.causality != "parameter" or variable.type != "Real":
+            raise doc.fail(key, "is not a Real parameter of the cueing FMU", name)
+        if not (isinstance(span, list) and len(span) == 2 and all(isinstance(v, (int, float)) and
+                                                                  not isinstance(v, bool) for v in span)):
+            raise doc.fail(key, "must be [low, high]", span)
+        try:
+            check_values("cueing", fmu_path("cueing"), {name: float(span[0])})
+            check_values("cueing", fmu_path("cueing"), {name: float(span[1])})
+        except ParameterError as error:
+            raise doc.fail(key, f"{error.reason} at an end", span) from None
+        if not span[0] < span[1]:
+            raise doc.fail(key, "must run from a value to a larger one", span)
+        out[name] = (float(span[0]), float(span[1]))
+    if not out:
+        raise doc.fail("cueing.tune.ranges", "names no parameter", given)
+    return out
 
 
 def _pulses(doc: Document) -> tuple[Pulse, ...]:

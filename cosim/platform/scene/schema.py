@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from ...engine.errors import InputError
 from ...engine.schema import Key, Schema, Table
-from ...engine.values import REQUIRED, Choice, Either, Flag, Free, Items, ListOf, Number, Text
+from ...engine.values import REQUIRED, Choice, Either, Flag, Free, Items, ListOf, Number, Row, Text
 from ...engine.settings import COUPLING_KEYS
 from ..ports import DRIVES, LEGS, POSE
 
@@ -109,7 +109,16 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
             "specific_force.x/y/z [m/s^2] and angular_rate.x/y/z [rad/s] (vehicle frame: x forward, y left, z up)"),)),
     Table("cueing", "The motion cueing of a [motion] vehicle.", (
         Key("parameters", Free("cueing FMU variable = value"), "values of the cueing FMU's parameters (gains, limits, "
-            "filter frequencies and dampings, the tilt's rate limit), checked against its modelDescription"),)),
+            "filter frequencies and dampings, the tilt's rate limit), checked against its modelDescription"),
+        Key("head", Row((Number("m"),) * 3), "the occupant's head in the platform's frame, from its origin: where "
+            "the platform's motion is felt and judged against the vehicle's (docs/guide/cueing.md)", [0.0, 0.0, 0.0]))),
+    Table("cueing.tune", "What `cosim tune SCENE` searches (docs/guide/cueing.md): the cueing parameters that "
+          "feel most like the vehicle within the platform's limits, by differential evolution on Dask.", (
+        Key("ranges", Free("cueing FMU parameter = [low, high]"), "the parameters searched and their ranges (default: "
+            "the gain and frequency of the x and y translation, the tilt and the yaw rotation)"),
+        Key("iterations", Number("", 1, whole=True), "generations of the search", 15),
+        Key("population", Number("", 1, whole=True), "points per parameter in a generation", 6),
+        Key("seed", Number("", 0, whole=True), "the search's seed: the same seed, the same answer", 1))),
     Table("live", "A live input's limits (`cosim run SCENE --listen udp://HOST:PORT`, docs/guide/realtime.md): the "
           "reference moves towards each pose received, braking in time, within these; refused packets and a silent "
           "sender leave it where it is going.", (

@@ -92,3 +92,24 @@ def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndar
     result = outcome.result
     return result["time"], np.column_stack([result[f"trajectory.{n}"] for n in names[:6]]), \
         np.column_stack([result[f"trajectory.{n}"] for n in names[6:]])
+
+
+CUEING_OUTPUTS = (*(f"pose_ref.{a}" for a in POSE), "tilt.roll", "tilt.pitch",
+                  *(f"vehicle.{q}.{a}" for q in ("specific_force", "angular_rate") for a in "xyz"))
+
+
+def play_cueing(cueing_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                             np.ndarray]:
+    """The cueing FMU with these start values run alone for `duration` at `step` (a vehicle's
+    motion through the classical washout, the platform's response left out): times, the pose
+    reference (n x 6), the tilt (n x 2: roll, pitch) and the vehicle's motion it took (n x 6).
+    Raises what the FMU refuses (a bad vehicle table: its file and line) as the engine's error."""
+    alone = SystemStructure("cueing", [Component("cueing", fmu_path("cueing"), cueing_values)], [],
+                            experiment=Experiment(0.0, duration, step))
+    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("cueing", n) for n in CUEING_OUTPUTS])
+    if outcome.failure is not None:
+        raise outcome.failure
+    result = outcome.result
+    columns = [np.column_stack([result[f"cueing.{n}"] for n in names])
+               for names in (CUEING_OUTPUTS[:6], CUEING_OUTPUTS[6:8], CUEING_OUTPUTS[8:])]
+    return (result["time"], *columns)

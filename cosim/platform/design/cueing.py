@@ -1,0 +1,248 @@
+"""Tuning a scene's motion cueing: the cueing parameters (within ranges the scene gives) that make
+the platform's motion feel most like the vehicle's (cosim.platform.perception: the rms errors of
+the perceived motion, each in thresholds of its channel, summed) while every leg stays in its
+stroke, every joint within its angle and every drive within its current.
+
+Two judges, as the design studies have them: the kinematic screening plays the cueing FMU alone
+and takes the platform on its reference (leg lengths and joint angles from the dynamics core, the
+currents from its inverse dynamics along the reference); scipy's differential evolution searches
+with it, on Dask. The co-simulation then confirms the best and the scene's own parameters: the
+whole scene run, the platform's simulated motion felt, its legs, joints and drive currents
+measured.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from ..core import Core, mechanics_value
+from ..perception import ChannelQuality, perceive, perceived_error, platform_motion, quality, vehicle_motion
+from ..ports import DRIVES, LEGS, POSE
+from ..run.compile import scene_cueing, scene_values
+from ..run.runner import cueing_value, run_scene
+from ..scene import Scene
+from ..scene.signals import play_cueing
+from .optimise import evolve
+
+# searched where the scene's [cueing.tune] names no ranges: the horizontal channels and the tilt,
+# the ones a ground vehicle's motion exercises most
+DEFAULT_RANGES = {"translation.x.gain": (0.1, 1.0), "translation.x.frequency": (0.5, 5.0),
+                  "translation.y.gain": (0.1, 1.0), "translation.y.frequency": (0.5, 5.0),
+                  "tilt.gain": (0.1, 1.0), "tilt.frequency": (0.5, 5.0),
+                  "rotation.yaw.gain": (0.1, 1.0), "rotation.yaw.frequency": (0.1, 2.0)}
+# the drive's effort per ampere, by drive kind: the PMSM's torque constant, the linear motor's force constant
+PER_AMPERE = {"pmsm": "motor.torque_constant", "linear": "motor.force_constant"}
+CURRENT = {"pmsm": "current.q", "linear": "current"}
+# [s] the screening's drives take a jump of the reference's rate (where the tilt's rate limit takes
+# hold) over this long, about their speed loops' response; the co-simulation has the drives' own
+SPREAD = 0.004
+PENALTY = 100.0  # the objective's price of a limit's violation, per fraction of that limit
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What the platform must stay within: the legs' stroke [m], the joints' angle [rad], the
+    drives' current [A] and the effort a drive gives per ampere (N m/A, N/A)."""
+    leg_length: tuple[float, float]
+    joint_angle: float
+    current: float
+    per_ampere: float
+
+    def margins(self, lengths: np.ndarray, angles: np.ndarray, currents: np.ndarray) -> dict[str, float]:
+        """Each limit's margin as a fraction of it (negative: violated): the stroke at both ends
+        (of the stroke), the joint angle and the current (of their limits)."""
+        low, high = self.leg_length
+        stroke = high - low
+        return {"stroke (long end)": float((high - np.nanmax(lengths)) / stroke),
+                "stroke (short end)": float((np.nanmin(lengths) - low) / stroke),
+                "joint angle": float(1.0 - np.nanmax(angles) / self.joint_angle),
+                "current": float(1.0 - np.nanmax(np.abs(currents)) / self.current)}
+
+
+def scene_limits(scene: Scene) -> Limits:
+    """A scene's limits: its mechanics' stroke and joint angle, its drives' current limit (ours)."""
+    mechanics, drives = scene_values(scene)
+    from ...engine.artifacts import fmu_path
+    from ...engine.checks import variables
+    drive = variables(fmu_path(DRIVES[scene.drive].fmu))
+
+    def of_drive(name: str) -> float:
+        return float(drives.get(name, drive[name].start))
+    return Limits((float(mechanics_value(mechanics, "limit.leg_length_min")),
+                   float(mechanics_value(mechanics, "limit.leg_length_max"))),
+                  float(mechanics_value(mechanics, "limit.joint_angle")), of_drive("limit.current"),
+                  of_drive(PER_AMPERE[scene.drive]))
+
+
+@dataclass
+class Judged:
+    """A cueing's parameters judged: the perceived error, per channel, and the limits' margins."""
+    parameters: dict[str, float]
+    perceived_error: float
+    channels: list[ChannelQuality]
+    margins: dict[str, float]
+    how: str  # "screened" (the platform on its reference) or "co-simulated"
+
+    @property
+    def within(self) -> bool:
+        return all(m >= 0.0 for m in self.margins.values())
+
+    def objective(self) -> float:
+        """What the search minimises: the perceived error, plus PENALTY per fraction a limit is passed by."""
+        return self.perceived_error + PENALTY * sum(max(0.0, -m) for m in self.margins.values())
+
+    def line(self) -> str:
+        worst = min(self.margins, key=self.margins.get)
+        return (f"{self.how}: perceived error {self.perceived_error:.3f}, "
+                + ", ".join(f"{k} margin {v:.1%}" for k, v in self.margins.items())
+                + (" (within every limit)" if self.within else f" (past the {worst} limit)"))
+
+
+def _gravity(mechanics: dict) -> np.ndarray:
+    return np.array([float(mechanics_value(mechanics, f"environment.gravity_{a}")) for a in "xyz"])
+
+
+def screen(scene: Scene, parameters: dict[str, float]) -> Judged:
+    """The kinematic screening of cueing `parameters` (over the scene's own): the cueing FMU alone
+    at the scene's step, the platform on its reference (its rates and accelerations by
+    second-order differences, the accelerations averaged over SPREAD), felt at the scene's head
+    point; leg lengths and joint angles from the dynamics core, the drives' currents from its
+    inverse dynamics along the reference (no external load)."""
+    mechanics, _ = scene_values(scene)
+    values = {**scene_cueing(scene, mechanics), **parameters}
+    times, poses, _, taken = play_cueing(values, scene.duration, scene.step)
+    from scipy.ndimage import uniform_filter1d
+    rates = np.gradient(poses, times, axis=0, edge_order=2)
+    accelerations = np.gradient(rates, times, axis=0, edge_order=2)
+    spread = max(1, int(round(SPREAD / scene.step)))  # a jump of the rate (the tilt's limiter) as the drives take it
+    accelerations = uniform_filter1d(accelerations, spread, axis=0, mode="nearest")
+    twist = np.column_stack([rates[:, :3], euler_angular_velocity(poses, rates)])
+    gravity = _gravity(mechanics)
+    felt = perceive(times, vehicle_motion(taken[:, :3], taken[:, 3:], float(values.get("gravity", cueing_value(
+        scene, "gravity")))), platform_motion(times, poses, twist, np.array(scene.head), gravity))
+    channels = quality(felt)
+    core = _core(scene)
+    kinematics = core.pose_kinematics(poses)
+    efforts = core.inverse_dynamics_many(poses, rates, accelerations)
+    limits = scene_limits(scene)
+    margins = limits.margins(kinematics["length"], np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]),
+                             efforts / limits.per_ampere)
+    return Judged(dict(parameters), perceived_error(channels), channels, margins, "screened")
+
+
+def euler_angular_velocity(poses: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """The base-frame angular velocity (n x 3) of poses turning at their rates (R = Rz Ry Rx):
+    w = roll' Rz Ry e_x + pitch' Rz e_y + yaw' e_z."""
+    pitch, yaw = poses[:, 4], poses[:, 5]
+    roll_rate, pitch_rate, yaw_rate = rates[:, 3], rates[:, 4], rates[:, 5]
+    return np.column_stack([roll_rate * np.cos(yaw) * np.cos(pitch) - pitch_rate * np.sin(yaw),
+                            roll_rate * np.sin(yaw) * np.cos(pitch) + pitch_rate * np.cos(yaw),
+                            -roll_rate * np.sin(pitch) + yaw_rate])
+
+
+_CORES: dict[str, Core] = {}
+
+
+def _core(scene: Scene) -> Core:
+    """The scene's platform in the dynamics core (one per platform and process: the search asks often)."""
+    values = scene_values(scene)[0]
+    key = repr(sorted((k, str(v)) for k, v in values.items()))
+    if key not in _CORES:
+        _CORES[key] = Core().use_start_values(values)
+    return _CORES[key]
+
+
+def confirm(scene: Scene, parameters: dict[str, float]) -> Judged:
+    """Cueing `parameters` (over the scene's own) confirmed by co-simulating the scene: the
+    platform's simulated motion felt at the head; the legs' lengths and joint angles at its
+    simulated poses (the dynamics core), the drives' currents as they ran."""
+    tuned = scene.changed({"cueing.parameters": {**scene.cueing_parameters, **parameters}})
+    result, report = run_scene(tuned, plots=False, progress=False, advice=False)
+    core = _core(scene)
+    keep = np.r_[True, np.diff(result["time"]) > 0]
+    kinematics = core.pose_kinematics(np.column_stack([result[f"pose.{a}"] for a in POSE])[keep])
+    current = CURRENT[scene.drive]
+    currents = np.column_stack([result[f"{current}[{i}]"] for i in LEGS])
+    margins = scene_limits(scene).margins(kinematics["length"], np.maximum(kinematics["lower_angle"],
+                                                                          kinematics["upper_angle"]), currents)
+    channels = quality(report.perceived)
+    return Judged(dict(parameters), perceived_error(channels), channels, margins, "co-simulated")
+
+
+def _objective(x: np.ndarray, scene: Scene, keys: tuple[str, ...]) -> float:
+    try:
+        return screen(scene, dict(zip(keys, map(float, x)))).objective()
+    except Exception:  # the FMU refused these values (none in the ranges should): the worst there is
+        return math.inf
+
+
+@dataclass
+class Tuning:
+    """A tuned cueing: the scene's own and the best parameters, each screened and co-simulated."""
+    ranges: dict[str, tuple[float, float]]
+    best: dict[str, float]
+    evaluations: int
+    seconds: float
+    screened: dict[str, Judged] = field(default_factory=dict)   # "scene", "tuned"
+    confirmed: dict[str, Judged] = field(default_factory=dict)  # "scene", "tuned"
+
+    @property
+    def better(self) -> bool:
+        """The tuned parameters feel better than the scene's own in co-simulation, within every limit."""
+        tuned, own = self.confirmed["tuned"], self.confirmed["scene"]
+        return tuned.within and tuned.perceived_error < own.perceived_error
+
+    def lines(self) -> list[str]:
+        out = [f"tuned {len(self.ranges)} cueing parameters by differential evolution: {self.evaluations} screenings "
+               f"in {self.seconds:.0f} s"]
+        for name in ("scene", "tuned"):
+            out.append(f"the {'scene' if name == 'scene' else 'tuned'}'s cueing:")
+            out += [f"  {judged.line()}" for judged in (self.screened[name], self.confirmed[name])]
+        out.append("tuned parameters: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.best.items()))
+        out.append("verdict: the tuned cueing " + ("feels closer to the vehicle than the scene's, within every limit, "
+                                                    "confirmed by co-simulation" if self.better else
+                                                    "is not confirmed better within every limit by co-simulation"))
+        return out
+
+
+def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, workers: int | None = 0,
+         scheduler: str | None = None, seed: int = 1, iterations: int = 15, population: int = 6) -> Tuning:
+    """The cueing parameters within `ranges` (default: the scene's [cueing.tune] ranges, or
+    DEFAULT_RANGES) whose screened objective is least (Judged.objective), searched on Dask
+    (workers, scheduler as for a sweep), then it and the scene's own confirmed by co-simulation."""
+    ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES)
+    keys = tuple(ranges)
+    start = time.perf_counter()
+    result = evolve(partial(_objective, scene=scene, keys=keys), [tuple(map(float, ranges[k])) for k in keys],
+                    workers, scheduler, seed, iterations, population)
+    best = dict(zip(keys, map(float, result.x)))
+    tuning = Tuning(ranges, best, int(result.nfev), time.perf_counter() - start)
+    for name, parameters in (("scene", {}), ("tuned", best)):
+        tuning.screened[name] = screen(scene, parameters)
+        tuning.confirmed[name] = confirm(scene, parameters)
+    return tuning
+
+
+def tuned_scene_text(scene: Scene, best: dict[str, float]) -> str:
+    """The scene's file (its comments kept) with the tuned values in its [cueing.parameters] and its
+    vehicle file's path absolute, so that it runs from anywhere."""
+    import tomlkit
+    document = tomlkit.parse(scene.text)
+    cueing = document.setdefault("cueing", tomlkit.table())
+    parameters = cueing.setdefault("parameters", tomlkit.table())
+    for name, value in best.items():
+        parameters[name] = float(f"{value:.6g}")
+    document["motion"]["vehicle"] = str(scene.vehicle)
+    return tomlkit.dumps(document)
+
+
+def write_tuned(scene: Scene, tuning: Tuning, out: Path) -> Path:
+    """The tuned scene beside the scene's results: out/<stem>_tuned.toml."""
+    from ...engine.files import write_text
+    return write_text(out / f"{scene.path.stem}_tuned.toml", tuned_scene_text(scene, tuning.best), "the tuned scene")
