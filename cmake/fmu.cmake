@@ -54,6 +54,13 @@ function(add_fmu name)
   if(NOT WIN32)
     target_link_libraries(${name} PRIVATE m)
   endif()
+  if(MINGW)  # the C runtime's parts linked in: the DLL needs only Windows' own DLLs (KERNEL32, msvcrt)
+    target_compile_definitions(${name} PRIVATE __USE_MINGW_ANSI_STDIO=1)
+    target_link_options(${name} PRIVATE -static-libgcc -Wl,--no-insert-timestamp)
+  endif()
+  if(COSIM_MODELS_ONLY)  # the win64 cross build: the binary alone, packaged by the top-level build
+    return()
+  endif()
 
   # The fuzz harness (tests/fuzz/), this model linked in, with sanitizers when asked for.
   if(COSIM_FUZZ)
@@ -82,6 +89,15 @@ function(add_fmu name)
     target_link_libraries(${name}_model_description PRIVATE m)
   endif()
 
+  # The win64 binary of a shipped FMU, from the cross build (CMakeLists.txt: COSIM_WIN64).
+  set(win64_commands "")
+  set(win64_depends "")
+  if(TARGET win64 AND NOT ARG_OUTPUT_DIR)
+    set(win64_commands COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/win64"
+                       COMMAND ${CMAKE_COMMAND} -E copy "${WIN64_BINARY_DIR}/${name}.dll" "${stage}/binaries/win64/")
+    set(win64_depends win64 "${WIN64_BINARY_DIR}/${name}.dll")
+  endif()
+
   # What goes into sources/: everything the binary is compiled from, flat.
   set(shipped_sources ${model_sources} ${FMU_COMMON_SOURCES})
   set(shipped_files ${shipped_sources} ${model_headers} ${FMU_COMMON_HEADERS} "${generated_dir}/model_guid.h")
@@ -93,11 +109,12 @@ function(add_fmu name)
             "${stage}/documentation" "${output_dir}"
     COMMAND $<TARGET_FILE:${name}_model_description> "${stage}" "${model_dir}/doc.html" ${shipped_sources}
     COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage}/binaries/${FMU_PLATFORM}/"
+    ${win64_commands}
     COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage}/sources/"
     COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_file}"
     COMMAND ${CMAKE_COMMAND} -E chdir "${stage}" ${CMAKE_COMMAND} -E tar cf "${fmu_file}" --format=zip
             modelDescription.xml binaries sources documentation
-    DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
+    DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files} ${win64_depends}
     COMMENT "Packaging ${fmu_file}"
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu_file}")

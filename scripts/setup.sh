@@ -5,15 +5,19 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 # Ecos (ecospy, one of the tools the SSP tests run the exported system in) links against Intel
-# TBB: Debian's libtbb12; the TLS sweep test makes its certificates with openssl.
+# TBB: Debian's libtbb12; the TLS sweep test makes its certificates with openssl; every FMU's
+# binaries/win64/ is cross-compiled by MinGW-w64 and tested under Wine (wine64 lives in
+# /usr/lib/wine, off the PATH).
 missing=""
 ldconfig -p 2>/dev/null | grep -q "libtbb.so.12" || missing="$missing libtbb12"
 command -v openssl > /dev/null 2>&1 || missing="$missing openssl"
+command -v x86_64-w64-mingw32-gcc > /dev/null 2>&1 || missing="$missing gcc-mingw-w64-x86-64"
+{ command -v wine64 > /dev/null 2>&1 || [ -x /usr/lib/wine/wine64 ]; } || missing="$missing wine64"
 if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   # shellcheck disable=SC2086
   $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq $missing >> apt.log 2>&1 \
-    || { cat apt.log; echo "could not install$missing (needed by ecospy and the tests)" >&2; exit 1; }
+    || { cat apt.log; echo "could not install$missing (needed by ecospy, the win64 binaries and the tests)" >&2; exit 1; }
 fi
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv

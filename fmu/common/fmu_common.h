@@ -79,7 +79,9 @@ void fmu_free(const FmuInstance *fmu, void *memory);
 void fmu_set_model_data(FmuInstance *fmu, void *data, void (*release)(FmuInstance *fmu, void *data));
 
 void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, const char *format, ...)
-#if defined(__GNUC__)
+#if defined(__MINGW32__) /* the win64 build's C99 printf (__USE_MINGW_ANSI_STDIO, cmake/mingw-w64.cmake) */
+    __attribute__((format(gnu_printf, 4, 5)))
+#elif defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
