@@ -153,13 +153,15 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     return Run(values, report)
 
 
-def export_ssp(scene: str | Path | Scene, path: str | Path) -> Path:
-    """Writes a scene as an SSP 1.0 archive: its FMUs, parameter values (SSV), connections, and
-    our run settings in an annotation that other tools ignore. Returns the archive's path."""
-    from .engine.ssp import write_ssp
-    from .platform.run.compile import scene_structure
+def export_ssp(scene: str | Path | Scene, path: str | Path, *, measure: bool = True) -> Path:
+    """Writes a scene as an SSP 1.0 archive: its FMUs, parameter values (SSV), connections, our run
+    settings in an annotation that other tools ignore, and for each other tool (OMSimulator,
+    libcosim, Ecos, fmpy.ssp) the step its master holds the scene's tolerances at, measured in our
+    engine (measure=False: the scene's own step, as `cosim export --scene-step`). Returns the
+    archive's path."""
+    from .platform.run.portable import export_scene
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
-    return write_ssp(scene_structure(loaded), Path(path))
+    return export_scene(loaded, ssp=Path(path), measure=measure).files[0]
 
 
 def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None = None,

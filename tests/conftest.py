@@ -145,3 +145,20 @@ def fill(folder, leave: int) -> None:
     """Fills the disk that holds `folder` but for `leave` bytes."""
     import shutil
     (folder / "filler").write_bytes(bytes(max(0, shutil.disk_usage(folder).free - leave)))
+
+
+def fmpy_parameter_set(archive):
+    """An SSP archive's SSV values as one fmpy.ssp ParameterSet (fmpy applies no parameter bindings,
+    so a run in fmpy.ssp is given them by name, component.variable)."""
+    import zipfile
+    from fmpy.ssp.ssd import ParameterSet, read_ssv
+    parameters = ParameterSet(name="all")
+    parameters.parameters = []
+    with zipfile.ZipFile(archive) as z:
+        for name in z.namelist():
+            if name.endswith(".ssv"):
+                component = name.rsplit("/", 1)[-1][:-4]
+                for p in read_ssv(str(archive), resource=name).parameters:
+                    p.name = f"{component}.{p.name}"
+                    parameters.parameters.append(p)
+    return parameters

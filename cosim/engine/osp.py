@@ -30,13 +30,13 @@ def _element(parent, tag: str, text: str | None = None, **attributes) -> etree._
     return element
 
 
-def to_osp_xml(structure: SystemStructure, power_bonds: bool = True) -> etree._Element:
+def to_osp_xml(structure: SystemStructure, power_bonds: bool = True, step: float | None = None) -> etree._Element:
     _, control = system_settings(structure.settings, structure.experiment.step)
     ecco = control if isinstance(control, EnergyControl) else EnergyControl(structure.experiment.step, rtol=1e-4,
                                                                             atol=1e-4, h_min=1e-5)
     root = etree.Element(f"{{{OSP}}}OspSystemStructure", nsmap={None: OSP}, version="0.1")
     _element(root, "StartTime", repr(structure.experiment.start))
-    _element(root, "BaseStepSize", repr(structure.experiment.step))
+    _element(root, "BaseStepSize", repr(step or structure.experiment.step))
     _element(root, "Algorithm", "ecco" if isinstance(control, EnergyControl) else "fixedStep")
     simulators = _element(root, "Simulators")
     for component in structure.components:
@@ -71,14 +71,15 @@ def to_osp_xml(structure: SystemStructure, power_bonds: bool = True) -> etree._E
     return root
 
 
-def write_osp(structure: SystemStructure, folder: Path, power_bonds: bool = True) -> Path:
+def write_osp(structure: SystemStructure, folder: Path, power_bonds: bool = True, step: float | None = None) -> Path:
     """Writes folder/OspSystemStructure.xml and the FMUs beside it; returns the XML's path.
     power_bonds=False leaves the bonds out (a fixed-step run does not use them; libcosimpy 0.0.6
-    refuses a file with more than one bond, a bug of its configuration parser fixed upstream)."""
+    refuses a file with more than one bond, a bug of its configuration parser fixed upstream).
+    step: libcosim's base step (default the system's)."""
     folder = Path(folder)
     for fmu in dict.fromkeys(c.fmu for c in structure.components):
         with replacing(folder / fmu.name, "an FMU of the OSP configuration", fmu.stat().st_size) as temporary:
             shutil.copyfile(fmu, temporary)
     return write_bytes(folder / "OspSystemStructure.xml", etree.tostring(
-        to_osp_xml(structure, power_bonds), pretty_print=True, xml_declaration=True, encoding="UTF-8"),
+        to_osp_xml(structure, power_bonds, step), pretty_print=True, xml_declaration=True, encoding="UTF-8"),
         "the OSP configuration")

@@ -26,7 +26,7 @@ import zlib
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, Sequence
 
 from fmpy import read_model_description
 from lxml import etree
@@ -45,6 +45,9 @@ OSP_ANNOTATION, OSP = "com.opensimulationplatform", "http://opensimulationplatfo
 OMS_ANNOTATION, OMS = "org.openmodelica", "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 NS = {"ssd": SSD, "ssc": SSC, "ssv": SSV, "cosim": COSIM, "osp": OSP, "oms": OMS}
 _SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "schema"
+
+
+ToolStepped = tuple[str, float, bool]  # a tool, the step measured for it, whether it holds the tolerances there
 
 
 class SspError(InputError):
@@ -125,9 +128,12 @@ def _decimal(value: float) -> str:
     return text.rstrip("0").rstrip(".") if "." in text else text
 
 
-def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._Element, dict[str, etree._Element]]:
+def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequence[ToolStepped] = ()
+           ) -> tuple[etree._Element, dict[str, etree._Element]]:
     """The SSD tree and the SSV tree of each component; `sources` maps components to their FMU's
-    path inside the archive."""
+    path inside the archive; `tool_steps`: (tool, step, within its tolerances) measured for other
+    tools (cosim.engine.tools), written where each takes its step (the system's own step where a
+    tool has none)."""
     # the tools' namespaces are declared here: libcosim reads an element's attributes, a namespace
     # declaration among them, as its children
     root = etree.Element(_q(SSD, "SystemStructureDescription"), nsmap={"ssd": SSD, "ssc": SSC, "osp": OSP, "oms": OMS},
@@ -171,9 +177,10 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     system_annotations = etree.SubElement(system, _q(SSD, "Annotations"))
     oms = etree.SubElement(etree.SubElement(system_annotations, _q(SSC, "Annotation"), type=OMS_ANNOTATION),
                            _q(OMS, "Annotations"))
+    steps = {tool: step for tool, step, _ in tool_steps}
     etree.SubElement(etree.SubElement(oms, _q(OMS, "SimulationInformation")), _q(OMS, "FixedStepMaster"),
-                     description="oms-ma", stepSize=_decimal(structure.experiment.step), absoluteTolerance="0.0001",
-                     relativeTolerance="0.0001")
+                     description="oms-ma", stepSize=_decimal(steps.get("OMSimulator", structure.experiment.step)),
+                     absoluteTolerance="0.0001", relativeTolerance="0.0001")
     used = {u.get("unit") for u in root.iter(_q(SSC, "Real")) if u.get("unit")}
     if used:
         unit_list = etree.SubElement(root, _q(SSD, "Units"))
@@ -187,7 +194,8 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     # libcosim's base step, where its own SSPs keep it
     algorithm = etree.SubElement(etree.SubElement(annotations, _q(SSC, "Annotation"), type=OSP_ANNOTATION),
                                  _q(OSP, "Algorithm"))
-    etree.SubElement(algorithm, _q(OSP, "FixedStepAlgorithm"), baseStepSize=repr(structure.experiment.step))
+    etree.SubElement(algorithm, _q(OSP, "FixedStepAlgorithm"),
+                     baseStepSize=repr(steps.get("libcosim", structure.experiment.step)))
     annotation = etree.SubElement(annotations, _q(SSC, "Annotation"), type=ANNOTATION)
     run = etree.SubElement(annotation, _q(COSIM, "Run"), nsmap={"cosim": COSIM}, step=repr(structure.experiment.step))
     for name, value in structure.settings.items():
@@ -195,19 +203,21 @@ def to_xml(structure: SystemStructure, sources: dict[str, str]) -> tuple[etree._
     for bond in structure.bonds:
         etree.SubElement(run, _q(COSIM, "PowerBond"), effort=str(bond.effort), flow=str(bond.flow),
                          **({"slope": str(bond.slope)} if bond.slope else {}))
+    for tool, step, within in tool_steps:  # the step measured for each other tool (cosim.engine.tools)
+        etree.SubElement(run, _q(COSIM, "ToolStep"), tool=tool, step=repr(step), within=str(bool(within)).lower())
     return root, parameter_sets
 
 
-def write_ssp(structure: SystemStructure, path: Path) -> Path:
+def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped] = ()) -> Path:
     """Writes `structure` as an SSP 1.0 archive at `path` (each FMU file once under resources/);
-    the SSD and every SSV are validated against the schemas first."""
+    the SSD and every SSV are validated against the schemas first. tool_steps: as to_xml's."""
     sources, files = {}, {}
     for component in structure.components:
         inner = f"resources/{component.fmu.name}"
         if files.get(inner, component.fmu) != component.fmu:
             raise SspError(f"two different FMUs named {component.fmu.name}")
         files[inner], sources[component.name] = component.fmu, inner
-    root, parameter_sets = to_xml(structure, sources)
+    root, parameter_sets = to_xml(structure, sources, tool_steps)
     validate(root, "SystemStructureDescription.xsd", "SystemStructure.ssd")
     for name, tree in parameter_sets.items():
         validate(tree, "SystemStructureParameterValues.xsd", f"resources/{name}.ssv")

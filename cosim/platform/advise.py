@@ -102,9 +102,8 @@ def advise(scene: Scene, tolerance: float, probe: float | None = None, effort_to
     designer would; the full-model candidates keep the scene's own gains."""
     # by default the probe lasts 2 s and reaches past the first load pulse and the 0.2 s after it,
     # where the efforts are judged against their own change
-    from .run.accuracy import AFTER
-    first = min((pulse.end + AFTER for pulse in scene.pulses if pulse.start < scene.duration), default=0.0)
-    duration = min(scene.duration, probe if probe is not None else max(2.0, first))
+    from .run.accuracy import probe_duration
+    duration = min(scene.duration, probe) if probe is not None else probe_duration(scene)
     own = next(name for name, values in fidelities(scene).items()
                if all(scene.drive_parameters.get(k, v if name.startswith(("averaged", "electrical")) else None) == v
                       for k, v in values.items()))

@@ -85,7 +85,7 @@ def bases(root: Path) -> dict[str, list[Base]]:
                                  ["sweep", "{root}/sweeps/mutant.toml", "--workers", "0", "--out", "{out}"]))
     archive = root / "meng.ssp"
     with _quiet():
-        assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive)]) == 0
+        assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive), "--scene-step"]) == 0
     with zipfile.ZipFile(archive) as z:
         z.extractall(root / "ssp")
     out["ssp"].append(Base("ssp", "meng.ssp", archive.read_bytes().decode("latin-1"),
@@ -122,7 +122,7 @@ def bases(root: Path) -> dict[str, list[Base]]:
     for command in (["run", "{root}/scenes/meng_eq35.toml", "--duration", "0.3", "--out", "{disk}/out"],
                     ["run", "{root}/scenes/meng_eq35.toml", "--duration", "1.0", "--no-plots", "--out", "{disk}/out"],
                     ["run", "{root}/meng.ssp", "--duration", "0.5", "--out", "{disk}/out"],
-                    ["export", "{root}/scenes/meng_eq35.toml", "--ssp", "{disk}/out/meng.ssp"],
+                    ["export", "{root}/scenes/meng_eq35.toml", "--ssp", "{disk}/out/meng.ssp", "--scene-step"],
                     ["sweep", "{root}/sweeps/brief.toml", "--workers", "0", "--out", "{disk}/out"],
                     ["design", "{root}/studies/tiny.toml", "--out", "{disk}/out"]):
         out["disk"].append(Base("disk", None, "", command))

@@ -94,16 +94,8 @@ def ecos_matches(meng_ssp) -> None:
 def fmpy_matches(meng_ssp) -> None:
     """fmpy.ssp runs the SSP bit for bit like our master with zero_start, the SSV files' values given."""
     from fmpy.ssp.simulation import simulate_ssp
-    from fmpy.ssp.ssd import ParameterSet, read_ssv
-    parameters = ParameterSet(name="all")
-    parameters.parameters = []
-    with zipfile.ZipFile(meng_ssp) as archive:
-        for name in archive.namelist():
-            if name.endswith(".ssv"):
-                component = name.rsplit("/", 1)[-1][:-4]
-                for p in read_ssv(str(meng_ssp), resource=name).parameters:
-                    p.name = f"{component}.{p.name}"
-                    parameters.parameters.append(p)
+    from conftest import fmpy_parameter_set
+    parameters = fmpy_parameter_set(meng_ssp)
     theirs = simulate_ssp(str(meng_ssp), stop_time=STOP, step_size=STEP, parameter_set=parameters)
     reference = ours(meng_ssp, zero_start=True)  # fmpy's rows are labelled with the step's start
     assert len(theirs) == len(reference) - 1

@@ -6,11 +6,14 @@ largest difference over the whole run."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..ports import LEGS, per_leg
+from ..ports import DRIVES, LEGS, POSE, per_leg
+
+if TYPE_CHECKING:
+    from ..scene import Scene
 
 START_UP = 0.2  # [s] the drives' start-up shock and its settling
 AFTER = 0.2     # [s] judged with each load pulse after its end
@@ -115,3 +118,40 @@ def window_errors(result: np.ndarray, reference: np.ndarray, names: Sequence[str
         scale = max(float(np.ptp(reference[n][there])) for n in names)
         out.append(WindowError(window.name, error, scale))
     return out
+
+
+def probe_duration(scene: "Scene") -> float:
+    """How long a probe of a scene runs: 2 s, and past its first load pulse and the AFTER after it
+    (where the efforts are judged against their own change), at most the scene's duration."""
+    first = min((pulse.end + AFTER for pulse in scene.pulses if pulse.start < scene.duration), default=0.0)
+    return min(scene.duration, max(2.0, first))
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """A run against its scene's converged run, by the shipped scenes' tolerances."""
+    pose_error: float  # [m, rad] the largest after POSE_FROM
+    ratio: float       # the efforts' worst window against its tolerance (tolerance_ratio)
+    window: str        # which window that is
+
+    @property
+    def within(self) -> bool:
+        return self.pose_error <= POSE_TOLERANCE and self.ratio <= 1.0
+
+
+def judge(scene: "Scene", result: np.ndarray, reference: np.ndarray) -> Judgement:
+    """`result` of `scene` against `reference` (its converged run over the same time): the pose
+    after POSE_FROM and the drive efforts as the legs feel them, per window; a run that stops early
+    is infinitely far."""
+    if not len(result) or result["time"][-1] < reference["time"][-1] - 1e-9:
+        return Judgement(float("inf"), float("inf"), "the run stopped early")
+    from .compile import scene_values
+    from .tuning import leg_plants
+    late = result[result["time"] >= POSE_FROM]
+    pose = difference(late, reference, [f"pose.{a}" for a in POSE])
+    effort = DRIVES[scene.drive].effort[0]
+    found = window_errors(efforts(result, effort), efforts(reference, effort), per_leg(effort),
+                          windows(float(reference["time"][-1]), scene.pulses))
+    bound = steady_bound(scene.drive, [p.static_force for p in leg_plants(scene_values(scene)[0])])
+    ratio, window = tolerance_ratio(found, bound)
+    return Judgement(pose, ratio, window)

@@ -1,0 +1,157 @@
+"""The step an exported scene gets in each other tool: what that tool's master does with it
+(cosim.engine.tools: a fixed step, inputs held, no finer start) run in our engine on the system
+the export writes, at the scene's step and at each half of it down to FLOOR, over a probe of the
+scene (cosim.platform.run.accuracy.probe_duration) against the scene's converged run; the largest
+step within the shipped scenes' tolerances (the pose, and the drive efforts per window), or where
+none holds the step that came closest, named as such."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...engine.outcome import execute
+from ...engine.settings import FixedStep
+from ...engine.tools import TOOL_MASTERS, ToolMaster
+from ..scene import Scene
+from .accuracy import Judgement, judge, probe_duration
+from .compile import scene_record, scene_structure
+
+FLOOR = 64  # the finest step tried: the scene's step / FLOOR
+
+
+@dataclass(frozen=True)
+class ToolStep:
+    """The step measured for one tool, and how its master does there."""
+    master: ToolMaster
+    step: float
+    judgement: Judgement
+    wall: float  # [s] our engine's stepping of the probe at that step
+
+    @property
+    def within(self) -> bool:
+        return self.judgement.within
+
+    def row(self) -> str:
+        j = self.judgement
+        verdict = "within the tolerances" if self.within else (
+            f"none within the tolerances down to 1/{FLOOR} of the scene's step: the closest")
+        return (f"| {self.master.tool} | {self.master.master} | {self.step * 1e3:.4g} ms | {verdict} | "
+                f"{j.pose_error:.2e} | {j.ratio:.2f} ({j.window}) | {self.wall:.2f} s |")
+
+
+HEADER = ["| tool | its master | step written | | pose error [m, rad] | efforts' worst window / tolerance | "
+          "our wall at that step |", "|---|---|---|---|---|---|---|"]
+
+
+def converged(scene: Scene, duration: float) -> np.ndarray:
+    """The scene's converged run over `duration`: its own coupling at a 16th of its step
+    throughout (no finer start, no edge windows), as its twin."""
+    from .runner import run_scene
+    twin = scene.changed({"scene.duration": duration, "scene.step": scene.step / 16, "coupling.startup_time": 0.0,
+                          "coupling.edge_time": 0.0, "coupling.step_control": "fixed"})
+    return run_scene(twin, progress=False, advice=False, plots=False)[0]
+
+
+def _run(scene: Scene, master: ToolMaster, step: float, duration: float) -> tuple[np.ndarray, float]:
+    """The exported system under the tool's master at `step` for `duration`: its results (the
+    scene's columns; empty where it fails) and the stepping's wall time."""
+    record, names = scene_record(scene)
+    outcome = execute(scene_structure(scene), master.algorithm, FixedStep(step), duration, record, names,
+                      clock="mechanics")
+    return outcome.result, outcome.wall
+
+
+_MEASURED: dict[tuple, list[ToolStep]] = {}
+
+
+def tool_steps(scene: Scene) -> list[ToolStep]:
+    """Per tool of TOOL_MASTERS, the largest step (the scene's step over a power of two, down to
+    FLOOR) at which its master holds the tolerances over a probe of the scene, or the one that came
+    closest. Tools with the same master are run once; a scene measured before in this process is
+    not measured again."""
+    key = (str(scene.path), scene.text, tuple(sorted((k, repr(v)) for k, v in scene.overrides.items())))
+    if key in _MEASURED:
+        return _MEASURED[key]
+    duration = probe_duration(scene)
+    reference = converged(scene, duration)
+    found: dict[object, ToolStep] = {}
+    out = []
+    for master in TOOL_MASTERS:
+        if master.algorithm not in found:
+            tried = []
+            divisor = 1
+            while divisor <= FLOOR:
+                step = scene.step / divisor
+                start = time.perf_counter()
+                result, wall = _run(scene, master, step, duration)
+                tried.append(ToolStep(master, step, judge(scene, result, reference), wall or time.perf_counter() - start))
+                if tried[-1].within:
+                    break
+                divisor *= 2
+            best = tried[-1] if tried[-1].within else min(tried, key=lambda t: (t.judgement.ratio, -t.step))
+            found[master.algorithm] = best
+        measured = found[master.algorithm]
+        out.append(ToolStep(master, measured.step, measured.judgement, measured.wall))
+    _MEASURED[key] = out
+    return out
+
+
+def steps_text(scene: Scene, steps: list[ToolStep]) -> list[str]:
+    """The export's table: per tool, its master, the step written and how it does there."""
+    return [f"the step each tool gets, measured by its master in our engine over the first "
+            f"{probe_duration(scene):g} s against the scene's converged run (pose within 1e-5, efforts within "
+            f"their windows' tolerances):", *HEADER, *(s.row() for s in steps)]
+
+
+@dataclass
+class Exported:
+    """What an export wrote and what it says about it, line by line."""
+    files: list
+    lines: list
+
+
+def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False) -> Exported:
+    """The scene's whole system for other tools: an SSP archive at `ssp` and/or an OSP
+    configuration in the folder `osp`. measure: each tool's step measured (tool_steps) and written
+    where it takes it; otherwise the scene's own step everywhere. Unless fmi2_warnings, every FMU
+    that can returns fmi2OK where it logs a warning (fmi.warnings_as_ok), so that a tool which stops
+    at the first fmi2Warning (OMSimulator, at a leg past its stroke) runs on. Raises SceneError for
+    values the FMUs refuse (the scene's file and line)."""
+    from ...engine import ParameterError
+    from ...engine.checks import check_parameters, variables
+    from ...engine.osp import write_osp
+    from ...engine.ssp import not_portable, write_ssp
+    from .errors import scene_error
+    structure = scene_structure(scene)
+    lines, files = [], []
+    if not fmi2_warnings:
+        without = []
+        for component in structure.components:
+            if "fmi.warnings_as_ok" in variables(component.fmu):
+                component.parameters["fmi.warnings_as_ok"] = True
+            else:
+                without.append(component.name)
+        lines.append("note: every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok = true), so that a "
+                     "tool that stops at the first fmi2Warning (OMSimulator) runs on past a leg out of its stroke; the "
+                     "warnings stay in the FMUs' log (--fmi2-warnings keeps the standard's status)"
+                     + (f"; not {', '.join(without)} (its FMU has no such switch)" if without else ""))
+    try:
+        check_parameters(structure)
+    except ParameterError as error:
+        raise scene_error(scene, error) from None
+    steps = tool_steps(scene) if measure else []
+    if steps:
+        lines += steps_text(scene, steps)
+    else:
+        lines.append(f"note: every tool gets the scene's own step, {scene.step:g} s, unmeasured (--scene-step)")
+    if ssp is not None:
+        files.append(write_ssp(structure, ssp, [(s.master.tool, s.step, s.within) for s in steps]))
+    for note in not_portable(structure.settings):
+        lines.append(f"note: other tools run this system without {note}")
+    if osp is not None:
+        libcosim = next((s.step for s in steps if s.master.tool == "libcosim"), None)
+        files.append(write_osp(structure, osp, step=libcosim))
+    return Exported(files, lines)
