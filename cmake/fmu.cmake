@@ -54,11 +54,26 @@ function(add_fmu name)
   if(NOT WIN32)
     target_link_libraries(${name} PRIVATE m)
   endif()
-  if(MINGW)  # the C runtime's parts linked in: the DLL needs only Windows' own DLLs (KERNEL32, msvcrt)
-    target_compile_definitions(${name} PRIVATE __USE_MINGW_ANSI_STDIO=1)
-    target_link_options(${name} PRIVATE -static-libgcc -Wl,--no-insert-timestamp)
+  # The FMI 3.0 binary of a shipped FMU: the same model and FMI 2.0 layer, with fmu/common/fmi3_layer.c.
+  set(fmi3 OFF)
+  if(NOT ARG_OUTPUT_DIR)
+    set(fmi3 ON)
+    add_library(${name}_fmi3 SHARED ${model_sources} ${FMU_COMMON_SOURCES} "${FMU_COMMON_DIR}/fmi3_layer.c")
+    target_include_directories(${name}_fmi3 PRIVATE ${include_dirs})
+    set_target_properties(${name}_fmi3 PROPERTIES PREFIX "" OUTPUT_NAME ${name}
+                          LIBRARY_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3"
+                          RUNTIME_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3")
+    if(NOT WIN32)
+      target_link_libraries(${name}_fmi3 PRIVATE m)
+    endif()
   endif()
-  if(COSIM_MODELS_ONLY)  # the win64 cross build: the binary alone, packaged by the top-level build
+  foreach(binary ${name} ${name}_fmi3)
+    if(MINGW AND TARGET ${binary})  # the C runtime's parts linked in: the DLL needs only Windows' own DLLs
+      target_compile_definitions(${binary} PRIVATE __USE_MINGW_ANSI_STDIO=1)
+      target_link_options(${binary} PRIVATE -static-libgcc -Wl,--no-insert-timestamp)
+    endif()
+  endforeach()
+  if(COSIM_MODELS_ONLY)  # the win64 cross build: the binaries alone, packaged by the top-level build
     return()
   endif()
 
@@ -118,4 +133,36 @@ function(add_fmu name)
     COMMENT "Packaging ${fmu_file}"
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu_file}")
+
+  # The FMI 3.0 FMU: build/fmus3/<name>.fmu, binaries/x86_64-linux (and x86_64-windows from the cross build)
+  if(fmi3)
+    set(stage3 "${CMAKE_BINARY_DIR}/stage3/${name}")
+    set(fmu3_file "${CMAKE_BINARY_DIR}/fmus3/${name}.fmu")
+    set(win64_commands3 "")
+    set(win64_depends3 "")
+    if(TARGET win64)
+      set(win64_commands3 COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3}/binaries/x86_64-windows"
+                          COMMAND ${CMAKE_COMMAND} -E copy "${WIN64_BINARY_DIR}/fmi3/${name}.dll"
+                                  "${stage3}/binaries/x86_64-windows/")
+      set(win64_depends3 win64 "${WIN64_BINARY_DIR}/fmi3/${name}.dll")
+    endif()
+    add_custom_command(
+      OUTPUT "${fmu3_file}"
+      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage3}"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3}/binaries/x86_64-linux" "${stage3}/sources"
+              "${stage3}/documentation" "${CMAKE_BINARY_DIR}/fmus3"
+      COMMAND $<TARGET_FILE:${name}_model_description> --fmi3 "${stage3}" "${model_dir}/doc.html"
+              ${shipped_sources} "${FMU_COMMON_DIR}/fmi3_layer.c"
+      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}_fmi3> "${stage3}/binaries/x86_64-linux/"
+      ${win64_commands3}
+      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${FMU_COMMON_DIR}/fmi3_layer.c" "${stage3}/sources/"
+      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu3_file}"
+      COMMAND ${CMAKE_COMMAND} -E chdir "${stage3}" ${CMAKE_COMMAND} -E tar cf "${fmu3_file}" --format=zip
+              modelDescription.xml binaries sources documentation
+      DEPENDS ${name}_fmi3 ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
+              "${FMU_COMMON_DIR}/fmi3_layer.c" ${win64_depends3}
+      COMMENT "Packaging ${fmu3_file}"
+      VERBATIM)
+    add_custom_target(${name}_fmu3 ALL DEPENDS "${fmu3_file}")
+  endif()
 endfunction()

@@ -162,3 +162,18 @@ def fmpy_parameter_set(archive):
                     p.name = f"{component}.{p.name}"
                     parameters.parameters.append(p)
     return parameters
+
+
+# Per shipped FMU, an experiment that moves it (values set by name before initialization: inputs
+# held, parameters), and its communication step where not 1 ms: what the binaries of one model built
+# twice (win64 against linux64, FMI 3.0 against FMI 2.0) are compared on.
+FMU_EXPERIMENTS = {
+    "pmsm_drive": {"angle_ref": 2.0, "torque_ff": 3.0},
+    "mechanics": {f"leg[{i}].torque": 8.2 + 0.03 * i for i in range(1, 7)},  # about what holds it: it drifts
+    "linear_motor": {"position_ref": 0.01, "force_ff": 5.0},
+    "trajectory": {"x.sine[1].amplitude": 0.1, "x.sine[1].frequency": 1.5, "roll.sine[1].amplitude": 0.05,
+                   "roll.sine[1].frequency": 0.7, "load.force.z.pulse[1].value": -500.0,
+                   "load.force.z.pulse[1].start": 0.5, "load.force.z.pulse[1].end": 0.7},
+    "cueing": {"vehicle.file": str(Path(__file__).resolve().parents[1] / "examples" / "vehicle" / "drive.csv")},
+}
+FMU_EXPERIMENT_STEPS = {"cueing": 5e-3}  # the vehicle's drive brakes from 2 s on: 10 s of it

@@ -1,9 +1,11 @@
 /* Build-time generator: writes an FMU's modelDescription.xml and documentation/index.html from
  * the same variable table (variables.h) that the FMU binary is compiled from.
  *
- * usage: model_description OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...
+ * usage: model_description [--fmi3] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...
  *   OUT_DIR/modelDescription.xml and OUT_DIR/documentation/index.html are written; the source
- *   file names are listed under <SourceFiles> so another tool can rebuild the binary.
+ *   file names are listed under <SourceFiles> (FMI 2.0) or in OUT_DIR/sources/buildDescription.xml
+ *   (FMI 3.0) so another tool can rebuild the binary. --fmi3: the FMI 3.0 description of the same
+ *   table (fmu/common/fmi3_layer.c says which FMI 3.0 features the FMUs use).
  */
 #include "fmu_table.h"
 
@@ -91,6 +93,61 @@ static void put_number(FILE *f, FmuType type, double value) {
     else fputs(value != 0.0 ? "true" : "false", f);
 }
 
+/* A Real variable's unit must be one of UNITS (logged on stderr when not). */
+static int unit_defined(const FmuVariable *v) {
+    if (v->type != FMU_REAL || find_unit(v->unit)) return 1;
+    fprintf(stderr, "model_description: variable '%s' uses unit '%s', which has no definition\n", v->name, v->unit);
+    return 0;
+}
+
+/* A variable's attributes both FMI versions share: name, value reference, causality, variability,
+ * initial and description. */
+static void put_header(FILE *f, int vr) {
+    const FmuVariable *v = &fmu_variables[vr];
+    fprintf(f, " name=\"%s\" valueReference=\"%d\" causality=\"%s\" variability=\"%s\"", v->name, vr,
+            causality_name(v->causality),
+            (v->type != FMU_REAL && v->variability == FMU_CONTINUOUS) ? "discrete" : variability_name(v->variability));
+    if (v->causality == FMU_OUTPUT) fprintf(f, " initial=\"calculated\"");
+    fprintf(f, "\n      description=\"");
+    put_escaped(f, v->description);
+    fputc('"', f);
+}
+
+static void put_unit_and_bounds(FILE *f, const FmuVariable *v) {
+    if (v->type == FMU_REAL && v->unit[0]) fprintf(f, " unit=\"%s\"", v->unit);
+    if (v->type == FMU_BOOLEAN || v->type == FMU_STRING) return;
+    if (isfinite(v->min)) { fputs(" min=\"", f); put_number(f, v->type, v->min); fputc('"', f); }
+    if (isfinite(v->max)) { fputs(" max=\"", f); put_number(f, v->type, v->max); fputc('"', f); }
+}
+
+static void put_units(FILE *f) {
+    fprintf(f, "  <UnitDefinitions>\n");
+    for (size_t u = 0; u < N_UNITS; u++) {
+        int used = 0;
+        for (int vr = 1; vr < VR_COUNT; vr++)
+            if (fmu_variables[vr].type == FMU_REAL && strcmp(fmu_variables[vr].unit, UNITS[u].name) == 0) used = 1;
+        if (!used) continue;
+        const UnitDefinition *d = &UNITS[u];
+        fprintf(f, "    <Unit name=\"%s\"><BaseUnit", d->name);
+        if (d->kg) fprintf(f, " kg=\"%d\"", d->kg);
+        if (d->m) fprintf(f, " m=\"%d\"", d->m);
+        if (d->s) fprintf(f, " s=\"%d\"", d->s);
+        if (d->A) fprintf(f, " A=\"%d\"", d->A);
+        if (d->rad) fprintf(f, " rad=\"%d\"", d->rad);
+        fprintf(f, "/></Unit>\n");
+    }
+    fprintf(f, "  </UnitDefinitions>\n");
+}
+
+static void put_log_categories(FILE *f) {
+    fprintf(f, "  <LogCategories>\n"
+               "    <Category name=\"logEvents\" description=\"Events, limits reached, solver notes\"/>\n"
+               "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
+               "    <Category name=\"logStatusError\" description=\"Errors: bad input, illegal call sequence, solver failure\"/>\n"
+               "    <Category name=\"logAll\" description=\"Everything\"/>\n"
+               "  </LogCategories>\n");
+}
+
 static int write_model_description(const char *path, int n_sources, char **sources) {
     FILE *f = fopen(path, "w");
     if (!f) { perror(path); return 1; }
@@ -115,51 +172,22 @@ static int write_model_description(const char *path, int n_sources, char **sourc
     }
     fprintf(f, "    </SourceFiles>\n  </CoSimulation>\n");
 
-    /* Units actually used, each once. */
-    fprintf(f, "  <UnitDefinitions>\n");
-    for (size_t u = 0; u < N_UNITS; u++) {
-        int used = 0;
-        for (int vr = 1; vr < VR_COUNT; vr++)
-            if (fmu_variables[vr].type == FMU_REAL && strcmp(fmu_variables[vr].unit, UNITS[u].name) == 0) used = 1;
-        if (!used) continue;
-        const UnitDefinition *d = &UNITS[u];
-        fprintf(f, "    <Unit name=\"%s\"><BaseUnit", d->name);
-        if (d->kg) fprintf(f, " kg=\"%d\"", d->kg);
-        if (d->m) fprintf(f, " m=\"%d\"", d->m);
-        if (d->s) fprintf(f, " s=\"%d\"", d->s);
-        if (d->A) fprintf(f, " A=\"%d\"", d->A);
-        if (d->rad) fprintf(f, " rad=\"%d\"", d->rad);
-        fprintf(f, "/></Unit>\n");
-    }
-    fprintf(f, "  </UnitDefinitions>\n");
-    fprintf(f, "  <LogCategories>\n"
-               "    <Category name=\"logEvents\" description=\"Events, limits reached, solver notes\"/>\n"
-               "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
-               "    <Category name=\"logStatusError\" description=\"Errors: bad input, illegal call sequence, solver failure\"/>\n"
-               "    <Category name=\"logAll\" description=\"Everything\"/>\n"
-               "  </LogCategories>\n");
+    put_units(f);
+    put_log_categories(f);
     fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%g\" stepSize=\"%g\"/>\n", MODEL_STOP_TIME,
             MODEL_COMMUNICATION_STEP);
 
     fprintf(f, "  <ModelVariables>\n");
     for (int vr = 1; vr < VR_COUNT; vr++) {
         const FmuVariable *v = &fmu_variables[vr];
-        if (v->type == FMU_REAL && !find_unit(v->unit)) {
-            fprintf(stderr, "model_description: variable '%s' uses unit '%s', which has no definition\n",
-                    v->name, v->unit);
+        if (!unit_defined(v)) {
             fclose(f);
             return 1;
         }
-        fprintf(f, "    <!-- %d --><ScalarVariable name=\"%s\" valueReference=\"%d\" causality=\"%s\" variability=\"%s\"",
-                vr, v->name, vr, causality_name(v->causality),
-                (v->type != FMU_REAL && v->variability == FMU_CONTINUOUS) ? "discrete" : variability_name(v->variability));
-        if (v->causality == FMU_OUTPUT) fprintf(f, " initial=\"calculated\"");
-        fprintf(f, "\n      description=\"");
-        put_escaped(f, v->description);
-        fprintf(f, "\">\n      <%s", type_element(v->type));
-        if (v->type == FMU_REAL && v->unit[0]) fprintf(f, " unit=\"%s\"", v->unit);
-        if (v->type != FMU_BOOLEAN && v->type != FMU_STRING && isfinite(v->min)) { fputs(" min=\"", f); put_number(f, v->type, v->min); fputc('"', f); }
-        if (v->type != FMU_BOOLEAN && v->type != FMU_STRING && isfinite(v->max)) { fputs(" max=\"", f); put_number(f, v->type, v->max); fputc('"', f); }
+        fprintf(f, "    <!-- %d --><ScalarVariable", vr);
+        put_header(f, vr);
+        fprintf(f, ">\n      <%s", type_element(v->type));
+        put_unit_and_bounds(f, v);
         if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
         fprintf(f, "/>\n    </ScalarVariable>\n");
     }
@@ -170,6 +198,82 @@ static int write_model_description(const char *path, int n_sources, char **sourc
     for (int vr = 1; vr < VR_COUNT; vr++)
         if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
     fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+    return fclose(f) != 0;
+}
+
+/* ---- FMI 3.0: the same table, FMI 3.0's types and structure ---- */
+
+static const char *type_element3(FmuType t) {
+    return t == FMU_REAL ? "Float64" : t == FMU_INTEGER ? "Int32" : t == FMU_BOOLEAN ? "Boolean" : "String";
+}
+
+static int write_model_description3(const char *path) {
+    FILE *f = fopen(path, "w");
+    if (!f) { perror(path); return 1; }
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"%s\" instantiationToken=\"%s\"\n",
+            MODEL_IDENTIFIER_STRING, MODEL_GUID);
+    fprintf(f, "  description=\"");
+    put_escaped(f, MODEL_DESCRIPTION);
+    fprintf(f, "\"\n  version=\"%s\" generationTool=\"stewart-cosim fmu/common/model_description.c\"\n"
+               "  variableNamingConvention=\"structured\">\n", MODEL_VERSION);
+    fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
+               "    maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"\n"
+               "    providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\"\n"
+               "    hasEventMode=\"false\" providesIntermediateUpdate=\"false\"\n"
+               "    canReturnEarlyAfterIntermediateUpdate=\"false\"/>\n",
+            MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
+    put_units(f);
+    put_log_categories(f);
+    fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%g\" stepSize=\"%g\"/>\n", MODEL_STOP_TIME,
+            MODEL_COMMUNICATION_STEP);
+    fprintf(f, "  <ModelVariables>\n    <Float64 name=\"time\" valueReference=\"0\" causality=\"independent\" "
+               "variability=\"continuous\"\n      description=\"Simulation time [s]\"/>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        const FmuVariable *v = &fmu_variables[vr];
+        if (!unit_defined(v)) {
+            fclose(f);
+            return 1;
+        }
+        fprintf(f, "    <%s", type_element3(v->type));
+        put_header(f, vr);
+        put_unit_and_bounds(f, v);
+        if (v->type == FMU_STRING && has_start(v)) {
+            fprintf(f, ">\n      <Start value=\"\"/>\n    </String>\n");
+            continue;
+        }
+        if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
+        fprintf(f, "/>\n");
+    }
+    fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n");
+    for (int vr = 1; vr < VR_COUNT; vr++) { /* dependencies: value references in FMI 3.0 (ours equal the indices) */
+        if (fmu_variables[vr].causality != FMU_OUTPUT) continue;
+        fprintf(f, "    <Output valueReference=\"%d\" dependencies=\"", vr);
+        for (const Feedthrough *row = FEEDTHROUGH; row->inputs; row++)
+            if (row->output == vr)
+                for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", k ? " " : "", row->inputs[k]);
+        fputs("\"/>\n", f);
+    }
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "    <InitialUnknown valueReference=\"%d\"/>\n", vr);
+    fprintf(f, "  </ModelStructure>\n</fmiModelDescription>\n");
+    return fclose(f) != 0;
+}
+
+/* FMI 3.0 lists the sources in sources/buildDescription.xml. */
+static int write_build_description(const char *path, int n_sources, char **sources) {
+    FILE *f = fopen(path, "w");
+    if (!f) { perror(path); return 1; }
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiBuildDescription fmiVersion=\"3.0\">\n"
+               "  <BuildConfiguration modelIdentifier=\"%s\">\n    <SourceFileSet language=\"C99\">\n",
+            MODEL_IDENTIFIER_STRING);
+    for (int i = 0; i < n_sources; i++) {
+        const char *base = strrchr(sources[i], '/');
+        base = base ? base + 1 : sources[i];
+        if (strlen(base) > 2 && strcmp(base + strlen(base) - 2, ".c") == 0)
+            fprintf(f, "      <SourceFile name=\"%s\"/>\n", base);
+    }
+    fprintf(f, "    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n");
     return fclose(f) != 0;
 }
 
@@ -221,13 +325,19 @@ static int write_documentation(const char *path, const char *fragment_path) {
 }
 
 int main(int argc, char **argv) {
+    const int fmi3 = argc > 1 && strcmp(argv[1], "--fmi3") == 0;
+    argc -= fmi3, argv += fmi3;
     if (argc < 3) {
-        fprintf(stderr, "usage: %s OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n", argv[0]);
+        fprintf(stderr, "usage: model_description [--fmi3] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n");
         return 2;
     }
     char path[4096];
     snprintf(path, sizeof path, "%s/modelDescription.xml", argv[1]);
-    if (write_model_description(path, argc - 3, argv + 3)) return 1;
+    if (fmi3 ? write_model_description3(path) : write_model_description(path, argc - 3, argv + 3)) return 1;
+    if (fmi3) {
+        snprintf(path, sizeof path, "%s/sources/buildDescription.xml", argv[1]);
+        if (write_build_description(path, argc - 3, argv + 3)) return 1;
+    }
     snprintf(path, sizeof path, "%s/documentation/index.html", argv[1]);
     return write_documentation(path, argv[2]);
 }

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import FMU_EXPERIMENT_STEPS, FMU_EXPERIMENTS
 from cosim.engine.artifacts import MODELS, ROOT, fmu_path
 from cosim.engine.checks import variables
 
@@ -33,18 +34,8 @@ pytestmark = pytest.mark.skipif(not (WINE and MINGW and OBJDUMP), reason="needs 
                                 "installs wine64 and gcc-mingw-w64-x86-64)")
 
 STEP, STEPS = 1e-3, 2000
-STEP_OF = {"cueing": 5e-3}  # the vehicle's drive brakes from 2 s on: 10 s of it
-VEHICLE = ROOT / "examples" / "vehicle" / "drive.csv"
-# per model, what the experiment sets (by name) before initialization: inputs held, parameters
-EXPERIMENTS = {
-    "pmsm_drive": {"angle_ref": 2.0, "torque_ff": 3.0},
-    "mechanics": {f"leg[{i}].torque": 8.2 + 0.03 * i for i in range(1, 7)},  # about what holds it: it drifts
-    "linear_motor": {"position_ref": 0.01, "force_ff": 5.0},
-    "trajectory": {"x.sine[1].amplitude": 0.1, "x.sine[1].frequency": 1.5, "roll.sine[1].amplitude": 0.05,
-                   "roll.sine[1].frequency": 0.7, "load.force.z.pulse[1].value": -500.0,
-                   "load.force.z.pulse[1].start": 0.5, "load.force.z.pulse[1].end": 0.7},
-    "cueing": {"vehicle.file": str(VEHICLE)},
-}
+STEP_OF = FMU_EXPERIMENT_STEPS
+EXPERIMENTS = FMU_EXPERIMENTS
 WINDOWS_DLLS = {"KERNEL32.dll", "msvcrt.dll"}
 
 

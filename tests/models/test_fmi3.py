@@ -1,0 +1,166 @@
+"""Every model as an FMI 3.0 Co-Simulation FMU (build/fmus3/, fmu/common/fmi3_layer.c over the
+same model and FMI 2.0 layer): fmpy validates it; its variables are its FMI 2.0 twin's (names,
+value references, causalities, units, starts) in FMI 3.0's types; it runs the twin's experiment
+bit for bit (one source, one compiler: an FMI 3.0 instance holds its inputs over a step, as the
+experiment's held inputs do); its state kept, serialized and set back replays bit for bit; wrong
+use is refused with a logged reason; its sources/ rebuild it (fmpy's build of buildDescription.xml)
+with the same outputs; its Windows binary imports only Windows' own DLLs."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from conftest import FMU_EXPERIMENT_STEPS, FMU_EXPERIMENTS
+from cosim.engine.artifacts import MODELS, fmu_path
+
+STEPS = 2000
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_fmi3_fmu_validates_and_has_its_twins_variables(name):
+    assert validate_fmu(str(fmu_path(name, fmi=3))) == []
+    two, three = (read_model_description(str(fmu_path(name, fmi=f))) for f in (2, 3))
+    assert three.fmiVersion == "3.0" and three.guid == two.guid  # the instantiation token: the table's hash
+    assert three.coSimulation.modelIdentifier == two.coSimulation.modelIdentifier == name
+    time, *variables = three.modelVariables
+    assert (time.name, time.causality, time.valueReference) == ("time", "independent", 0)
+    assert len(variables) == len(two.modelVariables)
+    for a, b in zip(two.modelVariables, variables):
+        assert (b.name, b.valueReference, b.causality, b.type, b.unit) == \
+               (a.name, a.valueReference, a.causality, FMI3_TYPES[a.type], a.unit), a.name
+        if a.causality != "output" and a.type != "String":
+            assert b.start == a.start, a.name
+    outputs = {u.variable.name: sorted(d.name for d in u.dependencies or []) for u in two.outputs}
+    assert {u.variable.name: sorted(d.name for d in u.dependencies or []) for u in three.outputs} == outputs
+
+
+def experiment(name: str) -> dict:
+    step = FMU_EXPERIMENT_STEPS.get(name, 1e-3)
+    outputs = [v.name for v in read_model_description(str(fmu_path(name))).modelVariables
+               if v.causality == "output" and v.type == "Real"]
+    return dict(stop_time=STEPS * step, step_size=step, output_interval=step, start_values=FMU_EXPERIMENTS[name],
+                output=outputs)
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_fmi3_fmu_runs_its_twins_experiment_bit_for_bit(name):
+    settings = experiment(name)
+    two = simulate_fmu(str(fmu_path(name)), **settings)
+    three = simulate_fmu(str(fmu_path(name, fmi=3)), fmi_type="CoSimulation", **settings)
+    assert len(two) == len(three) == STEPS + 1
+    moved = False
+    for output in settings["output"]:
+        assert np.array_equal(two[output], three[output]), output
+        moved = moved or np.ptp(three[output]) > 0
+    assert moved
+
+
+@pytest.fixture
+def slave(tmp_path):
+    """An FMI 3.0 instance of the trajectory FMU through fmpy, its log collected."""
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+    path = fmu_path("trajectory", fmi=3)
+    description = read_model_description(str(path))
+    unzipped = extract(str(path), str(tmp_path / "unzipped"))
+    made = []
+
+    def make(**instantiate):
+        fmu = FMU3Slave(guid=description.guid, unzipDirectory=unzipped, modelIdentifier="trajectory",
+                        instanceName="it")
+        log = []
+        fmu.instantiate(logMessage=lambda env, status, category, message: log.append(message.decode()),
+                        **instantiate)
+        made.append(fmu)
+        return fmu, log, {v.name: v.valueReference for v in description.modelVariables}
+    yield make
+    for fmu in made:
+        try:
+            fmu.freeInstance()
+        except Exception:
+            pass
+
+
+def test_the_fmi3_state_replays_the_steps_bit_for_bit(slave):
+    fmu, _, vr = slave()
+    fmu.setFloat64([vr["x.sine[1].amplitude"], vr["x.sine[1].frequency"]], [0.1, 1.5])
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    watched = [vr["pose_ref.x"], vr["pose_ref.roll"], vr["time"]]
+    for k in range(100):
+        fmu.doStep(k * 1e-3, 1e-3)
+    kept = fmu.serializeFMUState(fmu.getFMUState())
+    first = []
+    for k in range(100, 200):
+        fmu.doStep(k * 1e-3, 1e-3)
+        first.append(fmu.getFloat64(watched))
+    fmu.setFMUState(fmu.deserializeFMUState(kept))
+    again = []
+    for k in range(100, 200):
+        fmu.doStep(k * 1e-3, 1e-3)
+        again.append(fmu.getFloat64(watched))
+    assert first == again and first[-1][2] == pytest.approx(0.2, abs=1e-12)  # time, value reference 0
+
+
+def test_wrong_use_of_the_fmi3_layer_is_refused_with_its_reason(slave):
+    from fmpy.fmi1 import FMICallException
+    fmu, log, vr = slave()
+    with pytest.raises(FMICallException):  # a step before initialization
+        fmu.doStep(0.0, 1e-3)
+    assert "illegal call sequence" in log[-1]
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    with pytest.raises(FMICallException):  # a Float64 read as an Int32
+        fmu.getInt32([vr["pose_ref.x"]])
+    assert "is of type Real, not Integer" in log[-1]
+    with pytest.raises(FMICallException):  # no Float32 variables
+        fmu.getFloat32([vr["pose_ref.x"]])
+    assert "no Float32 variables" in log[-1]
+    with pytest.raises(FMICallException):
+        fmu.enterEventMode()
+    assert "no event mode" in log[-1]
+    with pytest.raises(FMICallException):  # the independent variable is not set
+        fmu.setFloat64([vr["time"]], [1.0])
+    with pytest.raises(Exception):  # an FMU without event mode refuses to be instantiated for one
+        slave(eventModeUsed=True)
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_fmi3_fmu_rebuilds_from_its_sources(name, tmp_path):
+    from fmpy.build import build_platform_binary
+    rebuilt = tmp_path / "unzipped"
+    with zipfile.ZipFile(fmu_path(name, fmi=3)) as z:
+        z.extractall(rebuilt)
+    shutil.rmtree(rebuilt / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(rebuilt, build_dir=tmp_path / "build")
+    assert (rebuilt / "binaries" / "x86_64-linux" / f"{name}.so").exists()
+    settings = {**experiment(name), "stop_time": 20 * FMU_EXPERIMENT_STEPS.get(name, 1e-3)}
+    original = simulate_fmu(str(fmu_path(name, fmi=3)), **settings)
+    from_sources = simulate_fmu(str(rebuilt), **settings)
+    for output in settings["output"]:
+        np.testing.assert_allclose(from_sources[output], original[output], rtol=1e-9, atol=1e-12)
+
+
+OBJDUMP = shutil.which("x86_64-w64-mingw32-objdump")
+
+
+@pytest.mark.skipif(not OBJDUMP, reason="needs MinGW-w64's objdump (scripts/setup.sh installs it)")
+@pytest.mark.parametrize("name", MODELS)
+def test_the_fmi3_windows_binary_needs_only_windows_own_dlls(name, tmp_path):
+    with zipfile.ZipFile(fmu_path(name, fmi=3)) as z:
+        z.extract(f"binaries/x86_64-windows/{name}.dll", tmp_path)
+    table = subprocess.run([OBJDUMP, "-p", str(tmp_path / "binaries" / "x86_64-windows" / f"{name}.dll")],
+                           capture_output=True, text=True, check=True).stdout
+    assert {line.split(":", 1)[1].strip() for line in table.splitlines() if "DLL Name:" in line} == \
+        {"KERNEL32.dll", "msvcrt.dll"}
+    for function in ("fmi3InstantiateCoSimulation", "fmi3DoStep", "fmi3GetFloat64", "fmi3SerializeFMUState"):
+        assert f"] {function}\n" in table, function
