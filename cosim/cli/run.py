@@ -21,6 +21,8 @@ def add(commands) -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, default=Path("out"), help="folder for CSV, .mat and plots")
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=str, help="override the scene's duration [s]")
+    run.add_argument("--fmi", type=int, choices=(2, 3), help="a scene's FMUs as FMI 2.0 (the default) or FMI 3.0 "
+                     "(scene.fmi; FMI 3.0 has no input derivatives: inputs held over each step)")
     run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
                      "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
     run.add_argument("--real-time", nargs="?", const="1", metavar="FACTOR", help="pace the run to the wall clock (each "
@@ -73,7 +75,10 @@ def main(args: argparse.Namespace) -> int:
     stem = args.scene.stem
     written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if system or args.no_plots else
                                                      f", plots and the report {stem}.html")
-    given = {"settings": settings(args.set) or None} if system else {"overrides": scene_values(args.set) or None}
+    if args.fmi is not None and system:
+        raise UsageError(f"--fmi: for a scene; {args.scene.name} names its own FMUs")
+    overrides = {**scene_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
+    given = {"settings": settings(args.set) or None} if system else {"overrides": overrides or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
                                    twin=args.twin, progress=True, real_time=factor, stream=args.stream,
                                    listen=args.listen, **given).report, written, args.out)

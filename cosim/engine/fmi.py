@@ -1,6 +1,8 @@
-"""One FMI 2.0 co-simulation instance, driven through fmpy, with names resolved once.
+"""One FMI 2.0 or FMI 3.0 co-simulation instance, driven through fmpy, with names resolved once.
 
-`FmuInstance` wraps fmpy's FMU2Slave: it resolves variable names to value references, keeps the
+`FmuInstance` wraps fmpy's FMU2Slave (or FMU3Slave for an FMI 3.0 FMU, whose description is read
+with FMI 2.0's type names, Real for Float64 and Integer for Int32, so that the rest of the engine
+knows one kind of FMU; it takes no input derivatives and holds its inputs over a step): it resolves variable names to value references, keeps the
 FMU's log lines, and turns a failed FMI call into an `FmuError` that names the instance, the call,
 the simulation time and what the FMU logged. `RealGroup` is a preallocated set of real variables
 read or written in one FMI call, so a stepping loop makes no per-step allocations.
@@ -63,13 +65,31 @@ _LOADED: dict[tuple[str, int, int], tuple[object, Path]] = {}
 def loaded(fmu_path: str | Path) -> tuple[object, Path]:
     """The FMU's model description and its extraction, read once per process for each version of
     the file (path, size, modification time): a run, or a sweep's thousandth point on a worker,
-    parses and unzips nothing. The extractions are removed when the process ends."""
+    parses and unzips nothing. The extractions are removed when the process ends. An FMI 3.0
+    description is read as the engine reads an FMI 2.0 one (fmi2_kinds)."""
     path = Path(fmu_path).resolve()
     status = path.stat()
     key = (str(path), status.st_size, status.st_mtime_ns)
     if key not in _LOADED:
-        _LOADED[key] = (read_model_description(str(path)), Path(extract(str(path))))
+        _LOADED[key] = (fmi2_kinds(read_model_description(str(path))), Path(extract(str(path))))
     return _LOADED[key]
+
+
+_FMI3_KINDS = {"Float64": "Real", "Float32": "Real", **{k: "Integer" for k in (
+    "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")}}
+
+
+def fmi2_kinds(description):
+    """An FMI 3.0 model description as the engine reads an FMI 2.0 one: each variable's type by its
+    FMI 2.0 name (Float64 as Real, Int32 as Integer), the independent variable left out, no input
+    derivatives (FMI 3.0 has none). An FMI 2.0 description as it is."""
+    if not str(description.fmiVersion).startswith("3"):
+        return description
+    description.modelVariables = [v for v in description.modelVariables if v.causality != "independent"]
+    for v in description.modelVariables:
+        v.type = _FMI3_KINDS.get(v.type, v.type)
+    description.coSimulation.canInterpolateInputs = False
+    return description
 
 
 @atexit.register
@@ -96,6 +116,18 @@ class FmuInstance:
         self.messages: list[LogMessage] = []
         self.time = 0.0
         self.fmi_seconds = 0.0  # wall time spent inside FMI calls (for the master-overhead share)
+        self.fmi3 = str(self.model_description.fmiVersion).startswith("3")
+        self.clock = None  # a function giving the instance's time while a native loop runs it
+        if self.fmi3:
+            from fmpy.fmi3 import FMU3Slave
+            self.fmu = FMU3Slave(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
+                                 modelIdentifier=self.model_description.coSimulation.modelIdentifier,
+                                 instanceName=instance_name)
+            self._call("fmi3InstantiateCoSimulation", self.fmu.instantiate, loggingOn=logging_on,
+                       logMessage=self._on_log3)
+            if warnings and not logging_on and "logStatusWarning" in self.log_categories:
+                self._call("fmi3SetDebugLogging", self.fmu.setDebugLogging, True, ["logStatusWarning"])
+            return
         self._callbacks = fmi2CallbackFunctions()
         self._logger = fmi2CallbackLoggerTYPE(self._on_log)  # kept alive with the instance
         self._callbacks.logger = self._logger
@@ -104,7 +136,6 @@ class FmuInstance:
         self.fmu = FMU2Slave(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
                              modelIdentifier=self.model_description.coSimulation.modelIdentifier,
                              instanceName=instance_name)
-        self.clock = None  # a function giving the instance's time while a native loop runs it
         self._call("fmi2Instantiate", self.fmu.instantiate, callbacks=self._callbacks, loggingOn=logging_on)
         if warnings and not logging_on and "logStatusWarning" in self.log_categories:
             self._call("fmi2SetDebugLogging", self.fmu.setDebugLogging, True, ["logStatusWarning"])
@@ -117,6 +148,10 @@ class FmuInstance:
                                         (category or b"").decode(), (message or b"").decode(),
                                         self.clock() if self.clock else self.time))
 
+    @callback
+    def _on_log3(self, env, status, category, message) -> None:
+        self._on_log(env, None, status, category, message)
+
     def _call(self, call: str, function, *args, **kwargs):
         logged_before = len(self.messages)
         start = clock.perf_counter()
@@ -125,7 +160,7 @@ class FmuInstance:
         except FMICallException as error:
             raise FmuError(self.name, call, self.time, self.messages[logged_before:]) from error
         except Exception as error:  # fmpy raises a bare Exception when instantiation fails
-            if call == "fmi2Instantiate":
+            if call in ("fmi2Instantiate", "fmi3InstantiateCoSimulation"):
                 raise FmuError(self.name, call, self.time, self.messages[logged_before:]) from error
             raise
         finally:
@@ -144,14 +179,17 @@ class FmuInstance:
         for name, value in values.items():
             kind = self.variables[name].type if name in self.variables else None
             vr = [self.vr(name)]
+            three = self.fmi3
             if kind == "Real":
-                self._call(f"fmi2SetReal({name})", self.fmu.setReal, vr, [float(value)])
+                self._call(f"{'fmi3SetFloat64' if three else 'fmi2SetReal'}({name})",
+                           self.fmu.setFloat64 if three else self.fmu.setReal, vr, [float(value)])
             elif kind in ("Integer", "Enumeration"):
-                self._call(f"fmi2SetInteger({name})", self.fmu.setInteger, vr, [int(value)])
+                self._call(f"{'fmi3SetInt32' if three else 'fmi2SetInteger'}({name})",
+                           self.fmu.setInt32 if three else self.fmu.setInteger, vr, [int(value)])
             elif kind == "Boolean":
-                self._call(f"fmi2SetBoolean({name})", self.fmu.setBoolean, vr, [bool(value)])
+                self._call(f"fmi{3 if three else 2}SetBoolean({name})", self.fmu.setBoolean, vr, [bool(value)])
             elif kind == "String":
-                self._call(f"fmi2SetString({name})", self.fmu.setString, vr, [str(value)])
+                self._call(f"fmi{3 if three else 2}SetString({name})", self.fmu.setString, vr, [str(value)])
             else:
                 raise TypeError(f"{self.name}: cannot set '{name}' of type {kind}")
 
@@ -169,13 +207,17 @@ class FmuInstance:
 
     def get(self, name: str) -> float | str:
         kind, vr = self.variables[name].type if name in self.variables else None, [self.vr(name)]
+        three, version = self.fmi3, 3 if self.fmi3 else 2
         if kind == "Real":
-            return self._call(f"fmi2GetReal({name})", self.fmu.getReal, vr)[0]
+            return self._call(f"fmi{version}Get{'Float64' if three else 'Real'}({name})",
+                              self.fmu.getFloat64 if three else self.fmu.getReal, vr)[0]
         if kind in ("Integer", "Enumeration"):
-            return self._call(f"fmi2GetInteger({name})", self.fmu.getInteger, vr)[0]
+            return self._call(f"fmi{version}Get{'Int32' if three else 'Integer'}({name})",
+                              self.fmu.getInt32 if three else self.fmu.getInteger, vr)[0]
         if kind == "String":
-            return self._call(f"fmi2GetString({name})", self.fmu.getString, vr)[0].decode()
-        return self._call(f"fmi2GetBoolean({name})", self.fmu.getBoolean, vr)[0]
+            text = self._call(f"fmi{version}GetString({name})", self.fmu.getString, vr)[0]
+            return text.decode() if isinstance(text, bytes) else text
+        return self._call(f"fmi{version}GetBoolean({name})", self.fmu.getBoolean, vr)[0]
 
     def real_group(self, names: Sequence[str]) -> "RealGroup":
         return RealGroup(self, names)
@@ -185,6 +227,12 @@ class FmuInstance:
     def initialize(self, start_values: Mapping[str, float | int | bool] | None = None,
                    start_time: float = 0.0) -> None:
         self.time = start_time
+        if self.fmi3:  # FMI 3.0: the values in the instantiated state, the experiment at initialization
+            if start_values:
+                self.set(start_values)
+            self._call("fmi3EnterInitializationMode", self.fmu.enterInitializationMode, startTime=start_time)
+            self._call("fmi3ExitInitializationMode", self.fmu.exitInitializationMode)
+            return
         self._call("fmi2SetupExperiment", self.fmu.setupExperiment, startTime=start_time)
         if start_values:
             self.set(start_values)
@@ -192,31 +240,46 @@ class FmuInstance:
         self._call("fmi2ExitInitializationMode", self.fmu.exitInitializationMode)
 
     def do_step(self, step: float) -> None:
-        self._call("fmi2DoStep", self.fmu.doStep, self.time, step)
+        self._call(f"fmi{3 if self.fmi3 else 2}DoStep", self.fmu.doStep, self.time, step)
         self.time += step
 
     def set_input_derivatives(self, names: Sequence[str], derivatives: Sequence[float], order: int = 1) -> None:
+        if self.fmi3:
+            raise FmuError(self.name, "set input derivatives", self.time,
+                           [LogMessage("error", "", "FMI 3.0 has no input derivatives")])
         self._call("fmi2SetRealInputDerivatives", self.fmu.setRealInputDerivatives,
                    [self.vr(n) for n in names], [order] * len(names), [float(d) for d in derivatives])
 
     def get_state(self):
+        if self.fmi3:
+            return self._call("fmi3GetFMUState", self.fmu.getFMUState), self.time
         return self._call("fmi2GetFMUstate", self.fmu.getFMUstate), self.time
 
     def set_state(self, state) -> None:
         fmu_state, self.time = state
-        self._call("fmi2SetFMUstate", self.fmu.setFMUstate, fmu_state)
+        if self.fmi3:
+            self._call("fmi3SetFMUState", self.fmu.setFMUState, fmu_state)
+        else:
+            self._call("fmi2SetFMUstate", self.fmu.setFMUstate, fmu_state)
 
     def free_state(self, state) -> None:
-        self._call("fmi2FreeFMUstate", self.fmu.freeFMUstate, state[0])
+        if self.fmi3:
+            self._call("fmi3FreeFMUState", self.fmu.freeFMUState, state[0])
+        else:
+            self._call("fmi2FreeFMUstate", self.fmu.freeFMUstate, state[0])
 
     def serialize_state(self, state) -> bytes:
+        if self.fmi3:
+            return self._call("fmi3SerializeFMUState", self.fmu.serializeFMUState, state[0])
         return self._call("fmi2SerializeFMUstate", self.fmu.serializeFMUstate, state[0])
 
     def deserialize_state(self, data: bytes, time: float):
+        if self.fmi3:
+            return self._call("fmi3DeserializeFMUState", self.fmu.deserializeFMUState, data), time
         return self._call("fmi2DeSerializeFMUstate", self.fmu.deSerializeFMUstate, data), time
 
     def terminate(self) -> None:
-        self._call("fmi2Terminate", self.fmu.terminate)
+        self._call(f"fmi{3 if self.fmi3 else 2}Terminate", self.fmu.terminate)
 
     def free(self) -> None:
         self.fmu.freeInstance()
@@ -233,15 +296,21 @@ class RealGroup:
         self._pointer = self.values.ctypes.data_as(ctypes.POINTER(fmi2Real))
 
     def read(self) -> np.ndarray:
-        self.instance._call("fmi2GetReal", self.instance.fmu.fmi2GetReal, self.instance.fmu.component,
-                            self._vr, len(self.names), self._pointer)
+        fmu, n = self.instance.fmu, len(self.names)
+        if self.instance.fmi3:
+            self.instance._call("fmi3GetFloat64", fmu.fmi3GetFloat64, fmu.component, self._vr, n, self._pointer, n)
+        else:
+            self.instance._call("fmi2GetReal", fmu.fmi2GetReal, fmu.component, self._vr, n, self._pointer)
         return self.values
 
     def write(self, values: Iterable[float] | None = None) -> None:
         if values is not None:
             self.values[:] = values
-        self.instance._call("fmi2SetReal", self.instance.fmu.fmi2SetReal, self.instance.fmu.component,
-                            self._vr, len(self.names), self._pointer)
+        fmu, n = self.instance.fmu, len(self.names)
+        if self.instance.fmi3:
+            self.instance._call("fmi3SetFloat64", fmu.fmi3SetFloat64, fmu.component, self._vr, n, self._pointer, n)
+        else:
+            self.instance._call("fmi2SetReal", fmu.fmi2SetReal, fmu.component, self._vr, n, self._pointer)
 
     def read_derivatives(self, order: int) -> np.ndarray:
         """fmi2GetRealOutputDerivatives of the given order for these (output) variables."""
@@ -250,12 +319,19 @@ class RealGroup:
             self._read_orders = {k: (fmi2Integer * n)(*([k] * n)) for k in (1, 2)}
             self._rates = np.zeros(n)
             self._rates_pointer = self._rates.ctypes.data_as(ctypes.POINTER(fmi2Real))
-        self.instance._call("fmi2GetRealOutputDerivatives", self.instance.fmu.fmi2GetRealOutputDerivatives,
-                            self.instance.fmu.component, self._vr, n, self._read_orders[order], self._rates_pointer)
+        fmu = self.instance.fmu
+        if self.instance.fmi3:
+            self.instance._call("fmi3GetOutputDerivatives", fmu.fmi3GetOutputDerivatives, fmu.component, self._vr, n,
+                                self._read_orders[order], self._rates_pointer, n)
+        else:
+            self.instance._call("fmi2GetRealOutputDerivatives", fmu.fmi2GetRealOutputDerivatives, fmu.component,
+                                self._vr, n, self._read_orders[order], self._rates_pointer)
         return self._rates.copy()
 
     def write_derivatives(self, derivatives: Iterable[float], order: int = 1) -> None:
         """fmi2SetRealInputDerivatives of the given order for these (input) variables."""
+        if self.instance.fmi3:
+            self.instance.set_input_derivatives(self.names, derivatives, order)  # refused: FMI 3.0 has none
         n = len(self.names)
         if not hasattr(self, "_derivatives"):
             self._derivatives = np.zeros(n)

@@ -50,6 +50,12 @@ class _Instance(ctypes.Structure):
                 ("n_record", ctypes.c_int), ("record_offset", ctypes.c_int), ("record_vrs", _UINTS)]
 
 
+class _Fmi3Component(ctypes.Structure):
+    """An FMI 3.0 instance as the kernel calls it (kernel/fmi3.c): the instance and its fmi3 functions."""
+    _fields_ = [("instance", _P), ("set_float64", _P), ("get_float64", _P), ("get_output_derivatives", _P),
+                ("do_step", _P), ("get_state", _P), ("set_state", _P), ("free_state", _P)]
+
+
 class _Kernel(ctypes.Structure):
     _fields_ = [("n_instances", ctypes.c_int), ("instances", ctypes.POINTER(_Instance)), ("sequence", _INTS),
                 ("gauss_seidel", ctypes.c_int), ("order", ctypes.c_int), ("keep", ctypes.c_int),
@@ -100,6 +106,7 @@ def _load() -> ctypes.CDLL:
         check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
                                                   (_Instance, "KernelInstance"), (_Kernel, "Kernel"), (_Feed, "KernelFeed"),
                                                   (_Controller, "Controller"), (_RealTime, "RealTime")])
+        check_layout(lib, "fmi3_layout", path, [(_Fmi3Component, "Fmi3Component")])
         K, C = ctypes.POINTER(_Kernel), ctypes.POINTER(_Controller)
         lib.kernel_initialize.argtypes = [K, ctypes.c_double, ctypes.c_int, ctypes.c_int]
         lib.kernel_record.argtypes = [K, ctypes.c_int, _DOUBLES]
@@ -185,13 +192,23 @@ class Kernel:
         for k, n in enumerate(names):
             fmu = coupling.instances[n]
             c = instances[k]
-            c.component = fmu.fmu.component
-            for field, function in (("set_real", "fmi2SetReal"), ("get_real", "fmi2GetReal"),
-                                    ("set_input_derivatives", "fmi2SetRealInputDerivatives"),
-                                    ("get_output_derivatives", "fmi2GetRealOutputDerivatives"), ("do_step", "fmi2DoStep"),
-                                    ("get_state", "fmi2GetFMUstate"), ("set_state", "fmi2SetFMUstate"),
-                                    ("free_state", "fmi2FreeFMUstate")):
-                setattr(c, field, ctypes.cast(getattr(fmu.fmu.dll, function), _P).value)
+            if fmu.fmi3:  # through the kernel's adapters (kernel/fmi3.c), the instance and its functions behind them
+                adapted = _Fmi3Component(fmu.fmu.component, *(ctypes.cast(getattr(fmu.fmu.dll, f), _P).value for f in (
+                    "fmi3SetFloat64", "fmi3GetFloat64", "fmi3GetOutputDerivatives", "fmi3DoStep", "fmi3GetFMUState",
+                    "fmi3SetFMUState", "fmi3FreeFMUState")))
+                keep.append(adapted)
+                c.component = ctypes.addressof(adapted)
+                for field in ("set_real", "get_real", "set_input_derivatives", "get_output_derivatives", "do_step",
+                              "get_state", "set_state", "free_state"):
+                    setattr(c, field, ctypes.cast(getattr(self.library, f"fmi3_{field}"), _P).value)
+            else:
+                c.component = fmu.fmu.component
+                for field, function in (("set_real", "fmi2SetReal"), ("get_real", "fmi2GetReal"),
+                                        ("set_input_derivatives", "fmi2SetRealInputDerivatives"),
+                                        ("get_output_derivatives", "fmi2GetRealOutputDerivatives"),
+                                        ("do_step", "fmi2DoStep"), ("get_state", "fmi2GetFMUstate"),
+                                        ("set_state", "fmi2SetFMUstate"), ("free_state", "fmi2FreeFMUstate")):
+                    setattr(c, field, ctypes.cast(getattr(fmu.fmu.dll, function), _P).value)
             outputs = coupling.sources[n]
             vrs = _ints([fmu.vr(v) for v in outputs]).astype(np.uintc)
             c.n_outputs, c.output_offset, c.output_vrs = len(outputs), offset, _ptr(vrs, _UINTS)

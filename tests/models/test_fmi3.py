@@ -164,3 +164,40 @@ def test_the_fmi3_windows_binary_needs_only_windows_own_dlls(name, tmp_path):
         {"KERNEL32.dll", "msvcrt.dll"}
     for function in ("fmi3InstantiateCoSimulation", "fmi3DoStep", "fmi3GetFloat64", "fmi3SerializeFMUState"):
         assert f"] {function}\n" in table, function
+
+
+def test_the_engine_runs_the_meng_scene_on_fmi3_fmus_as_on_fmi2_at_order_0():
+    """The whole platform on the FMI 3.0 FMUs (scene.fmi = 3) through the C step kernel's FMI 3.0
+    adapters: at order 0 (what FMI 3.0's held inputs are) bit for bit the FMI 2.0 run, fixed steps
+    with the finer start and step doubling with its rollbacks through FMU state alike."""
+    from cosim.platform.run.runner import run_scene
+    from cosim.platform.scene import load_scene
+    for control in ({}, {"coupling.step_control": "doubling"}):
+        scene = load_scene("meng_eq35", {"scene.duration": 0.3, "coupling.order": 0, **control})
+        two, _ = run_scene(scene, progress=False, plots=False)
+        three, report = run_scene(scene.changed({"scene.fmi": 3}), progress=False, plots=False)
+        assert two.dtype.names == three.dtype.names and len(two) == len(three) > 100
+        for name in two.dtype.names:
+            assert np.array_equal(two[name], three[name]), (control, name)
+        assert not any(r.startswith("FMI 3.0") for r in report.remarks)
+
+
+def test_an_fmi3_run_that_extrapolates_says_its_inputs_are_held(tmp_path, capsys):
+    from cosim.cli import main
+    assert main(["run", "meng_eq35", "--fmi", "3", "--duration", "0.05", "--no-plots", "--out", str(tmp_path)]) == 0
+    assert "FMI 3.0: the FMUs take no input derivatives" in capsys.readouterr().out
+    assert main(["export", "meng_eq35", "--ssp", str(tmp_path / "m.ssp"), "--scene-step"]) == 0
+    from cosim.engine.ssp import read_ssp
+    assert main(["run", str(tmp_path / "m.ssp"), "--fmi", "3", "--out", str(tmp_path)]) == 2
+    assert "--fmi: for a scene" in capsys.readouterr().err
+    assert read_ssp(tmp_path / "m.ssp").components  # the FMI 2.0 archive as before
+
+
+def test_exporting_a_scene_on_fmi3_fmus_is_one_line(tmp_path, capsys):
+    from cosim.cli import main
+    from cosim.engine.artifacts import ROOT
+    scene = tmp_path / "meng3.toml"
+    scene.write_text((ROOT / "scenes" / "meng_eq35.toml").read_text().replace("[scene]\n", "[scene]\nfmi = 3\n", 1))
+    assert main(["export", str(scene), "--ssp", str(tmp_path / "m.ssp")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "scene.fmi = 3: the export takes the FMI 2.0 FMUs" in err and str(scene) in err

@@ -23,7 +23,7 @@ from .tuning import SizingError, check_limit, check_sizing, design, hold_current
 
 def drive_fmus(scene: Scene) -> list[Path]:
     """Per leg, the drive FMU: the user's where the scene names one, ours for its kind otherwise."""
-    return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu) for leg in LEGS]
+    return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu, fmi=scene.fmi) for leg in LEGS]
 
 
 def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
@@ -119,7 +119,7 @@ def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemS
     structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
                                    interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene),
-                                   cueing_values=scene_cueing(scene, mechanics_values))
+                                   cueing_values=scene_cueing(scene, mechanics_values), fmi=scene.fmi)
     structure.settings = {**to_strings(scene_algorithm(scene), scene.control),
                           **output_settings(*scene_record(scene), scene.output_interval)}
     return structure

@@ -125,6 +125,10 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     from ...engine.osp import write_osp
     from ...engine.ssp import not_portable, write_ssp
     from .errors import scene_error
+    if scene.fmi == 3:
+        from ..scene import SceneError
+        raise SceneError(f"{scene.path}:{scene.document.line('scene.fmi')}: scene.fmi = 3: the export takes the FMI 2.0 "
+                         "FMUs (an SSP 1.0 archive of FMI 3.0 FMUs is not written yet); export the scene with fmi = 2")
     structure = scene_structure(scene)
     lines, files = [], []
     if not fmi2_warnings:

@@ -106,6 +106,10 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
     report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
                           tuning=tuning, diverged=outcome.diverged)
     report.name = scene.name
+    if scene.fmi == 3 and scene.algorithm.order > 0:
+        report.remarks.append(f"FMI 3.0: the FMUs take no input derivatives, so each holds its inputs over a step; the "
+                              f"coupling's order-{scene.algorithm.order} extrapolation reaches them as the value at "
+                              "the step's start (with coupling.order = 0 the run equals the FMI 2.0 one bit for bit)")
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
         if len(result) > 3:

@@ -25,7 +25,7 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
                        leg_values: Sequence[Mapping[str, object]] | None = None, name: str = "platform",
                        experiment: Experiment | None = None, interface_jacobian: bool = False,
                        drive_fmus: Sequence[Path] | None = None,
-                       cueing_values: Mapping[str, object] | None = None) -> SystemStructure:
+                       cueing_values: Mapping[str, object] | None = None, fmi: int = 2) -> SystemStructure:
     """Trajectory, mechanics and six drives of one kind with these parameter values (leg_values:
     per drive, on top of drive_values, e.g. each leg's force feedforward). drive_fmus: per leg, the
     drive's FMU (default: ours for the kind); a drive's optional ports (the reference's rate, the
@@ -34,21 +34,21 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     wired back to its `*_seen` input: every coupling algorithm hands both the same
     extrapolation), so the mechanics integrates the drives' damping implicitly. cueing_values: the
     pose reference comes from a cueing FMU with these values (a vehicle's motion through the
-    classical washout), the trajectory's giving the loads alone."""
+    classical washout), the trajectory's giving the loads alone. fmi: our FMUs as FMI 2.0 or 3.0."""
     from ...engine.checks import variables
     if drive not in DRIVES:
         raise ValueError(f"unknown drive kind '{drive}' (known: {', '.join(DRIVES)})")
     wiring = DRIVES[drive]
-    fmus = [Path(f) for f in drive_fmus] if drive_fmus else [fmu_path(wiring.fmu)] * len(LEGS)
+    fmus = [Path(f) for f in drive_fmus] if drive_fmus else [fmu_path(wiring.fmu, fmi=fmi)] * len(LEGS)
     has = {fmu: set(variables(fmu)) for fmu in set(fmus)}
-    components = [Component("trajectory", fmu_path("trajectory"), dict(trajectory_values or {})),
-                  Component("mechanics", fmu_path("mechanics"), dict(mechanics_values or {}))]
+    components = [Component("trajectory", fmu_path("trajectory", fmi=fmi), dict(trajectory_values or {})),
+                  Component("mechanics", fmu_path("mechanics", fmi=fmi), dict(mechanics_values or {}))]
     for k, instance in enumerate(drive_names(drive)):
         wired = {key: value for key, value in wiring.wired_parameters if key in has[fmus[k]]}
         components.append(Component(instance, fmus[k], {**wired, **(drive_values or {}),
                                                         **(leg_values[k] if leg_values else {})}))
     if cueing_values is not None:
-        components.insert(1, Component("cueing", fmu_path("cueing"), dict(cueing_values)))
+        components.insert(1, Component("cueing", fmu_path("cueing", fmi=fmi), dict(cueing_values)))
     source = pose_source(cueing_values is not None)
     connections = [*(Connection((source, f"pose_ref.{a}"), ("mechanics", f"pose_ref.{a}")) for a in POSE),
                    *(Connection(("trajectory", n), ("mechanics", n)) for n in [*WRENCH, *BODY_WRENCH])]

@@ -75,6 +75,7 @@ class Scene:
     document: Document = field(init=False, repr=False)  # the file with the overrides, checked
     name: str = field(init=False)
     duration: float = field(init=False)  # [s]
+    fmi: int = field(init=False)  # [scene] fmi: the FMI version of our FMUs (2 or 3)
     drive: str = field(init=False)  # the drive kind: "pmsm" or "linear"
     tuning: str = field(init=False)  # "auto": the drives' loops designed for this platform, or "defaults"
     drive_set: str | None = field(init=False)  # params/<name>.toml: a drive sized for this platform

@@ -68,7 +68,7 @@ def derive(scene: Scene) -> dict[str, Any]:
     overrides; raises SceneError, one line, for anything that cannot run."""
     doc = read(SCHEMA, scene.path, scene.overrides, text=scene.text, data=dict(scene.data))
     out: dict[str, Any] = {"document": doc, "name": doc.value("scene", "name", scene.path.stem),
-                           "duration": float(doc.value("scene", "duration"))}
+                           "duration": float(doc.value("scene", "duration")), "fmi": int(doc.value("scene", "fmi"))}
     out.update(_drives(doc))
     out.update(_platform(doc, out))
     out["trajectory"], out["neutral"] = _signals(doc)
