@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The FMUs under hostile use: builds the fuzz harness and the thread test of every FMU
-# (tests/fuzz/) under AddressSanitizer + UBSan and ThreadSanitizer in build-fuzz/, then runs them.
+# The FMUs under hostile use: builds the fuzz harnesses (FMI 2.0 and, through the FMI 3.0 layer,
+# FMI 3.0) and the thread test of every FMU (tests/fuzz/) under AddressSanitizer + UBSan and
+# ThreadSanitizer in build-fuzz/, then runs them.
 #   bash scripts/fuzz.sh          CI: seeds 1 and 2 (2 x 1000 sequences per FMU) and one new seed
 #                                 (1000 more, printed so a failure can be replayed)
 #   bash scripts/fuzz.sh long     100 000 sequences per FMU (seed 1)
-#   bash scripts/fuzz.sh replay MODEL SEED INDEX    one sequence, every call printed
+#   bash scripts/fuzz.sh replay MODEL SEED INDEX    one sequence, every call printed (replay3: FMI 3.0)
 #   bash scripts/fuzz.sh long-inputs              10 000 mutants of each input file kind (seed 1)
 # CI also fuzzes the files a user writes (tests/fuzz/fuzz_inputs.py): seeded mutations of every
 # shipped scene and sweep file and of an exported SSD, SSV and archive (hostile entries too), each
@@ -23,7 +24,7 @@ CMAKE=.venv/bin/cmake
 "$CMAKE" -S . -B build-fuzz -DCOSIM_FUZZ=ON -DCOSIM_SANITIZE=ON -DPython3_EXECUTABLE="$PWD/.venv/bin/python" \
   > build-fuzz.log 2>&1 || { cat build-fuzz.log; exit 1; }
 targets=""
-for m in $MODELS; do targets="$targets fuzz_$m threads_$m"; done
+for m in $MODELS; do targets="$targets fuzz_$m fuzz3_$m threads_$m"; done
 # shellcheck disable=SC2086
 "$CMAKE" --build build-fuzz -j 2 --target $targets >> build-fuzz.log 2>&1 || { cat build-fuzz.log; exit 1; }
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
@@ -35,16 +36,25 @@ case "$mode" in
     exec .venv/bin/python tests/fuzz/fuzz_inputs.py --long ;;
   replay)
     exec "build-fuzz/fuzz_$2" --seed "$3" --replay "$4" --verbose ;;
+  replay3)
+    exec "build-fuzz/fuzz3_$2" --seed "$3" --replay "$4" --verbose ;;
   long)
-    for m in $MODELS; do "build-fuzz/fuzz_$m" --seed 1 --sequences 100000; done ;;
+    for m in $MODELS; do
+      "build-fuzz/fuzz_$m" --seed 1 --sequences 100000
+      "build-fuzz/fuzz3_$m" --seed 1 --sequences 100000
+    done ;;
   ci)
     new_seed=$(( $(date +%s) % 1000000007 ))
-    echo "fuzz: fixed seeds 1 and 2, new seed $new_seed (replay: bash scripts/fuzz.sh replay MODEL SEED INDEX)"
+    echo "fuzz: fixed seeds 1 and 2, new seed $new_seed (replay: bash scripts/fuzz.sh replay|replay3 MODEL SEED INDEX)"
     for m in $MODELS; do
-      for seed in 1 2 "$new_seed"; do "build-fuzz/fuzz_$m" --seed "$seed" --sequences 1000; done
+      for seed in 1 2 "$new_seed"; do
+        "build-fuzz/fuzz_$m" --seed "$seed" --sequences 1000
+        "build-fuzz/fuzz3_$m" --seed "$seed" --sequences 1000
+      done
       "build-fuzz/threads_$m"
     done
     .venv/bin/python tests/fuzz/fuzz_inputs.py --mutants 40 ;;
-  *) echo "usage: bash scripts/fuzz.sh [ci | long | long-inputs | replay MODEL SEED INDEX]" >&2; exit 2 ;;
+  *) echo "usage: bash scripts/fuzz.sh [ci | long | long-inputs | replay MODEL SEED INDEX | replay3 MODEL SEED INDEX]" >&2
+     exit 2 ;;
 esac
 echo "fuzz: done in $(( $(date +%s) - start )) s, no violations, sanitizer reports or differences"

@@ -1,106 +1,13 @@
-/* Random FMI 2.0 call sequences against one model, linked in with the shared layer (build with
- * -DCOSIM_FUZZ=ON; with -DCOSIM_SANITIZE=ON under AddressSanitizer and UndefinedBehaviorSanitizer).
- *
- *   fuzz_<model> [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose]
- *
- * Each sequence instantiates the model and makes up to M calls chosen at random, with hostile
- * arguments: value references in and out of range, NaN, infinities, huge and tiny numbers, NULL
- * arrays, step sizes of every sign and size, FMU states of its own, altered serialized bytes.
- * Every result is judged by an oracle built from FMI 2.0's Co-Simulation state machine (the set of
- * states the instance may be in after each call): a call the standard does not allow that returns
- * fmi2OK, a Real output read as NaN or infinite with fmi2OK, or a sequence that takes longer than
- * 10 s (an alarm) is a violation, reported with the seed and the sequence index, which replay it
- * alone (--replay K, with --verbose printing every call). Crashes and memory errors are the
- * sanitizers' to report. Exit status: 0 without violations, 1 otherwise.
- */
-#define _POSIX_C_SOURCE 200809L /* alarm, signal */
-#include "fmu_common.h"
-#include "model_guid.h"
-
-#include <float.h>
-#include <math.h>
-#include <signal.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
-
-/* ---- random numbers: xorshift64*, reproducible from the seed ---- */
-static unsigned long long rng_state;
-static unsigned long long next_random(void) {
-    rng_state ^= rng_state >> 12; rng_state ^= rng_state << 25; rng_state ^= rng_state >> 27;
-    return rng_state * 2685821657736338717ULL;
-}
-static int pick(int n) { return (int)(next_random() % (unsigned long long)n); }
-static double uniform(void) { return (double)(next_random() >> 11) / 9007199254740992.0; }
-
-static double hostile_real(void) {
-    static const double special[] = {0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 1e308, -1e308, DBL_MAX, -DBL_MAX,
-                                     DBL_MIN, 1e-9, 1e9, 0.5, 2.0, 1e-3};
-    switch (pick(4)) {
-    case 0: return special[pick((int)(sizeof special / sizeof special[0]))];
-    case 1: return pick(3) == 0 ? NAN : (pick(2) ? INFINITY : -INFINITY);
-    case 2: return (uniform() - 0.5) * pow(10.0, pick(12) - 4);
-    default: return uniform();
-    }
-}
-
-/* a value for variable vr: mostly within its bounds (to get deep into the model), sometimes hostile */
-static double value_for(int vr) {
-    const FmuVariable *var = &fmu_variables[vr];
-    if (pick(3) == 0) return hostile_real();
-    const double lo = isfinite(var->min) ? var->min : -10.0, hi = isfinite(var->max) ? var->max : 10.0;
-    return lo + (hi - lo) * uniform();
-}
-
-static unsigned random_vr(void) {
-    return pick(10) == 0 ? (unsigned)(pick(3) == 0 ? 0 : VR_COUNT + pick(100)) : (unsigned)(1 + pick(VR_COUNT - 1));
-}
-
-/* ---- the oracle: FMI 2.0 Co-Simulation states (a set: after an error the instance may be anywhere) ---- */
-enum { S_INSTANTIATED = 1, S_INIT = 2, S_STEP_COMPLETE = 4, S_STEP_FAILED = 8, S_TERMINATED = 16, S_ERROR = 32 };
-#define S_ANY (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
-#define S_GET (S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
-#define S_SET (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE)
-#define S_STATUS (S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED)
-
-static int possible;              /* the states the instance may be in */
-static long violations, calls;
-static unsigned long long seed;
-static long sequence_index;
-static int verbose;
-
-static void violation(const char *call, const char *what) {
-    violations++;
-    fprintf(stderr, "VIOLATION seed %llu sequence %ld call %ld: %s: %s\n", seed, sequence_index, calls, call, what);
-}
-
-/* judge a call: allowed_in = the states in which the standard allows it */
-static void judge(const char *call, fmi2Status status, int allowed_in) {
-    calls++;
-    if (verbose) fprintf(stderr, "  %s -> %d (states %#x)\n", call, (int)status, possible);
-    if (status == fmi2OK && !(possible & allowed_in)) violation(call, "accepted in a state where FMI 2.0 forbids it");
-}
-
-/* after a call that failed, the instance may have moved to the error state */
-static void after(fmi2Status status, int success_state) {
-    if (status <= fmi2Warning) { if (success_state) possible = success_state; }
-    else possible |= S_ERROR;
-}
+/* Random FMI 2.0 call sequences against one model (tests/fuzz/fuzz_common.h says how they are
+ * judged and run): every FMI 2.0 Co-Simulation function with hostile arguments: value references in
+ * and out of range, NaN, infinities, huge and tiny numbers, NULL arrays, step sizes of every sign
+ * and size, FMU states of its own, altered serialized bytes. */
+#include "fuzz_common.h"
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {
     (void)env; (void)name; (void)status; (void)category;
     if (verbose) fprintf(stderr, "    log: %s\n", message);
-}
-
-static void on_alarm(int signum) {
-    (void)signum;
-    char text[160];
-    int n = snprintf(text, sizeof text, "VIOLATION seed %llu sequence %ld call %ld: hang (longer than 10 s)\n", seed,
-                     sequence_index, calls);
-    if (n > 0) { ssize_t ignored = write(2, text, (size_t)n); (void)ignored; }
-    _exit(1);
 }
 
 /* ---- one sequence ---- */
@@ -269,29 +176,3 @@ static void run_sequence(int max_calls) {
     fmi2FreeInstance(c);
 }
 
-int main(int argc, char **argv) {
-    unsigned long long first_seed = 1;
-    long sequences = 1000, replay = -1;
-    int max_calls = 200;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--seed") && i + 1 < argc) first_seed = strtoull(argv[++i], NULL, 10);
-        else if (!strcmp(argv[i], "--sequences") && i + 1 < argc) sequences = strtol(argv[++i], NULL, 10);
-        else if (!strcmp(argv[i], "--calls") && i + 1 < argc) max_calls = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--replay") && i + 1 < argc) replay = strtol(argv[++i], NULL, 10);
-        else if (!strcmp(argv[i], "--verbose")) verbose = 1;
-        else { fprintf(stderr, "usage: %s [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose]\n", argv[0]); return 2; }
-    }
-    signal(SIGALRM, on_alarm);
-    seed = first_seed;
-    for (sequence_index = (replay >= 0 ? replay : 0); sequence_index < (replay >= 0 ? replay + 1 : sequences);
-         sequence_index++) {
-        rng_state = (first_seed * 0x9E3779B97F4A7C15ULL) ^ (unsigned long long)(sequence_index + 1) * 0xBF58476D1CE4E5B9ULL;
-        if (!rng_state) rng_state = 1;
-        alarm(10);
-        run_sequence(max_calls);
-        alarm(0);
-    }
-    printf("%s: seed %llu, %ld sequences, %ld calls, %ld violations\n", MODEL_IDENTIFIER_STRING, first_seed,
-           replay >= 0 ? 1 : sequences, calls, violations);
-    return violations ? 1 : 0;
-}
