@@ -25,6 +25,8 @@ def add(commands) -> argparse.ArgumentParser:
                         help="the FMUs return fmi2Warning where they log one, as the standard has it (by default "
                              "fmi2OK, so that OMSimulator, which stops at the first, runs to the end)")
     export.add_argument("--warnings-as-ok", action="store_true", help="the default (kept for old command lines)")
+    export.add_argument("--fmi", type=int, choices=(2, 3), help="our FMUs as FMI 2.0 (the default) or FMI 3.0 in the "
+                        "archive (scene.fmi)")
     return export
 
 
@@ -38,7 +40,7 @@ def main(args: argparse.Namespace) -> int:
     for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp)):
         if folder is not None and (problem := unwritable(folder)):
             raise UsageError(f"{option} {folder}: {problem}")
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, {"scene.fmi": args.fmi} if args.fmi is not None else None)
     exported = export_scene(scene, args.ssp, args.osp, measure=not args.scene_step, fmi2_warnings=args.fmi2_warnings)
     print("\n".join(exported.lines))
     for path in exported.files:

@@ -13,11 +13,11 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from fmpy import read_model_description
 from lxml import etree
 
 from .files import replacing, write_bytes
 from .settings import EnergyControl, system_settings
+from .fmi import loaded
 from .structure import SystemStructure
 
 OSP = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
@@ -42,7 +42,7 @@ def to_osp_xml(structure: SystemStructure, power_bonds: bool = True, step: float
     for component in structure.components:
         simulator = _element(simulators, "Simulator", name=component.name, source=component.fmu.name)
         if component.parameters:
-            kinds = {v.name: v.type for v in read_model_description(str(component.fmu)).modelVariables}
+            kinds = {v.name: v.type for v in loaded(component.fmu)[0].modelVariables}
             values = _element(simulator, "InitialValues")
             for name, value in component.parameters.items():
                 kind = "Integer" if kinds[name] == "Enumeration" else kinds[name]

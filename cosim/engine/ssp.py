@@ -32,6 +32,7 @@ from fmpy import read_model_description
 from lxml import etree
 
 from .errors import InputError
+from .fmi import loaded
 from .files import replacing
 from .structure import Bond, Component, Connection, Experiment, SystemStructure, Value
 
@@ -144,7 +145,7 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
     parameter_sets = {}
     connected = {c.source for c in structure.connections} | {c.target for c in structure.connections}
     for component in structure.components:
-        description = read_model_description(str(component.fmu))
+        description = loaded(component.fmu)[0]  # an FMI 3.0 FMU's types by their FMI 2.0 (SSP 1.0) names
         variables = {v.name: v for v in description.modelVariables}
         for unit in description.unitDefinitions:
             base = unit.baseUnit

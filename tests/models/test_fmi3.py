@@ -193,11 +193,48 @@ def test_an_fmi3_run_that_extrapolates_says_its_inputs_are_held(tmp_path, capsys
     assert read_ssp(tmp_path / "m.ssp").components  # the FMI 2.0 archive as before
 
 
-def test_exporting_a_scene_on_fmi3_fmus_is_one_line(tmp_path, capsys):
+def test_a_scene_on_fmi3_fmus_exports_and_runs_from_its_archive_as_itself(tmp_path, capsys):
+    """cosim export SCENE --fmi 3: an SSP 1.0 archive of the FMI 3.0 FMUs (their Float64 connectors
+    as SSP's Real), which our engine runs bit for bit as the scene on FMI 3.0 FMUs."""
     from cosim.cli import main
     from cosim.engine.artifacts import ROOT
-    scene = tmp_path / "meng3.toml"
-    scene.write_text((ROOT / "scenes" / "meng_eq35.toml").read_text().replace("[scene]\n", "[scene]\nfmi = 3\n", 1))
-    assert main(["export", str(scene), "--ssp", str(tmp_path / "m.ssp")]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "scene.fmi = 3: the export takes the FMI 2.0 FMUs" in err and str(scene) in err
+    archive = tmp_path / "meng3.ssp"
+    assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive), "--fmi", "3",
+                 "--scene-step"]) == 0
+    assert "holds our FMUs as FMI 3.0" in capsys.readouterr().out
+    with zipfile.ZipFile(archive) as z:
+        description = z.read("resources/mechanics.fmu")
+    assert b'fmiVersion="3.0"' in zipfile.ZipFile(__import__("io").BytesIO(description)).read("modelDescription.xml")
+    assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--fmi", "3", "--duration", "0.3", "--no-plots",
+                 "--out", str(tmp_path / "a")]) == 0
+    assert main(["run", str(archive), "--duration", "0.3", "--out", str(tmp_path / "b")]) == 0
+    a = np.genfromtxt(tmp_path / "a" / "meng_eq35.csv", delimiter=",", names=True)
+    b = np.genfromtxt(tmp_path / "b" / "meng3.csv", delimiter=",", names=True)
+    assert a.dtype.names == b.dtype.names and len(a) == len(b)
+    for name in a.dtype.names:
+        assert np.array_equal(a[name], b[name]), name
+
+
+def test_a_users_drive_fmu_may_be_fmi3(tmp_path):
+    """A drive FMU of the user's own ([drive] fmu) as FMI 3.0: checked against the contract's ports
+    as an FMI 2.0 one (its Float64 read as Real), and run: our PMSM drive's FMI 3.0 FMU as the
+    user's gives, at order 0, the run of its FMI 2.0 FMU in the same place bit for bit."""
+    from cosim.platform.run.runner import run_scene
+    from cosim.platform.scene import load_scene
+    from cosim.platform.scene.drive_fmu import inspect
+    runs = []
+    for fmi in (2, 3):
+        folder = tmp_path / f"fmi{fmi}"
+        folder.mkdir()
+        (folder / "pmsm_drive.fmu").write_bytes(fmu_path("pmsm_drive", fmi=fmi).read_bytes())
+        assert inspect(folder / "pmsm_drive.fmu").kind == "pmsm"
+        (folder / "scene.toml").write_text('[scene]\nduration = 0.2\n[drive]\nfmu = "pmsm_drive.fmu"\n'
+                                           '[mechanics]\nparameter_set = "meng2010"\n[coupling]\norder = 0\n'
+                                           '[trajectory.z]\noffset = "neutral"\n[trajectory.x]\n'
+                                           'sines = [{amplitude = 0.05, frequency = 1.0}]\n')
+        result, report = run_scene(load_scene(folder / "scene.toml"), progress=False, plots=False)
+        assert report.failure is None
+        runs.append(result)
+    assert runs[0].dtype.names == runs[1].dtype.names
+    for name in runs[0].dtype.names:
+        assert np.array_equal(runs[0][name], runs[1][name]), name

@@ -125,10 +125,6 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     from ...engine.osp import write_osp
     from ...engine.ssp import not_portable, write_ssp
     from .errors import scene_error
-    if scene.fmi == 3:
-        from ..scene import SceneError
-        raise SceneError(f"{scene.path}:{scene.document.line('scene.fmi')}: scene.fmi = 3: the export takes the FMI 2.0 "
-                         "FMUs (an SSP 1.0 archive of FMI 3.0 FMUs is not written yet); export the scene with fmi = 2")
     structure = scene_structure(scene)
     lines, files = [], []
     if not fmi2_warnings:
@@ -146,6 +142,9 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
         check_parameters(structure)
     except ParameterError as error:
         raise scene_error(scene, error) from None
+    if scene.fmi == 3:
+        lines.append("note: the archive holds our FMUs as FMI 3.0 (no input derivatives: each holds its inputs over a "
+                     "step); our engine runs it; which of the other tools load FMI 3.0 FMUs is not checked here")
     steps = tool_steps(scene) if measure else []
     if steps:
         lines += steps_text(scene, steps)

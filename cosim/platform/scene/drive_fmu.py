@@ -1,13 +1,13 @@
 """A drive FMU of the user's own: what it is and what it can do, read from its modelDescription.
 
-Any FMI 2.0 Co-Simulation FMU that keeps a drive's ports of ../shared/INTERFACES.md drives a leg: a
+Any FMI 2.0 or 3.0 Co-Simulation FMU that keeps a drive's ports of ../shared/INTERFACES.md drives a leg: a
 rotary drive takes `angle_ref`, `angle`, `speed` and gives `torque` (the wiring of our pmsm_drive),
 a linear one takes `position_ref`, `position`, `velocity` and gives `force` (that of our
 linear_motor). Its kind follows from those ports. The optional ports (the reference's rate, the
 interface Jacobian's slope, currents) are wired and recorded where the FMU has them.
 
 `inspect` refuses, in one line naming the FMU, the port and the reason, what cannot drive a leg:
-a file that is not an FMU, FMI 1.0 or 3.0, Model Exchange only, no binary for this machine, a
+a file that is not an FMU, FMI 1.0, Model Exchange only, no binary for this machine, a
 missing port, a port of the wrong causality or type, a declared unit that contradicts the
 contract. What fmpy's validation finds beyond that is kept as `problems` and reported with the run
 (exporting tools differ in how strictly they fill ModelStructure; the run does not depend on it).
@@ -73,6 +73,7 @@ class DriveFmu:
 def _inspect(path: Path, size: int, mtime: int) -> DriveFmu:
     import fmpy
     from fmpy.validation import validate_fmu
+    from ...engine.fmi import fmi2_kinds
     name = path.name
     if not zipfile.is_zipfile(path):
         raise DriveFmuError(f"{name} is not an FMU (not a zip archive)")
@@ -81,11 +82,13 @@ def _inspect(path: Path, size: int, mtime: int) -> DriveFmu:
     except Exception as error:  # fmpy raises bare exceptions for a missing or invalid modelDescription.xml
         reason = " ".join(line.strip(" -") for line in str(error).splitlines() if line.strip())
         raise DriveFmuError(f"{name} is not an FMU fmpy can read: {reason}") from None
-    if md.fmiVersion != "2.0":
-        raise DriveFmuError(f"{name} is FMI {md.fmiVersion}; the drives are FMI 2.0 Co-Simulation FMUs")
+    if md.fmiVersion not in ("2.0", "3.0"):
+        raise DriveFmuError(f"{name} is FMI {md.fmiVersion}; a drive is an FMI 2.0 or 3.0 Co-Simulation FMU")
     if md.coSimulation is None:
         raise DriveFmuError(f"{name} is a Model Exchange FMU only; a drive must be a Co-Simulation FMU")
-    binary = f"binaries/{fmpy.platform}/{md.coSimulation.modelIdentifier}{fmpy.sharedLibraryExtension}"
+    md = fmi2_kinds(md)  # FMI 3.0: Float64 read as Real, no input derivatives
+    folder = fmpy.platform_tuple if md.fmiVersion == "3.0" else fmpy.platform
+    binary = f"binaries/{folder}/{md.coSimulation.modelIdentifier}{fmpy.sharedLibraryExtension}"
     with zipfile.ZipFile(path) as archive:
         held = sorted({n.split("/")[1] for n in archive.namelist() if n.startswith("binaries/") and n.count("/") > 1})
         if binary not in archive.namelist():
