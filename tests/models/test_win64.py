@@ -1,6 +1,7 @@
-"""Every FMU's Windows binary (binaries/win64/, MinGW-w64 from the same sources) as a Windows tool
-would run it: it imports only Windows' own DLLs, exports the FMI 2.0 functions, and under Wine runs
-the same experiment as its linux64 twin with the same outputs, its state kept, serialized and set
+"""Every FMU's Windows binary (binaries/win64/ of the FMI 2.0 FMU, binaries/x86_64-windows/ of the
+FMI 3.0 one; MinGW-w64 from the same sources) as a Windows tool would run it: it imports only
+Windows' own DLLs, exports the FMI functions, and under Wine runs the same experiment as its Linux
+twin with the same outputs, its state kept, serialized and set
 back included, and a call in the wrong state refused (tests/c/fmu_run.c drives both binaries).
 
 The tolerance: bit for bit where the model's arithmetic is the C operators (one compiler, gcc 12,
@@ -40,17 +41,22 @@ WINDOWS_DLLS = {"KERNEL32.dll", "msvcrt.dll"}
 
 
 @pytest.fixture(scope="module")
-def harness(tmp_path_factory) -> dict[str, Path]:
-    """tests/c/fmu_run.c built for this system (gcc) and for Windows (MinGW-w64)."""
+def harness(tmp_path_factory) -> dict[tuple[str, int], Path]:
+    """tests/c/fmu_run.c built for this system (gcc) and for Windows (MinGW-w64), for FMI 2.0 and 3.0."""
     import fmpy
     folder = tmp_path_factory.mktemp("harness")
     headers = Path(fmpy.__file__).parent / "c-code"
     source = ROOT / "tests" / "c" / "fmu_run.c"
     flags = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{headers}"]
-    subprocess.run([os.environ.get("CC", "cc"), *flags, str(source), "-o", str(folder / "fmu_run"), "-ldl"], check=True)
-    subprocess.run([MINGW, *flags, "-D__USE_MINGW_ANSI_STDIO=1", str(source), "-o", str(folder / "fmu_run.exe"),
-                    "-static-libgcc"], check=True)
-    return {"linux64": folder / "fmu_run", "win64": folder / "fmu_run.exe"}
+    out = {}
+    for fmi, define in ((2, []), (3, ["-DFMU_RUN_FMI3"])):
+        out["linux64", fmi] = folder / f"fmu_run{fmi}"
+        out["win64", fmi] = folder / f"fmu_run{fmi}.exe"
+        subprocess.run([os.environ.get("CC", "cc"), *flags, *define, str(source), "-o", str(out["linux64", fmi]),
+                        "-ldl"], check=True)
+        subprocess.run([MINGW, *flags, *define, "-D__USE_MINGW_ANSI_STDIO=1", str(source), "-o",
+                        str(out["win64", fmi]), "-static-libgcc"], check=True)
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -62,12 +68,15 @@ def wine_env(tmp_path_factory) -> dict[str, str]:
     return env
 
 
-def unpack(name: str, folder: Path) -> tuple[Path, str]:
-    with zipfile.ZipFile(fmu_path(name)) as archive:
+def unpack(name: str, folder: Path, fmi: int = 2) -> tuple[Path, str]:
+    with zipfile.ZipFile(fmu_path(name, fmi=fmi)) as archive:
         archive.extractall(folder)
     import re
-    guid = re.search(r'guid="([^"]+)"', (folder / "modelDescription.xml").read_text()).group(1)
-    return folder, guid
+    token = re.search(r'(?:guid|instantiationToken)="([^"]+)"', (folder / "modelDescription.xml").read_text()).group(1)
+    return folder, token
+
+
+BINARIES = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}  # each version's platform folders
 
 
 def arguments(name: str) -> tuple[str, list[str]]:
@@ -100,14 +109,16 @@ def test_the_windows_binary_needs_only_windows_own_dlls(name, tmp_path):
         assert f"] {function}\n" in table, function
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("name", MODELS)
-def test_under_wine_the_windows_binary_gives_the_linux_outputs(name, tmp_path, harness, wine_env):
-    folder, guid = unpack(name, tmp_path)
+def test_under_wine_the_windows_binary_gives_the_linux_outputs(name, fmi, tmp_path, harness, wine_env):
+    folder, token = unpack(name, tmp_path, fmi)
     outputs, settings = arguments(name)
-    common = [guid, repr(STEP_OF.get(name, STEP)), f"{STEPS}r", outputs, *settings]
-    linux, linux_again = run([str(harness["linux64"]), str(folder / "binaries" / "linux64" / f"{name}.so"), *common])
-    windows, windows_again = run([WINE, str(harness["win64"]), str(folder / "binaries" / "win64" / f"{name}.dll"),
-                                  *common], wine_env)
+    common = [token, repr(STEP_OF.get(name, STEP)), f"{STEPS}r", outputs, *settings]
+    on_linux, on_windows = (folder / "binaries" / f for f in BINARIES[fmi])
+    linux, linux_again = run([str(harness["linux64", fmi]), str(on_linux / f"{name}.so"), *common])
+    windows, windows_again = run([WINE, str(harness["win64", fmi]), str(on_windows / f"{name}.dll"), *common],
+                                 wine_env)
     assert linux.shape == windows.shape == (STEPS + 1, 1 + len(outputs.split(",")))
     scale = np.ptp(linux, axis=0)
     assert np.all(np.abs(windows - linux) <= 1e-12 * np.maximum(scale, 1.0))
