@@ -62,7 +62,8 @@ function(add_fmu name)
     target_include_directories(${name}_fmi3 PRIVATE ${include_dirs})
     set_target_properties(${name}_fmi3 PROPERTIES PREFIX "" OUTPUT_NAME ${name}
                           LIBRARY_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3"
-                          RUNTIME_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3")
+                          RUNTIME_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3"
+                          ARCHIVE_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3")  # a DLL's import library too
     if(NOT WIN32)
       target_link_libraries(${name}_fmi3 PRIVATE m)
     endif()
