@@ -15,9 +15,14 @@ status=0
 if [ "$status" -eq 5 ]; then
   echo "pytest collected no tests: failing the run" >&2
 fi
-# The FMUs under hostile use: random FMI call sequences under sanitizers, threads under TSan; and
-# the wheel, installed outside the checkout, running a scene, its SSP and a cluster sweep.
+# Every shipped scene's export in the other tools (libcosim, Ecos, fmpy.ssp) at the steps it wrote
+# for them; the FMUs under hostile use: random FMI call sequences under sanitizers, threads under
+# TSan; and the wheel, installed outside the checkout, running a scene, its SSP and a cluster sweep.
 if [ "$#" -eq 0 ]; then
+  tools=0
+  .venv/bin/python -m pytest -ra -m tools tests/platform/test_export_tools.py || tools=$?
+  if [ "$tools" -eq 5 ]; then echo "the tools stage collected no tests: failing the run" >&2; fi
+  [ "$tools" -eq 0 ] || status=1
   bash scripts/fuzz.sh ci || status=1
   bash scripts/check_wheel.sh || status=1
 fi

@@ -149,7 +149,9 @@ def fill(folder, leave: int) -> None:
 
 def fmpy_parameter_set(archive):
     """An SSP archive's SSV values as one fmpy.ssp ParameterSet (fmpy applies no parameter bindings,
-    so a run in fmpy.ssp is given them by name, component.variable)."""
+    so a run in fmpy.ssp is given them by name, component.variable). Booleans go as 1.0 and 0.0:
+    fmpy.ssp sets a Boolean to `value != 0.0`, which the SSV's literal 'false' passes as true
+    (fmpy 0.3.32), so a false switch would silently run on."""
     import zipfile
     from fmpy.ssp.ssd import ParameterSet, read_ssv
     parameters = ParameterSet(name="all")
@@ -160,6 +162,8 @@ def fmpy_parameter_set(archive):
                 component = name.rsplit("/", 1)[-1][:-4]
                 for p in read_ssv(str(archive), resource=name).parameters:
                     p.name = f"{component}.{p.name}"
+                    if p.type == "Boolean":
+                        p.value = 1.0 if str(p.value).lower() in ("true", "1") else 0.0
                     parameters.parameters.append(p)
     return parameters
 

@@ -35,6 +35,7 @@ from .errors import InputError
 from .fmi import loaded
 from .files import replacing
 from .structure import Bond, Component, Connection, Experiment, SystemStructure, Value
+from .settings import recorded
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -64,7 +65,7 @@ def not_portable(settings: dict) -> list[str]:
     order = int(settings.get("order", 1))
     if order > 0:
         notes.append(f"input extrapolation of order {order} through fmi2SetRealInputDerivatives (other tools hold "
-                     f"inputs over a step: order 0)")
+                     f"inputs over a step: order 0, unless an FMU extrapolates them itself, fmi.extrapolate_inputs)")
     if settings.get("algorithm", "gauss-seidel") == "gauss-seidel":
         notes.append("Gauss-Seidel stepping in the order " + str(settings.get("sequence", "of the components")) +
                      " (libcosim, Ecos and fmpy.ssp step every component from the same time: Jacobi)")
@@ -79,7 +80,8 @@ def not_portable(settings: dict) -> list[str]:
     elif control == "energy":
         notes.append("our energy step control (libcosim's ECCO, from an OSP export, is the nearest)")
     if int(settings.get("initial_sweeps", 20)) > 0:
-        notes.append("the consistency sweeps at the start (libcosim does the like; Ecos and fmpy.ssp do not)")
+        notes.append("the consistency sweeps at the start (other tools start from the inputs' start values in the "
+                     "parameter sets, fmpy.ssp from 0 over its first step)")
     return notes
 
 
@@ -144,6 +146,7 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
     units: dict[str, dict] = {}
     parameter_sets = {}
     connected = {c.source for c in structure.connections} | {c.target for c in structure.connections}
+    shown = set((recorded(structure.settings) or ([], []))[0])  # the recorded outputs: a tool shows them too
     for component in structure.components:
         description = loaded(component.fmu)[0]  # an FMI 3.0 FMU's types by their FMI 2.0 (SSP 1.0) names
         variables = {v.name: v for v in description.modelVariables}
@@ -158,8 +161,9 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
         element = etree.SubElement(elements, _q(SSD, "Component"), name=component.name,
                                    type="application/x-fmu-sharedlibrary", source=sources[component.name])
         connectors = etree.SubElement(element, _q(SSD, "Connectors"))
-        for name, variable in variables.items():  # the connected inputs and outputs
-            if (component.name, name) not in connected:
+        for name, variable in variables.items():  # the connected inputs and outputs, and the recorded outputs
+            if (component.name, name) not in connected and not (
+                    (component.name, name) in shown and variable.causality == "output"):
                 continue
             connector = etree.SubElement(connectors, _q(SSD, "Connector"), name=name, kind=variable.causality)
             kind = etree.SubElement(connector, _q(SSC, "Integer" if variable.type == "Enumeration" else variable.type))
@@ -290,7 +294,7 @@ def _float(element: etree._Element, attribute: str, default: float, where: str, 
 
 def _check_record(settings: dict, found: dict[str, dict], run: etree._Element, where: str) -> None:
     """The annotation's record setting names variables of the system's components."""
-    from .settings import SettingsError, recorded
+    from .settings import SettingsError
     element = run.find("cosim:Setting[@name='record']", NS)
     line = element.sourceline if element is not None else run.sourceline
     try:

@@ -184,11 +184,67 @@ double fmu_input_at(const FmuInstance *fmu, int vr, double t) {
     return value;
 }
 
+/* The inputs that carry another input's exact rate (a model's MODEL_INPUT_RATES(R): R(input, its
+ * rate input)), and those the model keeps piecewise constant (MODEL_HELD_INPUTS), which its own
+ * extrapolation leaves held. */
+#ifndef MODEL_INPUT_RATES
+#define MODEL_INPUT_RATES(R)
+#endif
+#ifndef MODEL_HELD_INPUTS
+#define MODEL_HELD_INPUTS
+#endif
+#define RATE_PAIR(input, rate) {input, rate},
+static const int INPUT_RATES[][2] = {MODEL_INPUT_RATES(RATE_PAIR){0, 0}};
+static const int HELD_INPUTS[] = {MODEL_HELD_INPUTS 0};
+
+static int rate_input_of(int vr) {
+    for (size_t k = 0; INPUT_RATES[k][0]; k++)
+        if (INPUT_RATES[k][0] == vr) return INPUT_RATES[k][1];
+    return 0;
+}
+
+static int held_input(int vr) {
+    for (size_t k = 0; HELD_INPUTS[k]; k++)
+        if (HELD_INPUTS[k] == vr) return 1;
+    return 0;
+}
+
 double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t) {
-    double rate = 0.0;
-    if (fmu->s.input_derivative_given[vr] >= 1) rate += fmu->s.input_derivative[vr][0];
+    if (fmu->s.input_derivative_given[vr] == 0) {
+        const int rate = rate_input_of(vr);
+        return rate ? fmu_input_at(fmu, rate, t) : 0.0;
+    }
+    double rate = fmu->s.input_derivative[vr][0];
     if (fmu->s.input_derivative_given[vr] >= 2) rate += fmu->s.input_derivative[vr][1] * (t - fmu->s.input_time);
     return rate;
+}
+
+/* At a step's start from t0, with fmi.extrapolate_inputs: every Real input the master gave no
+ * derivative for gets one from the FMU itself, as if the master had sent it: the value of its rate
+ * input where it has one (exact), else the slope from its value at the last step's start to its
+ * value now (none on the first step); inputs the model holds are left alone. A master that holds
+ * its inputs then couples at second order, as one that extrapolates them at order 1. */
+static void extrapolate_inputs(FmuInstance *fmu, double t0) {
+    FmuSnapshot *s = &fmu->s;
+    if (!s->v.fmi_extrapolate_inputs) return;
+    const int history = s->input_previous_valid && t0 > s->input_previous_time;
+    const double span = t0 - s->input_previous_time;
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        if (fmu_variables[vr].causality != FMU_INPUT || fmu_variables[vr].type != FMU_REAL) continue;
+        const double value = *(const double *)value_address(fmu, vr);
+        if (s->input_derivative_given[vr] == 0 && !held_input(vr)) {
+            const int rate = rate_input_of(vr);
+            const double slope = rate ? *(const double *)value_address(fmu, rate)
+                                      : history ? (value - s->input_previous[vr]) / span : 0.0;
+            s->input_derivative[vr][0] = isfinite(slope) ? slope : 0.0; /* (huge values a tiny step apart) */
+            s->input_derivative[vr][1] = 0.0;
+            s->input_derivative_given[vr] = 1;
+        }
+        s->input_previous[vr] = value;
+    }
+    s->input_previous_time = t0;
+    s->input_previous_valid = 1;
+    s->input_time = t0; /* the values held since they were set are the values at t0 */
 }
 
 int fmu_reject(const FmuInstance *fmu, int vr, const char *rule) {
@@ -383,6 +439,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     if (!allowed(fmu, "fmi2ExitInitializationMode", PHASE_INITIALIZATION)) return fmi2Error;
     if (model_validate(fmu) != fmi2OK) return fmi2Error;
     model_initialize(fmu);
+    fmu->s.input_previous_valid = 0; /* the FMU's own extrapolation starts with the first step */
     fmu->s.phase = PHASE_STEP_COMPLETE;
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
@@ -611,7 +668,8 @@ static int snapshot_valid(FmuInstance *fmu, const char *call) {
         LOG_ERROR(fmu, "%s: the state's phase %d is not one of FMI 2.0's", call, phase);
         return 0;
     }
-    if (!isfinite(s->time) || !isfinite(s->input_time) || !isfinite(s->stop_time)) {
+    if (!isfinite(s->time) || !isfinite(s->input_time) || !isfinite(s->stop_time) ||
+        !isfinite(s->input_previous_time) || (s->input_previous_valid != 0 && s->input_previous_valid != 1)) {
         LOG_ERROR(fmu, "%s: the state's time is not finite", call);
         return 0;
     }
@@ -626,7 +684,8 @@ static int snapshot_valid(FmuInstance *fmu, const char *call) {
             return 0;
         }
         if (s->input_derivative_given[vr] < 0 || s->input_derivative_given[vr] > 2 ||
-            !isfinite(s->input_derivative[vr][0]) || !isfinite(s->input_derivative[vr][1])) {
+            !isfinite(s->input_derivative[vr][0]) || !isfinite(s->input_derivative[vr][1]) ||
+            !isfinite(s->input_previous[vr])) {
             LOG_ERROR(fmu, "%s: the state's input derivatives of '%s' are invalid", call, var->name);
             return 0;
         }
@@ -829,15 +888,23 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 /* The part of the snapshot a step writes: its time, the variables, the ODE state, the solver's and
  * the model's memory. */
 typedef struct {
-    double time;
+    double time, input_time;
     ModelVariables v;
     double x[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1];
     OdeSolver solver;
     ModelInternal internal;
+    double input_derivative[VR_COUNT][2], input_previous[VR_COUNT], input_previous_time;
+    int input_derivative_given[VR_COUNT], input_previous_valid;
 } StepBackup;
 
 static void backup_step(const FmuInstance *fmu, StepBackup *b) {
     b->time = fmu->s.time;
+    b->input_time = fmu->s.input_time;
+    memcpy(b->input_derivative, fmu->s.input_derivative, sizeof b->input_derivative);
+    memcpy(b->input_derivative_given, fmu->s.input_derivative_given, sizeof b->input_derivative_given);
+    memcpy(b->input_previous, fmu->s.input_previous, sizeof b->input_previous);
+    b->input_previous_time = fmu->s.input_previous_time;
+    b->input_previous_valid = fmu->s.input_previous_valid;
     b->v = fmu->s.v;
     memcpy(b->x, fmu->s.x, sizeof b->x);
     b->solver = fmu->s.solver;
@@ -846,6 +913,12 @@ static void backup_step(const FmuInstance *fmu, StepBackup *b) {
 
 static void restore_step(FmuInstance *fmu, const StepBackup *b) {
     fmu->s.time = b->time;
+    fmu->s.input_time = b->input_time;
+    memcpy(fmu->s.input_derivative, b->input_derivative, sizeof b->input_derivative);
+    memcpy(fmu->s.input_derivative_given, b->input_derivative_given, sizeof b->input_derivative_given);
+    memcpy(fmu->s.input_previous, b->input_previous, sizeof b->input_previous);
+    fmu->s.input_previous_time = b->input_previous_time;
+    fmu->s.input_previous_valid = b->input_previous_valid;
     fmu->s.v = b->v;
     memcpy(fmu->s.x, b->x, sizeof b->x);
     fmu->s.solver = b->solver;
@@ -877,6 +950,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
      * a step changes is kept aside (the inputs and their derivatives it only reads). */
     StepBackup before;
     backup_step(fmu, &before);
+    extrapolate_inputs(fmu, t0);
     if (model_do_step(fmu, h) != fmi2OK) {
         restore_step(fmu, &before);
         fmu->s.phase = PHASE_ERROR;

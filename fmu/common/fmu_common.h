@@ -30,6 +30,10 @@ typedef struct {
     ModelVariables v;                      /* every variable of the table */
     double input_derivative[VR_COUNT][2];  /* fmi2SetRealInputDerivatives, orders 1 and 2 */
     int input_derivative_given[VR_COUNT];  /* highest order given (0: none); cleared after each step */
+    /* The FMU's own extrapolation (fmi.extrapolate_inputs): each input at the last step's start. */
+    double input_previous[VR_COUNT];
+    double input_previous_time;
+    int input_previous_valid;              /* 0: no step yet since initialization */
     double x[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1]; /* internal ODE state */
     OdeSolver solver;
     ModelInternal internal;                /* the model's own discrete state */
@@ -96,7 +100,8 @@ int fmu_reject(const FmuInstance *fmu, int vr, const char *rule);
 /* Value of the real input `vr` at time t: the value set, extrapolated with the derivatives given
  * through fmi2SetRealInputDerivatives (orders 1 and 2, if any) from the time it was set. */
 double fmu_input_at(const FmuInstance *fmu, int vr, double t);
-/* Its rate of change at t from those derivatives (0 if none were given). */
+/* Its rate of change at t from those derivatives; if none were given, the value of its rate input
+ * (MODEL_INPUT_RATES) where the model has one, else 0. */
 double fmu_input_rate_at(const FmuInstance *fmu, int vr, double t);
 /* The Real variable `vr`, for models that address variables through arrays of references. */
 double *fmu_real(FmuInstance *fmu, int vr);

@@ -51,7 +51,13 @@
     X(Boolean, fmi_warnings_as_ok, "fmi.warnings_as_ok", parameter, fixed, "", 0, 0, 1,            \
       "false (FMI 2.0): a call that raised a warning returns fmi2Warning; true: the warning stays " \
       "in the log, the call returns fmi2OK (for importers that stop on any status but fmi2OK, "    \
-      "such as OMSimulator)")
+      "such as OMSimulator)")                                                                  \
+    X(Boolean, fmi_extrapolate_inputs, "fmi.extrapolate_inputs", parameter, fixed, "", 0, 0, 1,    \
+      "false: an input the master gives no derivative for (fmi2SetRealInputDerivatives) is held "  \
+      "over the step; true: the FMU extrapolates it linearly over the step from its values at the " \
+      "last two communication points, or with the rate input that carries its exact rate, so "   \
+      "that a master which holds its inputs couples at second order under Jacobi (inputs the "   \
+      "model keeps piecewise constant, such as loads, stay held)")
 
 #define FMU_TEXT_MAX 1024
 typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's value, inside the snapshot */

@@ -176,10 +176,10 @@ FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const
     return table;
 }
 
-/* Value and first two derivatives of column c at t. */
-void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, double out[3]) {
+/* Value and first three derivatives of column c at t. */
+void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, double out[4]) {
     const int n = table->rows, stride = table->columns;
-    out[1] = out[2] = 0.0;
+    out[1] = out[2] = out[3] = 0.0;
     if (t < table->time[0] || n == 1) { out[0] = table->values[c]; return; } /* from time[0] on: its first interval */
     if (t >= table->time[n - 1]) { out[0] = table->values[(n - 1) * stride + c]; return; }
     int lo = 0, hi = n - 1; /* time[lo] <= t < time[hi] */
@@ -200,5 +200,6 @@ void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, dou
     out[0] = (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * m0 + (3 * s2 - 2 * s3) * y1 + (s3 - s2) * m1;
     out[1] = ((6 * s2 - 6 * s) * y0 + (3 * s2 - 4 * s + 1) * m0 + (6 * s - 6 * s2) * y1 + (3 * s2 - 2 * s) * m1) / h;
     out[2] = ((12 * s - 6) * y0 + (6 * s - 4) * m0 + (6 - 12 * s) * y1 + (6 * s - 2) * m1) / (h * h);
+    out[3] = (12 * y0 + 6 * m0 - 12 * y1 + 6 * m1) / (h * h * h);
 }
 

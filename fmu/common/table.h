@@ -23,8 +23,8 @@ typedef struct {
 FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const char *const *names, int n_names);
 void fmu_table_free(FmuInstance *fmu, FmuTable *table);
 
-/* Value and first two time derivatives at t of column c (interpolation 1: linear, 2: cubic Hermite
+/* Value and first three time derivatives at t of column c (interpolation 1: linear, 2: cubic Hermite
  * with the slopes above); the end values held before the first and after the last row. */
-void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, double out[3]);
+void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, double out[4]);
 
 #endif

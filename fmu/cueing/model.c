@@ -48,6 +48,8 @@ static const int VEHICLE[6] = {VR_vehicle_specific_force_x, VR_vehicle_specific_
                                VR_vehicle_angular_rate_x, VR_vehicle_angular_rate_y, VR_vehicle_angular_rate_z};
 static const int POSE[6] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch,
                             VR_pose_ref_yaw};
+static const int POSE_RATE[6] = {VR_pose_ref_rate_x, VR_pose_ref_rate_y, VR_pose_ref_rate_z, VR_pose_ref_rate_roll,
+                                 VR_pose_ref_rate_pitch, VR_pose_ref_rate_yaw};
 static const int NEUTRAL[6] = {VR_neutral_x, VR_neutral_y, VR_neutral_z, VR_neutral_roll, VR_neutral_pitch,
                                VR_neutral_yaw};
 /* per translational axis: gain, limit, frequency, damping, break; per rotational: gain, limit, frequency, damping */
@@ -77,7 +79,7 @@ static double motion(FmuInstance *fmu, int k, double t, double *rate) {
     const ModelData *data = (const ModelData *)fmu->model_data;
     const int vr = k < 3 ? FORCE[k] : RATE[k - 3];
     if (data && data->vehicle && data->vehicle->column_of[k] >= 0) {
-        double out[3];
+        double out[4];
         fmu_table_at(data->vehicle, data->vehicle->column_of[k], 1, t, out);
         if (rate) *rate = out[1];
         return out[0];
@@ -183,8 +185,8 @@ static const double *phi_of(FmuInstance *fmu, double h, int c) {
 
 /* ---- the tilt: its target from the low-passed force, and the rate limit ---- */
 
-/* Target angle, rate and acceleration of tilt axis j (0: pitch from x, 1: roll from y). */
-static void tilt_target(FmuInstance *fmu, int j, double t, double out[3]) {
+/* Target angle and its first three derivatives of tilt axis j (0: pitch from x, 1: roll from y). */
+static void tilt_target(FmuInstance *fmu, int j, double t, double out[4]) {
     const ModelVariables *v = &fmu->s.v;
     const double *x = fmu->s.internal.x + FIRST[N_TRANSLATION + N_ROTATION + j];
     const double w = v->tilt_frequency, zeta = v->tilt_damping, g = v->gravity;
@@ -192,13 +194,17 @@ static void tilt_target(FmuInstance *fmu, int j, double t, double out[3]) {
     const double top = sin(v->tilt_limit), sign = j == 0 ? -1.0 : 1.0;
     const double s = x[0] / g, ds = x[1] / g, dds = (w * w * (u - x[0]) - 2.0 * zeta * w * x[1]) / g;
     if (fabs(s) >= top) {
-        out[0] = sign * copysign(v->tilt_limit, s), out[1] = out[2] = 0.0;
+        out[0] = sign * copysign(v->tilt_limit, s), out[1] = out[2] = out[3] = 0.0;
         return;
     }
-    const double c2 = 1.0 - s * s;
+    const double du = channel_input_rate(fmu, N_TRANSLATION + N_ROTATION + j, t);
+    const double ddds = (w * w * (du - x[1]) - 2.0 * zeta * w * dds * g) / g; /* l''' = w^2 (u' - l') - 2 zeta w l'' */
+    const double c2 = 1.0 - s * s, c = sqrt(c2);
     out[0] = sign * asin(s);
-    out[1] = sign * ds / sqrt(c2);
-    out[2] = sign * (dds * c2 + s * ds * ds) / (c2 * sqrt(c2));
+    out[1] = sign * ds / c;
+    out[2] = sign * (dds * c2 + s * ds * ds) / (c2 * c);
+    /* d/dt of s'/c + s s'^2/c^3, with (1/c)' = s s'/c^3 and (1/c^3)' = 3 s s'/c^5 */
+    out[3] = sign * (ddds / c + (3.0 * s * ds * dds + ds * ds * ds) / (c2 * c) + 3.0 * s * s * ds * ds * ds / (c2 * c2 * c));
 }
 
 /* The tilt at t after the target has moved: towards it at no more than the rate limit over h (h
@@ -206,17 +212,18 @@ static void tilt_target(FmuInstance *fmu, int j, double t, double out[3]) {
 static void tilt_follow(FmuInstance *fmu, double t, double h) {
     const double limit = fmu->s.v.tilt_rate_limit;
     for (int j = 0; j < N_TILT; j++) {
-        double target[3], *tilt = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
+        double target[4], *tilt = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
         tilt_target(fmu, j, t, target);
         const double gap = target[0] - tilt[0];
         if (h == 0.0 || fabs(gap) <= limit * h) { /* on its target */
             tilt[0] = target[0];
             tilt[1] = clip(target[1], limit);
             tilt[2] = fabs(target[1]) < limit ? target[2] : 0.0;
+            tilt[3] = fabs(target[1]) < limit ? target[3] : 0.0;
         } else {
             tilt[0] += copysign(limit * h, gap);
             tilt[1] = copysign(limit, gap);
-            tilt[2] = 0.0;
+            tilt[2] = tilt[3] = 0.0;
         }
     }
 }
@@ -306,28 +313,34 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
     return fmi2OK;
 }
 
+/* d/dt of the filter's state x' = A x + B u for an input moving at du (first-order hold: u'' = 0). */
+static void state_rate(const Filter *f, const double *x, double u, double out[MAX_ORDER]) {
+    for (int i = 0; i < f->n; i++) {
+        out[i] = f->b[i] * u;
+        for (int j = 0; j < f->n; j++) out[i] += f->a[i * f->n + j] * x[j];
+    }
+}
+
 void model_compute_outputs(FmuInstance *fmu) {
     const double t = fmu->s.time, *x = fmu->s.internal.x;
-    double (*pose)[3] = fmu->s.internal.pose;
-    for (int a = 0; a < N_TRANSLATION; a++) { /* p, v and v' = y - 2 zeta w v - w^2 p */
-        const Filter f = filter(fmu, a);
-        const double *s = x + f.first, u = channel_input(fmu, a, t);
-        pose[a][0] = s[1], pose[a][1] = s[2];
-        pose[a][2] = u + f.a[6] * s[0] + f.a[7] * s[1] + f.a[8] * s[2];
-    }
-    for (int r = 0; r < N_ROTATION; r++) { /* b, b' and b'' */
-        const int c = N_TRANSLATION + r;
-        const Filter f = filter(fmu, c);
+    double (*pose)[4] = fmu->s.internal.pose;
+    for (int c = 0; c < N_TRANSLATION + N_ROTATION; c++) { /* each channel's output, its second state, */
+        const Filter f = filter(fmu, c);                     /* and that state's first three derivatives */
         const double *s = x + f.first, u = channel_input(fmu, c, t), du = channel_input_rate(fmu, c, t);
-        const double rate = u + f.a[2] * s[0] + f.a[3] * s[1];
-        pose[3 + r][0] = s[1], pose[3 + r][1] = rate;
-        pose[3 + r][2] = du + f.a[2] * s[1] + f.a[3] * rate;
+        double rate[MAX_ORDER], curvature[MAX_ORDER], jerk[MAX_ORDER];
+        state_rate(&f, s, u, rate);
+        state_rate(&f, rate, du, curvature);
+        state_rate(&f, curvature, 0.0, jerk);
+        pose[c][0] = s[1], pose[c][1] = rate[1], pose[c][2] = curvature[1], pose[c][3] = jerk[1];
     }
-    for (int k = 0; k < 3; k++) { /* tilt onto roll (3) and pitch (4) */
+    for (int k = 0; k < 4; k++) { /* tilt onto roll (3) and pitch (4) */
         pose[3][k] += fmu->s.internal.tilt[0][k];
         pose[4][k] += fmu->s.internal.tilt[1][k];
     }
-    for (int d = 0; d < 6; d++) *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
+    for (int d = 0; d < 6; d++) {
+        *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
+        *fmu_real(fmu, POSE_RATE[d]) = pose[d][1];
+    }
     for (int k = 0; k < 6; k++) *fmu_real(fmu, VEHICLE[k]) = motion(fmu, k, t, NULL);
     fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
     fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
@@ -336,8 +349,10 @@ void model_compute_outputs(FmuInstance *fmu) {
 }
 
 double model_output_derivative(FmuInstance *fmu, int vr, int order) {
-    for (int d = 0; d < 6; d++)
+    for (int d = 0; d < 6; d++) {
         if (POSE[d] == vr) return fmu->s.internal.pose[d][order];
+        if (POSE_RATE[d] == vr) return fmu->s.internal.pose[d][order + 1];
+    }
     if (vr == VR_tilt_roll) return fmu->s.internal.tilt[0][order];
     if (vr == VR_tilt_pitch) return fmu->s.internal.tilt[1][order];
     return 0.0;

@@ -28,8 +28,8 @@ typedef struct {
      * filter's state, position, velocity), per rotational axis roll, pitch, yaw (2), per tilt axis
      * pitch from x, roll from y (2: the low-passed specific force and its rate) */
     double x[19];
-    double tilt[2][3];   /* roll and pitch of the tilt coordination: angle, rate, acceleration */
-    double pose[6][3];   /* the outputs' value, rate and acceleration at the communication point */
+    double tilt[2][4];   /* roll and pitch of the tilt coordination: angle and its first three derivatives */
+    double pose[6][4];   /* the pose's value and first three derivatives at the communication point */
 } ModelInternal;
 
 /* One translational axis a (x, y, z) of the vehicle's specific force into platform position. */
@@ -59,6 +59,9 @@ X(Real, rotation_##r##_damping, "rotation." #r ".damping", parameter, fixed, "1"
 #define POSE_VARIABLES(X, dof, unit, offset, what) \
 X(Real, pose_ref_##dof, "pose_ref." #dof, output, continuous, unit, offset, -FMU_INF, FMU_INF, \
   "Reference pose of the platform, " what " (neutral plus the washed-out motion)") \
+X(Real, pose_ref_rate_##dof, "pose_ref_rate." #dof, output, continuous, unit "/s", 0.0, -FMU_INF, FMU_INF, \
+  "Rate of pose_ref." #dof ", exact (for masters that give no input derivatives: wired to the mechanics' " \
+  "pose_ref_rate." #dof ")") \
 X(Real, neutral_##dof, "neutral." #dof, parameter, fixed, unit, offset, -FMU_INF, FMU_INF, \
   "The platform's neutral pose, " what ": where the washout returns it")
 
@@ -124,11 +127,13 @@ X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.80665, 0.0, FMU_INF, \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
-/* Direct feed-through: the vehicle's motion taken, from its input (the pose follows the filters'
+/* Direct feed-through: the vehicle's motion taken, from its input; the rotations' rates, whose
+ * high-pass passes the angular rate straight into the angle's rate (the pose follows the filters'
  * states; the inputs reach its derivatives, not its value). */
 #define MODEL_FEEDTHROUGH(D) \
 D(vehicle_specific_force_x, VR_specific_force_x) D(vehicle_specific_force_y, VR_specific_force_y) \
 D(vehicle_specific_force_z, VR_specific_force_z) D(vehicle_angular_rate_x, VR_angular_rate_x) \
-D(vehicle_angular_rate_y, VR_angular_rate_y) D(vehicle_angular_rate_z, VR_angular_rate_z)
+D(vehicle_angular_rate_y, VR_angular_rate_y) D(vehicle_angular_rate_z, VR_angular_rate_z) \
+D(pose_ref_rate_roll, VR_angular_rate_x) D(pose_ref_rate_pitch, VR_angular_rate_y) D(pose_ref_rate_yaw, VR_angular_rate_z)
 
 #endif

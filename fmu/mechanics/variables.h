@@ -80,6 +80,18 @@ X(Real, field_prefix##roll, prefix ".roll", causality, variability, "rad", 0.0, 
 X(Real, field_prefix##pitch, prefix ".pitch", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", pitch") \
 X(Real, field_prefix##yaw, prefix ".yaw", causality, variability, "rad", 0.0, -FMU_INF, FMU_INF, what ", yaw")
 
+/* The pose reference's rate as a connection (the trajectory's pose_ref_rate.*), for masters that
+ * give no input derivatives: the legs' reference rates (leg[i].velocity_ref, speed_ref) follow it
+ * where pose_ref has no derivative from the master, and fmi.extrapolate_inputs extrapolates
+ * pose_ref with it. Unconnected (0) and without input derivatives: the references stand still. */
+#define POSE_RATE_VARIABLES(X) \
+X(Real, pose_ref_rate_x, "pose_ref_rate.x", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.x (where the master gives pose_ref no derivative)") \
+X(Real, pose_ref_rate_y, "pose_ref_rate.y", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.y") \
+X(Real, pose_ref_rate_z, "pose_ref_rate.z", input, continuous, "m/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.z") \
+X(Real, pose_ref_rate_roll, "pose_ref_rate.roll", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.roll") \
+X(Real, pose_ref_rate_pitch, "pose_ref_rate.pitch", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.pitch") \
+X(Real, pose_ref_rate_yaw, "pose_ref_rate.yaw", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, "Rate of pose_ref.yaw")
+
 /* Explicit joint coordinates of leg i, used with geometry.layout = 2. */
 #define JOINT_VARIABLES(X, i) \
 X(Real, geometry_base_joint_##i##_x, "geometry.base_joint[" #i "].x", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Lower joint b_" #i ", base frame, x (layout 2)") \
@@ -183,6 +195,7 @@ X(Boolean, limit_hard_stop, "limit.hard_stop", parameter, fixed, "", 0, 0, 1, "f
 FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10) \
 LEG_PLANT_VARIABLES(X, 1) LEG_PLANT_VARIABLES(X, 2) LEG_PLANT_VARIABLES(X, 3) \
 LEG_PLANT_VARIABLES(X, 4) LEG_PLANT_VARIABLES(X, 5) LEG_PLANT_VARIABLES(X, 6) \
+POSE_RATE_VARIABLES(X) \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
@@ -192,12 +205,14 @@ FMU_LAYER_VARIABLES(X)
  * its derivatives); the applied efforts and the powers follow the efforts; the load's power the load.
  * tests/models/test_dependencies.py perturbs each input and holds this table to what moves. */
 #define POSE_REF_INPUTS VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch, VR_pose_ref_yaw
+#define POSE_RATE_INPUTS VR_pose_ref_rate_x, VR_pose_ref_rate_y, VR_pose_ref_rate_z, VR_pose_ref_rate_roll, \
+    VR_pose_ref_rate_pitch, VR_pose_ref_rate_yaw
 #define LEG_EFFORT_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_force, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen, \
     VR_leg##i##_force_velocity_slope, VR_leg##i##_velocity_seen
 #define LEG_TORQUE_INPUTS(i) VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen
 #define ALL_LEGS(inputs) inputs(1), inputs(2), inputs(3), inputs(4), inputs(5), inputs(6)
 #define LEG_REFERENCES(D, i) D(leg##i##_length_ref, POSE_REF_INPUTS) D(leg##i##_angle_ref, POSE_REF_INPUTS) \
-    D(leg##i##_velocity_ref, POSE_REF_INPUTS) D(leg##i##_speed_ref, POSE_REF_INPUTS) \
+    D(leg##i##_velocity_ref, POSE_REF_INPUTS, POSE_RATE_INPUTS) D(leg##i##_speed_ref, POSE_REF_INPUTS, POSE_RATE_INPUTS) \
     D(leg##i##_torque_applied, VR_leg##i##_torque, VR_leg##i##_torque_speed_slope, VR_leg##i##_speed_seen) \
     D(leg##i##_force_applied, VR_leg##i##_force, VR_leg##i##_force_velocity_slope, VR_leg##i##_velocity_seen)
 #define MODEL_FEEDTHROUGH(D) \
@@ -208,5 +223,14 @@ D(power_transmission_loss, ALL_LEGS(LEG_TORQUE_INPUTS)) \
 D(power_load, VR_load_force_x, VR_load_force_y, VR_load_force_z, VR_load_torque_x, VR_load_torque_y, VR_load_torque_z, \
   VR_load_body_force_x, VR_load_body_force_y, VR_load_body_force_z, VR_load_body_torque_x, VR_load_body_torque_y, \
   VR_load_body_torque_z)
+
+/* The inputs that carry another's exact rate, and those the mechanics holds over a step
+ * (fmi.extrapolate_inputs leaves the loads piecewise constant, as the trajectory makes them). */
+#define MODEL_INPUT_RATES(R) R(VR_pose_ref_x, VR_pose_ref_rate_x) R(VR_pose_ref_y, VR_pose_ref_rate_y) \
+    R(VR_pose_ref_z, VR_pose_ref_rate_z) R(VR_pose_ref_roll, VR_pose_ref_rate_roll) \
+    R(VR_pose_ref_pitch, VR_pose_ref_rate_pitch) R(VR_pose_ref_yaw, VR_pose_ref_rate_yaw)
+#define MODEL_HELD_INPUTS VR_load_force_x, VR_load_force_y, VR_load_force_z, VR_load_torque_x, VR_load_torque_y, \
+    VR_load_torque_z, VR_load_body_force_x, VR_load_body_force_y, VR_load_body_force_z, VR_load_body_torque_x, \
+    VR_load_body_torque_y, VR_load_body_torque_z,
 
 #endif

@@ -8,10 +8,12 @@
  *                 + sum_k slope_k (min(t, end_k) - start_k)^+   2 ramps
  *                 + table(t)                                    its column of table.file, if any
  *
- * and each wrench component is the sum of its two pulses (value for start <= t <= end; edges within
+ * with its rate q' as the output pose_ref_rate.* (for masters that give no input derivatives, wired
+ * to the mechanics' pose_ref_rate.*), and each wrench component is the sum of its two pulses (value for start <= t <= end; edges within
  * 1e-9 relative count as reached, for communication points' round-off). The FMU has
  * no state: outputs are evaluated at the communication point, and fmi2GetRealOutputDerivatives gives
- * their exact first and second time derivatives (zero across steps and pulses), so that a master
+ * their exact first and second time derivatives (zero across steps and pulses; the rate's are the
+ * pose's second and third), so that a master
  * extrapolating its inputs over a macro step never rings on a step.
  */
 #include "fmu_common.h"
@@ -27,7 +29,7 @@ static const char *const DOF_NAMES[N_DOF] = {"x", "y", "z", "roll", "pitch", "ya
 
 /* The value references of one coordinate's signal. */
 typedef struct {
-    int output, offset, sine[3][3] /* amplitude, frequency, phase */, step[2][2] /* time, height */,
+    int output, rate_output, offset, sine[3][3] /* amplitude, frequency, phase */, step[2][2] /* time, height */,
         ramp[2][3] /* start, end, slope */;
 } DofSignal;
 
@@ -35,7 +37,7 @@ typedef struct {
 #define STEP_REFS(dof, k) {VR_##dof##_step##k##_time, VR_##dof##_step##k##_height}
 #define RAMP_REFS(dof, k) {VR_##dof##_ramp##k##_start, VR_##dof##_ramp##k##_end, VR_##dof##_ramp##k##_slope}
 #define DOF_REFS(dof)                                                                              \
-    {VR_pose_ref_##dof, VR_##dof##_offset, {SINE_REFS(dof, 1), SINE_REFS(dof, 2), SINE_REFS(dof, 3)}, \
+    {VR_pose_ref_##dof, VR_pose_ref_rate_##dof, VR_##dof##_offset, {SINE_REFS(dof, 1), SINE_REFS(dof, 2), SINE_REFS(dof, 3)}, \
      {STEP_REFS(dof, 1), STEP_REFS(dof, 2)}, {RAMP_REFS(dof, 1), RAMP_REFS(dof, 2)}}
 static const DofSignal DOFS[N_DOF] = {DOF_REFS(x), DOF_REFS(y), DOF_REFS(z), DOF_REFS(roll), DOF_REFS(pitch), DOF_REFS(yaw)};
 
@@ -58,17 +60,18 @@ static void free_table(FmuInstance *fmu, void *data) { fmu_table_free(fmu, (FmuT
  * within this of t counts as reached, so a step or pulse edge on a communication point is hit. */
 static double edge_tolerance(double t) { return 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0); }
 
-/* Value and first two time derivatives of coordinate d at t. */
-static void pose_at(FmuInstance *fmu, int d, double t, double out[3]) {
+/* Value and first three time derivatives of coordinate d at t. */
+static void pose_at(FmuInstance *fmu, int d, double t, double out[4]) {
     const DofSignal *q = &DOFS[d];
     out[0] = *fmu_real(fmu, q->offset);
-    out[1] = out[2] = 0.0;
+    out[1] = out[2] = out[3] = 0.0;
     for (int k = 0; k < 3; k++) {
         const double amplitude = *fmu_real(fmu, q->sine[k][0]), w = 2.0 * PI * *fmu_real(fmu, q->sine[k][1]);
         const double angle = w * t + *fmu_real(fmu, q->sine[k][2]);
         out[0] += amplitude * sin(angle);
         out[1] += amplitude * w * cos(angle);
         out[2] -= amplitude * w * w * sin(angle);
+        out[3] -= amplitude * w * w * w * cos(angle);
     }
     for (int k = 0; k < 2; k++)
         if (t >= *fmu_real(fmu, q->step[k][0]) - edge_tolerance(t)) out[0] += *fmu_real(fmu, q->step[k][1]);
@@ -80,9 +83,9 @@ static void pose_at(FmuInstance *fmu, int d, double t, double out[3]) {
     }
     const FmuTable *table = (const FmuTable *)fmu->model_data;
     if (table && table->column_of[d] >= 0) {
-        double column[3];
+        double column[4];
         fmu_table_at(table, table->column_of[d], fmu->s.v.table_interpolation, t, column);
-        for (int i = 0; i < 3; i++) out[i] += column[i];
+        for (int i = 0; i < 4; i++) out[i] += column[i];
     }
 }
 
@@ -132,11 +135,11 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
 void model_compute_outputs(FmuInstance *fmu) {
     const double t = fmu->s.time;
     for (int d = 0; d < N_DOF; d++) {
-        double q[3];
+        double q[4];
         pose_at(fmu, d, t, q);
         *fmu_real(fmu, DOFS[d].output) = q[0];
-        fmu->s.internal.derivatives[d][0] = q[1];
-        fmu->s.internal.derivatives[d][1] = q[2];
+        *fmu_real(fmu, DOFS[d].rate_output) = q[1];
+        for (int k = 0; k < 3; k++) fmu->s.internal.derivatives[d][k] = q[k + 1];
     }
     for (int c = 0; c < 6; c++) {
         *fmu_real(fmu, WRENCH[c].output) = wrench_at(fmu, c, t, 1);
@@ -148,7 +151,9 @@ void model_compute_outputs(FmuInstance *fmu) {
 
 double model_output_derivative(FmuInstance *fmu, int vr, int order) {
     /* the layer has refreshed the outputs (model_compute_outputs) at the current time */
-    for (int d = 0; d < N_DOF; d++)
+    for (int d = 0; d < N_DOF; d++) {
         if (DOFS[d].output == vr) return fmu->s.internal.derivatives[d][order - 1];
+        if (DOFS[d].rate_output == vr) return fmu->s.internal.derivatives[d][order];
+    }
     return 0.0; /* the wrench is piecewise constant */
 }

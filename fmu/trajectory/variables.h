@@ -19,9 +19,9 @@
 
 typedef struct {
     /* The signals are functions of time alone (the table lives in the model data); this holds each
-     * pose coordinate's rate and curvature at the outputs' time, computed with its value, for
-     * fmi2GetRealOutputDerivatives. */
-    double derivatives[6][2];
+     * pose coordinate's first three time derivatives at the outputs' time, computed with its value,
+     * for fmi2GetRealOutputDerivatives (of pose_ref and of its rate pose_ref_rate). */
+    double derivatives[6][3];
 } ModelInternal;
 
 /* The signal of one pose coordinate: offset + 3 sines + 2 steps + 2 ramps (+ its table column). */
@@ -50,6 +50,9 @@ X(Real, dof##_ramp##k##_slope, #dof ".ramp[" #k "].slope", parameter, fixed, rat
 #define DOF_VARIABLES(X, dof, unit, rate_unit, offset, what) \
 X(Real, pose_ref_##dof, "pose_ref." #dof, output, continuous, unit, 0.0, -FMU_INF, FMU_INF, \
   "Reference pose of the platform, " what) \
+X(Real, pose_ref_rate_##dof, "pose_ref_rate." #dof, output, continuous, rate_unit, 0.0, -FMU_INF, FMU_INF, \
+  "Rate of pose_ref." #dof ", exact (for masters that give no input derivatives: wired to the mechanics' " \
+  "pose_ref_rate." #dof ")") \
 X(Real, dof##_offset, #dof ".offset", parameter, fixed, unit, offset, -FMU_INF, FMU_INF, "Constant part of " #dof) \
 SINE_VARIABLES(X, dof, 1, unit) SINE_VARIABLES(X, dof, 2, unit) SINE_VARIABLES(X, dof, 3, unit) \
 STEP_VARIABLES(X, dof, 1, unit) STEP_VARIABLES(X, dof, 2, unit) \

@@ -1,8 +1,8 @@
 """Every FMU's outputs declare what they depend on (the modelDescription's ModelStructure, written
 from each variables.h's MODEL_FEEDTHROUGH), and the declaration is the truth: perturbing one input
 at a communication point, without a step, moves exactly the outputs that declare it. Measured in a
-generic state (every input away from its default, 20 steps taken, the reference's derivatives
-given) under each configuration that switches a path on (control modes, inverter models,
+generic state (every input away from its default, 20 steps taken; the reference's derivatives
+given, and not given, when the mechanics' pose_ref_rate inputs stand in) under each configuration that switches a path on (control modes, inverter models,
 effects); the union over them equals the declaration, and no configuration moves an output that
 does not declare the input. Tools such as OMSimulator read these dependencies to order the
 outputs along the connections and to find the algebraic loops (without them, every output is
@@ -87,9 +87,10 @@ def test_declared_dependencies_are_what_moves(name):
     declaration = declared(path)
     union: dict[str, set[str]] = {o: set() for o in declaration}
     for start in CONFIGURATIONS[name]:
-        for output, inputs in measured(path, name, start, RATES.get(name, [])).items():
-            assert inputs <= declaration[output], (start, output, inputs - declaration[output])
-            union[output] |= inputs
+        for rates in {(), tuple(RATES.get(name, ()))}:
+            for output, inputs in measured(path, name, start, list(rates)).items():
+                assert inputs <= declaration[output], (start, rates, output, inputs - declaration[output])
+                union[output] |= inputs
     assert union == declaration
     if name not in ("trajectory", "cueing", "oscillator_mass"):  # no feed-through there; the others declare some
         assert any(declaration.values())

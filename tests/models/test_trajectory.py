@@ -82,6 +82,30 @@ def test_output_derivatives_match_central_differences(make_trajectory):
     np.testing.assert_allclose(curvatures[1:-1][smooth], second[smooth], atol=1e-3)
 
 
+def test_the_rate_outputs_are_the_pose_rate_with_its_own_exact_derivatives(make_trajectory, tmp_path):
+    """pose_ref_rate.* (for masters without input derivatives) is pose_ref's first derivative bit for
+    bit, its first derivative pose_ref's second, and its second (the jerk) the central difference
+    of the curvature away from the corners: within 1e-6 of the jerk's range (the difference's O(h^2)
+    error, h^2/6 of the fifth derivative, is ~1e-7 of it here); for a cubic table too, whose jerk is
+    constant on each interval."""
+    path = tmp_path / "table.csv"
+    times = np.linspace(0.0, 1.0, 11)
+    path.write_text("time,y\n" + "".join(f"{a},{0.1 * np.sin(2 * np.pi * a)}\n" for a in times))
+    trajectory = make_trajectory({**trajectory_parameters(SIGNALS), "table.file": str(path), "table.interpolation": 2})
+    names = ["pose_ref.x", "pose_ref.yaw", "pose_ref.y"]
+    h = 1e-4
+    t, rows, rates, curvatures = sample(trajectory, names + [n.replace("pose_ref", "pose_ref_rate") for n in names],
+                                        h, 10000)
+    n = len(names)
+    assert np.array_equal(rows[:, n:], rates[:, :n]) and np.array_equal(rates[:, n:], curvatures[:, :n])
+    corners = np.array([0.1, 0.2, 0.35, 0.4, 0.5, 0.6, 0.9, *times])
+    smooth = np.min(np.abs(t[1:-1, None] - corners[None, :]), axis=1) > 2 * h
+    jerk = (curvatures[2:, :n] - curvatures[:-2, :n]) / (2 * h)
+    for k in range(n):
+        scale = np.abs(jerk[smooth, k]).max()
+        assert np.abs(curvatures[1:-1, n + k][smooth] - jerk[smooth, k]).max() <= 1e-6 * scale, names[k]
+
+
 @pytest.mark.parametrize("interpolation,order", [(1, 2), (2, 3)])
 def test_table_interpolation_converges_with_its_order(make_trajectory, tmp_path, interpolation, order):
     """A table of sin(2 pi t) sampled every dt: the interpolation error falls as dt^2 (linear) and

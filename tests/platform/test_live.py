@@ -145,7 +145,7 @@ def test_a_pose_sent_at_t_drives_the_platform_from_the_next_macro_step_within_it
                     pass
                 return seen
 
-    run, seen = follow(tmp_path, send)
+    run, seen = follow(tmp_path, send, watchdog=5.0)  # held to the end: the watchdog has its own test
     t, ref = run["time"], np.column_stack([run[f"pose_ref.{a}"] for a in cosim.platform.ports.POSE])
     scene_x = 0.02 * np.sin(2 * np.pi * 0.5 * t)
     moved = np.flatnonzero(np.abs(ref[:, 1] - neutral[1]) > 0)[0]  # y: the scene keeps it at 0

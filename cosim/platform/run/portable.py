@@ -1,9 +1,16 @@
-"""The step an exported scene gets in each other tool: what that tool's master does with it
-(cosim.engine.tools: a fixed step, inputs held, no finer start) run in our engine on the system
-the export writes, at the scene's step and at each half of it down to FLOOR, over a probe of the
-scene (cosim.platform.run.accuracy.probe_duration) against the scene's converged run; the largest
-step within the shipped scenes' tolerances (the pose, and the drive efforts per window), or where
-none holds the step that came closest, named as such."""
+"""A scene's system as other tools get it, and the step each gets: what that tool's master does
+with it (cosim.engine.tools: a fixed step, inputs held, no finer start) run in our engine on the
+system the export writes, at the scene's step and at each half of it down to FLOOR, over a probe of
+the scene (cosim.platform.run.accuracy.probe_duration) against the scene's converged run; the
+largest step within the shipped scenes' tolerances (the pose, and the drive efforts per window), or
+where none holds the step that came closest, named as such.
+
+What the exported system carries for masters without our coupling (portable_structure): every FMU
+extrapolates the inputs its master holds (fmi.extrapolate_inputs, with the reference's exact rate
+wired as pose_ref_rate.*), so that a master that holds inputs couples at second order; and every
+connected input starts at the value its source has at the start once the outputs are consistent
+(our consistency sweeps, written as the input's start value in the parameter sets), so that a
+master without such sweeps does not start the drives on a reference they are not at."""
 
 from __future__ import annotations
 
@@ -12,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...engine.outcome import execute
-from ...engine.settings import FixedStep
+from ...engine.settings import Algorithm, FixedStep
+from ...engine.structure import SystemStructure
 from ...engine.tools import TOOL_MASTERS, ToolMaster
 from ..scene import Scene
 from .accuracy import Judgement, judge, probe_duration
@@ -54,13 +62,67 @@ def converged(scene: Scene, duration: float) -> np.ndarray:
     return run_scene(twin, progress=False, advice=False, plots=False)[0]
 
 
+def start_inputs(structure: SystemStructure, step: float) -> dict[tuple[str, str], float]:
+    """Every connected input's value at the start once the outputs are consistent with the inputs
+    (the engine's fixed-point sweeps, before a step): (component, input) -> its source's output."""
+    sources = sorted({c.source for c in structure.connections})
+    outcome = execute(structure, Algorithm("jacobi", 0), FixedStep(step), step, sources, clock="mechanics")
+    if outcome.failure is not None:
+        raise outcome.failure
+    first = outcome.result[0]
+    return {c.target: float(first[f"{c.source[0]}.{c.source[1]}"]) for c in structure.connections}
+
+
+def portable_structure(scene: Scene, fmi2_warnings: bool = False) -> tuple[SystemStructure, list[str]]:
+    """The scene's system as the export writes it, and what the export says about it: every FMU
+    that can extrapolates the inputs its master holds (fmi.extrapolate_inputs), every connected
+    input starts consistent (start_inputs), and unless fmi2_warnings every FMU that can returns
+    fmi2OK where it logs a warning (fmi.warnings_as_ok), so that a tool which stops at the first
+    fmi2Warning (OMSimulator, at a leg past its stroke) runs on."""
+    from ...engine.checks import check_parameters, variables
+    structure = scene_structure(scene)
+    check_parameters(structure)  # ParameterError before a run on values the FMUs refuse
+    lines, without = [], {"fmi.extrapolate_inputs": [], "fmi.warnings_as_ok": []}
+    for component in structure.components:
+        known = variables(component.fmu)
+        # FMI 3.0 FMUs stay holding: our engine hands them each input at the step's midpoint, which an
+        # FMU extrapolating from it would count twice
+        switches = (*(() if scene.fmi == 3 else ("fmi.extrapolate_inputs",)),
+                    *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
+        for switch in switches:
+            if switch in known:
+                component.parameters[switch] = True
+            else:
+                without[switch].append(component.name)
+    for (component, name), value in start_inputs(structure, scene.step).items():
+        next(c for c in structure.components if c.name == component).parameters[name] = value
+    if scene.fmi == 3:
+        lines.append("note: every connected input starts at its source's consistent value (its start value in the "
+                     "parameter sets), so that a master which makes no consistency sweeps starts where ours does")
+    else:
+        lines.append("note: every FMU extrapolates over a step the inputs its master holds (fmi.extrapolate_inputs = "
+                     "true: linearly from their last two communication points, the reference with its exact rate "
+                     "pose_ref_rate.*), and every connected input starts at its source's consistent value (its start "
+                     "value in the parameter sets), so that a master which holds its inputs and makes no consistency "
+                     "sweeps couples at second order from a consistent start"
+                     + (f"; not {', '.join(without['fmi.extrapolate_inputs'])} (its FMU has no such switch)"
+                        if without["fmi.extrapolate_inputs"] else ""))
+    if not fmi2_warnings:
+        lines.append("note: every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok = true), so that a "
+                     "tool that stops at the first fmi2Warning (OMSimulator) runs on past a leg out of its stroke; the "
+                     "warnings stay in the FMUs' log (--fmi2-warnings keeps the standard's status)"
+                     + (f"; not {', '.join(without['fmi.warnings_as_ok'])} (its FMU has no such switch)"
+                        if without["fmi.warnings_as_ok"] else ""))
+    return structure, lines
+
+
 def _run(scene: Scene, master: ToolMaster, step: float, duration: float, structure=None) -> tuple[np.ndarray, float]:
-    """The exported system (`structure`, compiled from the scene where not given) under the tool's
-    master at `step` for `duration`: its results (the scene's columns; empty where it fails) and
-    the stepping's wall time."""
+    """The exported system (`structure`; portable_structure of the scene where not given) under the
+    tool's master at `step` for `duration`: its results (the scene's columns; empty where it fails)
+    and the stepping's wall time."""
     record, names = scene_record(scene)
-    outcome = execute(structure or scene_structure(scene), master.algorithm, FixedStep(step), duration, record,
-                      names, clock="mechanics")
+    outcome = execute(structure or portable_structure(scene)[0], master.algorithm, FixedStep(step), duration,
+                      record, names, clock="mechanics")
     return outcome.result, outcome.wall
 
 
@@ -77,7 +139,7 @@ def tool_steps(scene: Scene) -> list[ToolStep]:
         return _MEASURED[key]
     duration = probe_duration(scene)
     reference = converged(scene, duration)
-    structure = scene_structure(scene)  # its drives designed once, for every master and step
+    structure = portable_structure(scene)[0]  # its drives designed once, for every master and step
     found: dict[object, ToolStep] = {}
     out = []
     for master in TOOL_MASTERS:
@@ -121,25 +183,12 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     at the first fmi2Warning (OMSimulator, at a leg past its stroke) runs on. Raises SceneError for
     values the FMUs refuse (the scene's file and line)."""
     from ...engine import ParameterError
-    from ...engine.checks import check_parameters, variables
     from ...engine.osp import write_osp
     from ...engine.ssp import not_portable, write_ssp
     from .errors import scene_error
-    structure = scene_structure(scene)
-    lines, files = [], []
-    if not fmi2_warnings:
-        without = []
-        for component in structure.components:
-            if "fmi.warnings_as_ok" in variables(component.fmu):
-                component.parameters["fmi.warnings_as_ok"] = True
-            else:
-                without.append(component.name)
-        lines.append("note: every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok = true), so that a "
-                     "tool that stops at the first fmi2Warning (OMSimulator) runs on past a leg out of its stroke; the "
-                     "warnings stay in the FMUs' log (--fmi2-warnings keeps the standard's status)"
-                     + (f"; not {', '.join(without)} (its FMU has no such switch)" if without else ""))
+    files = []
     try:
-        check_parameters(structure)
+        structure, lines = portable_structure(scene, fmi2_warnings)
     except ParameterError as error:
         raise scene_error(scene, error) from None
     if scene.fmi == 3:

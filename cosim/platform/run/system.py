@@ -52,6 +52,9 @@ def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None
     source = pose_source(cueing_values is not None)
     connections = [*(Connection((source, f"pose_ref.{a}"), ("mechanics", f"pose_ref.{a}")) for a in POSE),
                    *(Connection(("trajectory", n), ("mechanics", n)) for n in [*WRENCH, *BODY_WRENCH])]
+    source_fmu = next(c.fmu for c in components if c.name == source)
+    if f"pose_ref_rate.{POSE[0]}" in variables(source_fmu):  # the exact rate, for masters without derivatives
+        connections += [Connection((source, f"pose_ref_rate.{a}"), ("mechanics", f"pose_ref_rate.{a}")) for a in POSE]
     bonds = []
     for i, instance, fmu in zip(LEGS, drive_names(drive), fmus):
         for output, drive_input in (wiring.reference, wiring.position, wiring.velocity):
