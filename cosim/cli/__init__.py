@@ -18,10 +18,10 @@ from pathlib import Path
 
 from ..engine.artifacts import ArtifactMissing
 from ..engine.errors import InputError, UsageError
-from . import advise, copy, design, export, run, stream, sweep, tune, validate, view
+from . import advise, copy, design, export, export_check, run, stream, sweep, tune, validate, view
 from .common import unwritable
 
-COMMANDS = (run, export, view, validate, advise, sweep, design, tune, copy, stream)
+COMMANDS = (run, export, export_check, view, validate, advise, sweep, design, tune, copy, stream)
 
 
 def parser() -> argparse.ArgumentParser:

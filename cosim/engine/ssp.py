@@ -177,15 +177,6 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
     for c in structure.connections:
         etree.SubElement(connections, _q(SSD, "Connection"), startElement=c.source[0], startConnector=c.source[1],
                          endElement=c.target[0], endConnector=c.target[1])
-    # OMSimulator takes a system's type (a weakly coupled system of co-simulation FMUs, run by its
-    # fixed-step master) only from its own annotation; its schema types the numbers as xs:decimal
-    system_annotations = etree.SubElement(system, _q(SSD, "Annotations"))
-    oms = etree.SubElement(etree.SubElement(system_annotations, _q(SSC, "Annotation"), type=OMS_ANNOTATION),
-                           _q(OMS, "Annotations"))
-    steps = {tool: step for tool, step, _ in tool_steps}
-    etree.SubElement(etree.SubElement(oms, _q(OMS, "SimulationInformation")), _q(OMS, "FixedStepMaster"),
-                     description="oms-ma", stepSize=_decimal(steps.get("OMSimulator", structure.experiment.step)),
-                     absoluteTolerance="0.0001", relativeTolerance="0.0001")
     used = {u.get("unit") for u in root.iter(_q(SSC, "Real")) if u.get("unit")}
     if used:
         unit_list = etree.SubElement(root, _q(SSD, "Units"))
@@ -196,11 +187,6 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
     experiment = etree.SubElement(root, _q(SSD, "DefaultExperiment"), startTime=repr(structure.experiment.start),
                                   stopTime=repr(structure.experiment.stop))
     annotations = etree.SubElement(experiment, _q(SSD, "Annotations"))
-    # libcosim's base step, where its own SSPs keep it
-    algorithm = etree.SubElement(etree.SubElement(annotations, _q(SSC, "Annotation"), type=OSP_ANNOTATION),
-                                 _q(OSP, "Algorithm"))
-    etree.SubElement(algorithm, _q(OSP, "FixedStepAlgorithm"),
-                     baseStepSize=repr(steps.get("libcosim", structure.experiment.step)))
     annotation = etree.SubElement(annotations, _q(SSC, "Annotation"), type=ANNOTATION)
     run = etree.SubElement(annotation, _q(COSIM, "Run"), nsmap={"cosim": COSIM}, step=repr(structure.experiment.step))
     for name, value in structure.settings.items():
@@ -208,9 +194,73 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
     for bond in structure.bonds:
         etree.SubElement(run, _q(COSIM, "PowerBond"), effort=str(bond.effort), flow=str(bond.flow),
                          **({"slope": str(bond.slope)} if bond.slope else {}))
+    set_tool_steps(root, tool_steps, structure.experiment.step)
+    return root, parameter_sets
+
+
+def _child(parent: etree._Element, tag: str, before: Sequence[str] = (), **attributes) -> etree._Element:
+    """parent's first `tag` child (with these attributes), made where missing: before the first
+    child whose tag is one of `before` (the schema's order), else last."""
+    for child in parent.iterchildren(tag):
+        if all(child.get(k) == v for k, v in attributes.items()):
+            return child
+    element = etree.Element(tag, **attributes)
+    following = next((c for c in parent.iterchildren() if c.tag in before), None)
+    if following is None:
+        parent.append(element)
+    else:
+        following.addprevious(element)
+    return element
+
+
+def set_tool_steps(root: etree._Element, tool_steps: Sequence[ToolStepped], default_step: float) -> None:
+    """Writes the step measured for each other tool where that tool takes it: OMSimulator's in the
+    system's annotation (oms:FixedStepMaster stepSize: OMSimulator takes a system's type, a weakly
+    coupled system run by its fixed-step master, from nothing else; its schema types the numbers as
+    xs:decimal), libcosim's in the
+    default experiment's OSP annotation (baseStepSize), each tool's in our annotation as
+    cosim:ToolStep (replacing any there); `default_step` where a tool has none measured. The
+    annotations are found or made (a DefaultExperiment too, where the SSD has none)."""
+    steps = {tool: step for tool, step, _ in tool_steps}
+    system = root.find("ssd:System", NS)
+    annotations = _child(system, _q(SSD, "Annotations"))
+    oms = _child(_child(annotations, _q(SSC, "Annotation"), type=OMS_ANNOTATION), _q(OMS, "Annotations"))
+    master = _child(_child(oms, _q(OMS, "SimulationInformation")), _q(OMS, "FixedStepMaster"))
+    master.attrib.update({"description": "oms-ma", "stepSize": _decimal(steps.get("OMSimulator", default_step)),
+                          "absoluteTolerance": master.get("absoluteTolerance", "0.0001"),
+                          "relativeTolerance": master.get("relativeTolerance", "0.0001")})
+    experiment = root.find("ssd:DefaultExperiment", NS)
+    if experiment is None:
+        experiment = _child(root, _q(SSD, "DefaultExperiment"), before=(_q(SSD, "Annotations"),), startTime="0.0")
+    annotations = _child(experiment, _q(SSD, "Annotations"))
+    algorithm = _child(_child(annotations, _q(SSC, "Annotation"), type=OSP_ANNOTATION), _q(OSP, "Algorithm"))
+    _child(algorithm, _q(OSP, "FixedStepAlgorithm")).set("baseStepSize", repr(steps.get("libcosim", default_step)))
+    annotation = _child(annotations, _q(SSC, "Annotation"), type=ANNOTATION)
+    run = annotation.find(_q(COSIM, "Run"))
+    if run is None:
+        run = etree.SubElement(annotation, _q(COSIM, "Run"), nsmap={"cosim": COSIM}, step=repr(default_step))
+    for old in run.findall(_q(COSIM, "ToolStep")):
+        run.remove(old)
     for tool, step, within in tool_steps:  # the step measured for each other tool (cosim.engine.tools)
         etree.SubElement(run, _q(COSIM, "ToolStep"), tool=tool, step=repr(step), within=str(bool(within)).lower())
-    return root, parameter_sets
+
+
+def write_tool_steps(path: Path, tool_steps: Sequence[ToolStepped], default_step: float) -> Path:
+    """Writes the steps measured for other tools into the existing archive at `path`
+    (set_tool_steps), every other entry kept as it was; the SSD validated first."""
+    path = Path(path)
+    with zipfile.ZipFile(path) as archive:
+        root = etree.fromstring(archive.read("SystemStructure.ssd"))
+        set_tool_steps(root, tool_steps, default_step)
+        validate(root, "SystemStructureDescription.xsd", "SystemStructure.ssd")
+        with replacing(path, "the SSP archive", path.stat().st_size + (1 << 20)) as temporary, \
+                zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as out:
+            for item in archive.infolist():
+                data = archive.read(item)
+                if item.filename == "SystemStructure.ssd":
+                    data = etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+                out.writestr(item, data)
+    return path
 
 
 def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped] = ()) -> Path:

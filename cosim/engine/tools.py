@@ -1,15 +1,22 @@
 """What other FMI tools do with an exported system: each tool's co-simulation master and our
-engine's emulation of it, an Algorithm taken at a fixed step with no finer start. The export
-measures with these the step it writes for each tool (cosim.platform.run.portable);
+engine's emulation of it, an Algorithm taken at a fixed step with no finer start; and the step
+each tool gets, measured with these emulations (largest_steps: the scene's step halved until the
+tool's master holds the tolerances). The platform's export measures with its own judge (the pose,
+the drive efforts per window: cosim.platform.run.portable); any SSP system (`cosim export-check`)
+with check_system's: every recorded output within FIT_TOLERANCE of its own range.
 tests/platform/test_ssp_tools.py holds the emulations to the tools themselves (Ecos and fmpy.ssp
 bit for bit, libcosim to round-off, OMSimulator, which cannot be installed here, as issue 38
 measured it by hand: to 5e-12 m)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Callable, Protocol, Sequence
 
-from .settings import Algorithm
+import numpy as np
+
+from .settings import Algorithm, FixedStep
+from .structure import SystemStructure
 
 
 @dataclass(frozen=True)
@@ -32,3 +39,116 @@ TOOL_MASTERS = (
                Algorithm("jacobi", 0, initial_sweeps=0, zero_start=True),
                "our annotation's cosim:ToolStep (fmpy.ssp runs at the step it is given)"),
 )
+
+FLOOR = 64  # the finest step tried: the system's step / FLOOR
+CONVERGED = 16  # the converged run: the system's own coupling at its step / CONVERGED
+PROBE = 2.0  # [s] how long check_system runs a system (at most its experiment)
+FIT_TOLERANCE = 0.02  # a recorded output's largest error, of its own range over the probe
+
+
+class Judged(Protocol):
+    """How a run at a step does: within the tolerances, and how far off (at most 1: within)."""
+    @property
+    def within(self) -> bool: ...
+
+    @property
+    def ratio(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class ToolStep:
+    """The step measured for one tool, and how its master does there (judged by the platform's
+    judge for a scene, by fit for any system)."""
+    master: ToolMaster
+    step: float
+    judgement: Judged
+    wall: float  # [s] our engine's stepping of the probe at that step
+
+    @property
+    def within(self) -> bool:
+        return self.judgement.within
+
+    @property
+    def ratio(self) -> float:
+        return self.judgement.ratio
+
+
+def largest_steps(step: float, attempt: Callable[[ToolMaster, float], ToolStep]) -> list[ToolStep]:
+    """Per tool of TOOL_MASTERS, the largest of `step` / 2^k (down to FLOOR) at which `attempt`
+    (the tool's master run at that step, judged) holds, or the trial that came closest (the least
+    ratio, then the largest step). Tools with the same master are run once."""
+    found: dict[Algorithm, ToolStep] = {}
+    out = []
+    for master in TOOL_MASTERS:
+        if master.algorithm not in found:
+            tried = []
+            divisor = 1
+            while divisor <= FLOOR:
+                tried.append(attempt(master, step / divisor))
+                if tried[-1].within:
+                    break
+                divisor *= 2
+            found[master.algorithm] = tried[-1] if tried[-1].within else min(tried, key=lambda t: (t.ratio, -t.step))
+        out.append(replace(found[master.algorithm], master=master))
+    return out
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A run of any system against its converged run: per recorded output the largest difference
+    (at the run's times, the converged run interpolated) over FIT_TOLERANCE of the output's own range
+    there; the worst output's ratio and name (at most 1: within)."""
+    ratio: float
+    worst: str
+
+    @property
+    def within(self) -> bool:
+        return self.ratio <= 1.0
+
+
+def fit(result: np.ndarray, reference: np.ndarray, names: Sequence[str]) -> Fit:
+    if not len(result) or result["time"][-1] < reference["time"][-1] - 1e-9:
+        return Fit(float("inf"), "the run stopped early")
+    ratios = []
+    for name in names:
+        expected = np.interp(result["time"], reference["time"], reference[name])
+        scale = float(np.ptp(reference[name])) or max(float(np.abs(reference[name]).max()), 1e-12)
+        ratios.append((float(np.abs(result[name] - expected).max()) / (FIT_TOLERANCE * scale), name))
+    return Fit(*max(ratios, default=(0.0, "")))
+
+
+def system_row(measured: ToolStep) -> str:
+    """A row of export-check's table: the tool, its master, the step written, the verdict, the worst
+    output's error against its tolerance, our wall time at that step."""
+    verdict = "within the tolerance" if measured.within else (
+        f"none within the tolerance down to 1/{FLOOR} of the system's step: the closest")
+    return (f"| {measured.master.tool} | {measured.master.master} | {measured.step * 1e3:.4g} ms | {verdict} | "
+            f"{measured.ratio:.2f} ({measured.judgement.worst}) | {measured.wall:.2f} s |")
+
+
+SYSTEM_HEADER = ["| tool | its master | step written | | worst output's error / tolerance | our wall at that step |",
+                 "|---|---|---|---|---|---|"]
+
+
+def check_system(structure: SystemStructure) -> tuple[float, list[ToolStep]]:
+    """Any system's step per tool: each tool's master run in our engine over the first PROBE
+    seconds (at most the experiment), against the system's own coupling at a CONVERGED-th of its
+    step, judged by fit over what the system records (its `record` setting, else every connected
+    output). Returns the probe's duration and the steps."""
+    from .outcome import execute
+    from .run import recording
+    from .settings import system_settings
+    record, names = recording(structure)
+    duration = min(PROBE, structure.experiment.stop - structure.experiment.start)
+    step = structure.experiment.step
+    algorithm, _ = system_settings(structure.settings, step)
+    clock = structure.components[0].name
+    converged = execute(structure, algorithm, FixedStep(step / CONVERGED), duration, record, names, clock=clock)
+    if converged.failure is not None:
+        raise converged.failure  # nothing to measure against
+
+    def attempt(master: ToolMaster, at: float) -> ToolStep:
+        outcome = execute(structure, master.algorithm, FixedStep(at), duration, record, names, clock=clock)
+        return ToolStep(master, at, fit(outcome.result, converged.result, names), outcome.wall)
+
+    return duration, largest_steps(step, attempt)

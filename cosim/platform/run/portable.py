@@ -21,32 +21,19 @@ import numpy as np
 from ...engine.outcome import execute
 from ...engine.settings import Algorithm, FixedStep
 from ...engine.structure import SystemStructure
-from ...engine.tools import TOOL_MASTERS, ToolMaster
+from ...engine.tools import CONVERGED, FLOOR, ToolMaster, ToolStep, largest_steps
 from ..scene import Scene
 from .accuracy import Judgement, judge, probe_duration
 from .compile import scene_record, scene_structure
 
-FLOOR = 64  # the finest step tried: the scene's step / FLOOR
-
-
-@dataclass(frozen=True)
-class ToolStep:
-    """The step measured for one tool, and how its master does there."""
-    master: ToolMaster
-    step: float
-    judgement: Judgement
-    wall: float  # [s] our engine's stepping of the probe at that step
-
-    @property
-    def within(self) -> bool:
-        return self.judgement.within
-
-    def row(self) -> str:
-        j = self.judgement
-        verdict = "within the tolerances" if self.within else (
-            f"none within the tolerances down to 1/{FLOOR} of the scene's step: the closest")
-        return (f"| {self.master.tool} | {self.master.master} | {self.step * 1e3:.4g} ms | {verdict} | "
-                f"{j.pose_error:.2e} | {j.ratio:.2f} ({j.window}) | {self.wall:.2f} s |")
+def row(measured: ToolStep) -> str:
+    """A row of the export's table: the tool, its master, the step written, the verdict, the pose
+    error, the efforts' worst window against its tolerance, our wall time at that step."""
+    j = measured.judgement
+    verdict = "within the tolerances" if measured.within else (
+        f"none within the tolerances down to 1/{FLOOR} of the scene's step: the closest")
+    return (f"| {measured.master.tool} | {measured.master.master} | {measured.step * 1e3:.4g} ms | {verdict} | "
+            f"{j.pose_error:.2e} | {j.ratio:.2f} ({j.window}) | {measured.wall:.2f} s |")
 
 
 HEADER = ["| tool | its master | step written | | pose error [m, rad] | efforts' worst window / tolerance | "
@@ -57,7 +44,7 @@ def converged(scene: Scene, duration: float) -> np.ndarray:
     """The scene's converged run over `duration`: its own coupling at a 16th of its step
     throughout (no finer start, no edge windows), as its twin."""
     from .runner import run_scene
-    twin = scene.changed({"scene.duration": duration, "scene.step": scene.step / 16, "coupling.startup_time": 0.0,
+    twin = scene.changed({"scene.duration": duration, "scene.step": scene.step / CONVERGED, "coupling.startup_time": 0.0,
                           "coupling.edge_time": 0.0, "coupling.step_control": "fixed"})
     return run_scene(twin, progress=False, advice=False, plots=False)[0]
 
@@ -140,32 +127,20 @@ def tool_steps(scene: Scene) -> list[ToolStep]:
     duration = probe_duration(scene)
     reference = converged(scene, duration)
     structure = portable_structure(scene)[0]  # its drives designed once, for every master and step
-    found: dict[object, ToolStep] = {}
-    out = []
-    for master in TOOL_MASTERS:
-        if master.algorithm not in found:
-            tried = []
-            divisor = 1
-            while divisor <= FLOOR:
-                step = scene.step / divisor
-                result, wall = _run(scene, master, step, duration, structure)
-                tried.append(ToolStep(master, step, judge(scene, result, reference), wall))
-                if tried[-1].within:
-                    break
-                divisor *= 2
-            best = tried[-1] if tried[-1].within else min(tried, key=lambda t: (t.judgement.ratio, -t.step))
-            found[master.algorithm] = best
-        measured = found[master.algorithm]
-        out.append(ToolStep(master, measured.step, measured.judgement, measured.wall))
-    _MEASURED[key] = out
-    return out
+
+    def attempt(master: ToolMaster, step: float) -> ToolStep:
+        result, wall = _run(scene, master, step, duration, structure)
+        return ToolStep(master, step, judge(scene, result, reference), wall)
+
+    _MEASURED[key] = largest_steps(scene.step, attempt)
+    return _MEASURED[key]
 
 
 def steps_text(scene: Scene, steps: list[ToolStep]) -> list[str]:
     """The export's table: per tool, its master, the step written and how it does there."""
     return [f"the step each tool gets, measured by its master in our engine over the first "
             f"{probe_duration(scene):g} s against the scene's converged run (pose within 1e-5, efforts within "
-            f"their windows' tolerances):", *HEADER, *(s.row() for s in steps)]
+            f"their windows' tolerances):", *HEADER, *(row(s) for s in steps)]
 
 
 @dataclass
