@@ -61,8 +61,10 @@ SCHEMA = Schema("study file", "A configuration design study (`cosim design STUDY
         Key("step", POSITIVE, "the spacing (at most 2000 values an axis)", REQUIRED))),
     Table("motion", "What the platform must carry: each DOF from -range to +range in the shortest time its limits "
           "allow (the basic motions), or a time series (scene or table).", (
-        *(Key(dof, NON_NEGATIVE, f"the {dof} half range [m]", 0.0) for dof in DOFS if dof not in ROTATIONS),
-        *(Key(f"{dof}_deg", NON_NEGATIVE, f"the {dof} half range [deg]", 0.0) for dof in ROTATIONS),
+        *(Key(dof, Number("m", 0, 100), f"the {dof} half range [m] (at most 100 m: a hexapod's is a fraction of "
+              "its legs)", 0.0) for dof in DOFS if dof not in ROTATIONS),
+        *(Key(f"{dof}_deg", Number("deg", 0, 90, below=True), f"the {dof} half range [deg] (below 90: the Euler "
+              "angles' pitch is singular there)", 0.0) for dof in ROTATIONS),
         Key("velocity", POSITIVE, "the translations' largest speed [m/s]"),
         Key("acceleration", POSITIVE, "their largest acceleration [m/s^2]"),
         Key("angular_velocity_deg", POSITIVE, "the rotations' largest speed [deg/s]"),
