@@ -70,19 +70,20 @@ def portable_structure(scene: Scene, fmi2_warnings: bool = False) -> tuple[Syste
     structure = scene_structure(scene)
     check_parameters(structure)  # ParameterError before a run on values the FMUs refuse
     lines, without = [], {"fmi.extrapolate_inputs": [], "fmi.warnings_as_ok": []}
+    # FMI 3.0 FMUs stay holding: our engine hands them each input at the step's midpoint, which an FMU
+    # extrapolating from it would count twice
+    switches = (*(() if scene.fmi == 3 else ("fmi.extrapolate_inputs",)),
+                *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
     for component in structure.components:
         known = variables(component.fmu)
-        # FMI 3.0 FMUs stay holding: our engine hands them each input at the step's midpoint, which an
-        # FMU extrapolating from it would count twice
-        switches = (*(() if scene.fmi == 3 else ("fmi.extrapolate_inputs",)),
-                    *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
         for switch in switches:
             if switch in known:
                 component.parameters[switch] = True
             else:
                 without[switch].append(component.name)
+    by_name = {c.name: c for c in structure.components}
     for (component, name), value in start_inputs(structure, scene.step).items():
-        next(c for c in structure.components if c.name == component).parameters[name] = value
+        by_name[component].parameters[name] = value
     if scene.fmi == 3:
         lines.append("note: every connected input starts at its source's consistent value (its start value in the "
                      "parameter sets), so that a master which makes no consistency sweeps starts where ours does")
