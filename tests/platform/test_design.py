@@ -123,6 +123,21 @@ def test_the_shortest_time_profile_is_the_bang_coast_bang_move():
         assert v == pytest.approx(np.r_[0, np.cumsum(np.diff(t) * a[1:])], abs=1e-12)
 
 
+def test_a_ramp_shorter_than_the_times_resolution_plays_as_a_jump(tmp_path):
+    """An all but unlimited acceleration (1e300 m/s^2) makes ramps of 5e-302 s, which the table's
+    offset by HOLD rounds onto one instant: the table keeps each instant once, strictly increasing
+    (the trajectory FMU refuses a table whose time does not increase)."""
+    from cosim.platform.design.confirm import HOLD, _table
+    t, s, v, a = shortest_time(0.6, 0.05, 1e300, 5)
+    keep = np.r_[True, np.diff(t) > 0]
+    displacement = np.zeros((keep.sum(), 6))
+    displacement[:, 0] = s[keep]
+    table = np.loadtxt(_table(tmp_path / "surge.csv", t[keep], displacement), delimiter=",", skiprows=1)
+    assert np.all(np.diff(table[:, 0]) > 0)
+    assert table[0, 1] == 0.0 and table[-1, 1] == pytest.approx(0.6, rel=1e-12)
+    assert table[-1, 0] == pytest.approx(HOLD + 0.6 / 0.05 + HOLD, rel=1e-12)
+
+
 def test_the_papers_points_a_b_c_and_the_short_actuators_zone(study):
     """Fig 2 at r_b = 1.03 m for sway with the 0.45 m actuator: a (max stroke) 1.19 m, b (min
     stroke) 1.06 m and c (joint angle) 0.62 m of disc height; ours within the grid's 0.01 m step.
@@ -162,6 +177,11 @@ BAD = {
     "[motion]\nscene = \"meng_eq35\"\nsurge = 0.3\n": "'motion.surge' belongs to the basic motions",
     "[motion]\nscene = \"no_such_scene\"\n": "'motion.scene' = 'no_such_scene': no such scene",
     "[motion]\ntable = \"motion.csv\"\n": "motion.csv:3",
+    # limits that make a basic motion last for ever (the confirmation plays it step by step)
+    "[motion]\nsurge = 0.3\nvelocity = 1e-300\nacceleration = 0.05\nangular_velocity_deg = 12.6\n"
+    "angular_acceleration_deg = 100.0\n": "'motion.velocity' = 1e-300: makes the surge motion last 6e+299 s",
+    "[motion]\nroll_deg = 15\nvelocity = 0.05\nacceleration = 0.05\nangular_velocity_deg = 12.6\n"
+    "angular_acceleration_deg = 1e-300\n": "'motion.angular_acceleration_deg' = 1e-300: makes the roll motion last",
     '[confirm]\ndrive = "hydraulic"\n': "'confirm.drive' = 'hydraulic': use 'force', 'pmsm' or 'linear'",
     "[axes]\nbase_radius = {from = 1.2, to = 1.1, step = 0.01}\ndisc_height = {from = 1, to = 2, step = 0.1}\n":
         ":{axes}: 'axes.base_radius.to' = 1.1: must not be below from = 1.2",

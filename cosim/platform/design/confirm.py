@@ -127,9 +127,13 @@ def _folder(folder: Path | None) -> Iterator[Path]:
 
 
 def _table(path: Path, t: np.ndarray, displacement: np.ndarray) -> Path:
-    """The motion as the trajectory FMU's table: HOLD s at its start, the motion, HOLD s at its end."""
+    """The motion as the trajectory FMU's table: HOLD s at its start, the motion, HOLD s at its end;
+    instants that the offset by HOLD rounds onto the one before (a ramp far shorter than any step,
+    from an all but unlimited acceleration) once."""
     times = np.r_[0.0, HOLD + t, HOLD + t[-1] + HOLD]
     played = np.vstack([displacement[:1], displacement, displacement[-1:]])
+    keep = np.r_[True, np.diff(times) > 0]
+    times, played = times[keep], played[keep]
     np.savetxt(path, np.column_stack([times, played]), delimiter=",", header=",".join(["time", *POSE]), comments="")
     return path
 

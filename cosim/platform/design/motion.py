@@ -12,14 +12,24 @@ import numpy as np
 from .study import DOFS, ROTATIONS, Study
 
 
+LONGEST = 3600.0  # [s] the longest basic motion a study may ask for (the confirmation plays it at 1 ms)
+
+
+def ramp_and_cruise(distance: float, v_max: float, a_max: float) -> tuple[float, float]:
+    """The shortest-time rest-to-rest move's phases over `distance`: how long it accelerates (and
+    as long again decelerates) and how long it cruises at v_max between [s]."""
+    t_ramp = min(v_max / a_max, math.sqrt(distance / a_max))
+    v_top = a_max * t_ramp
+    return t_ramp, max(0.0, (distance - a_max * t_ramp ** 2) / v_top) if v_top > 0 else 0.0
+
+
 def shortest_time(distance: float, v_max: float, a_max: float, samples: int = 41) -> tuple[np.ndarray, ...]:
     """The shortest-time rest-to-rest move over `distance` under |v| <= v_max, |a| <= a_max:
     accelerate at a_max, cruise at v_max (if reached), decelerate. Returns times, displacements,
     velocities and accelerations sampled in each phase with the phase's own (constant)
     acceleration at both its ends, so the extremes of anything the acceleration drives are seen."""
-    t_ramp = min(v_max / a_max, math.sqrt(distance / a_max))
+    t_ramp, t_cruise = ramp_and_cruise(distance, v_max, a_max)
     v_top = a_max * t_ramp
-    t_cruise = max(0.0, (distance - a_max * t_ramp ** 2) / v_top) if v_top > 0 else 0.0
     times, s, v, a = [], [], [], []
     for phase, (start, length, accel) in enumerate([(0.0, t_ramp, a_max), (t_ramp, t_cruise, 0.0),
                                                     (t_ramp + t_cruise, t_ramp, -a_max)]):

@@ -13,6 +13,7 @@ import numpy as np
 
 from ...engine.schema import Document, read
 from ..ports import POSE
+from .motion import LONGEST, ramp_and_cruise
 from .schema import RECORDED, SCHEMA, StudyError
 from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, Motor, OptimiseSpec, ParetoSpec,
                     Recorded, Study, Thresholds, WorkspaceSpec, parameter_set)
@@ -188,8 +189,19 @@ def _motion(doc: Document) -> tuple[Motion | None, Recorded | None]:
         if doc.value("motion", key) is None:
             raise doc.fail(f"motion.{key}", "is missing: the basic motions need their speed and acceleration limits")
         limits[key] = float(doc.value("motion", key))
-    return Motion(ranges, limits["velocity"], limits["acceleration"], math.radians(limits["angular_velocity_deg"]),
-                  math.radians(limits["angular_acceleration_deg"])), None
+    motion = Motion(ranges, limits["velocity"], limits["acceleration"], math.radians(limits["angular_velocity_deg"]),
+                    math.radians(limits["angular_acceleration_deg"]))
+    for dof, half in ranges.items():  # each basic motion must end: the confirmation plays it step by step
+        rotation = dof in ROTATIONS
+        t_ramp, t_cruise = ramp_and_cruise(2 * half, motion.angular_velocity if rotation else motion.velocity,
+                                           motion.angular_acceleration if rotation else motion.acceleration)
+        if 2 * t_ramp + t_cruise > LONGEST:
+            key = ("angular_" if rotation else "") + ("acceleration" if 2 * t_ramp > t_cruise else "velocity") \
+                + ("_deg" if rotation else "")
+            raise doc.fail(f"motion.{key}", f"makes the {dof} motion last {2 * t_ramp + t_cruise:.3g} s; a basic "
+                           f"motion lasts at most {LONGEST:g} s (raise the limit, or shorten the range)",
+                           limits[key])
+    return motion, None
 
 
 def _actuator(doc: Document, k: int, transmission: dict[str, float]) -> Actuator:
