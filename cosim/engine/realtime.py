@@ -63,7 +63,9 @@ class LiveInput:
     limits the reference moves within, its neutral values (where the watchdog takes it), how old
     a packet may be [s simulated] and how long the input may be silent [s wall]; `admissible`: a
     C function int(void *context, const double *values) and its context (None: any finite value),
-    `refusal`: what a refused value is called in the report ('outside the workspace')."""
+    `refusal`: what a refused value is called in the report ('outside the workspace');
+    `rate_outputs`: per output, the instance's output that carries its rate ("" where none), set
+    to the live rate (the inputs that take a rate where the master gives no derivatives)."""
     instance: str
     outputs: Sequence[str]
     rate_max: Sequence[float]
@@ -74,6 +76,7 @@ class LiveInput:
     admissible: object = None  # a ctypes function pointer
     admissible_context: object = None  # what it points at, kept alive with it
     refusal: str = "not admissible"
+    rate_outputs: Sequence[str] = ()
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ class _RealTime(ctypes.Structure):
                 ("n_stream", ctypes.c_int), ("stream_columns", _I), ("stream_sequence", ctypes.c_ulonglong),
                 ("packet", _P), ("stream_failed", ctypes.c_int), ("listen_fd", ctypes.c_int),
                 ("live_instance", ctypes.c_int), ("n_live", ctypes.c_int), ("live_index", _I),
-                ("live_column", _I), ("rate_max", _D), ("acceleration_max", _D), ("neutral", _D),
+                ("live_column", _I), ("live_rate_index", _I), ("live_rate_column", _I), ("rate_max", _D), ("acceleration_max", _D), ("neutral", _D),
                 ("late_after", ctypes.c_double), ("watchdog", ctypes.c_double), ("admissible", _P),
                 ("admissible_context", _P), ("live", _D), ("target_time", ctypes.c_double),
                 ("last_good", ctypes.c_double), ("live_active", ctypes.c_int), ("watchdog_engaged", ctypes.c_int),
@@ -257,6 +260,11 @@ class Session:
         replaced = [(live.instance, o) for o in live.outputs]
         r.live_column = self._array([1 + record.index(c) if c in record else -1 for c in replaced],
                                     np.intc).ctypes.data_as(ints)
+        # (a rate output that feeds nothing has nothing to replace)
+        rates = [(live.instance, o) if o in own else None for o in (live.rate_outputs or [""] * n)]
+        r.live_rate_index = self._array([own.index(c[1]) if c else -1 for c in rates], np.intc).ctypes.data_as(ints)
+        r.live_rate_column = self._array([1 + record.index(c) if c in record else -1 for c in rates],
+                                         np.intc).ctypes.data_as(ints)
         doubles = ctypes.POINTER(ctypes.c_double)
         r.rate_max = self._array(live.rate_max).ctypes.data_as(doubles)
         r.acceleration_max = self._array(live.acceleration_max).ctypes.data_as(doubles)

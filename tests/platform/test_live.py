@@ -131,21 +131,25 @@ def follow(tmp_path: Path, send, duration: float = 0.6, watchdog: float = 0.5, *
     return run, out.get("value")
 
 
+def send_once(target, after: float):
+    """A client for `follow` that sends `target` once, on seeing the sample at `after` s or later,
+    and returns that sample's time."""
+    def send(address, samples):
+        for sample in samples:
+            if sample.time >= after:
+                with Sender(address) as sender:
+                    sender.send(target)
+                for _ in samples:  # drain the stream
+                    pass
+                return sample.time
+    return send
+
+
 def test_a_pose_sent_at_t_drives_the_platform_from_the_next_macro_step_within_its_limits(tmp_path):
     neutral = Core().neutral_pose
     target = neutral + [0.0, 0.03, 0.04, 0.0, 0.0, 0.05]
 
-    def send(address, samples):
-        for sample in samples:
-            if sample.time >= 0.1:
-                with Sender(address) as sender:
-                    sender.send(target)
-                seen = sample.time
-                for _ in samples:  # drain the stream
-                    pass
-                return seen
-
-    run, seen = follow(tmp_path, send, watchdog=5.0)  # held to the end: the watchdog has its own test
+    run, seen = follow(tmp_path, send_once(target, 0.1), watchdog=5.0)  # held to the end: the watchdog has its own test
     t, ref = run["time"], np.column_stack([run[f"pose_ref.{a}"] for a in cosim.platform.ports.POSE])
     scene_x = 0.02 * np.sin(2 * np.pi * 0.5 * t)
     moved = np.flatnonzero(np.abs(ref[:, 1] - neutral[1]) > 0)[0]  # y: the scene keeps it at 0
@@ -160,6 +164,24 @@ def test_a_pose_sent_at_t_drives_the_platform_from_the_next_macro_step_within_it
     assert np.abs(np.diff(rate[:, :3], axis=0) / H).max() <= 2.0 * (1 + 1e-6)  # acceleration_max
     assert np.abs(ref[-1] - target).max() < 1e-9  # reached, and held
     assert abs(run["pose.z"][-1] - target[2]) < 2e-3  # and the platform followed
+
+
+def test_the_live_reference_reaches_the_mechanics_with_its_own_rate_at_order_0(tmp_path):
+    """Where the master gives no derivatives (order 0) the mechanics takes the reference's rate from
+    its pose_ref_rate inputs: the live input replaces them too, with its own rate. Held at the target
+    by the end, the reference's rate is 0, and so every leg's velocity reference, while the scene's
+    own sine still moves (the rate it would give: 0.063 cos(pi t) m/s in x)."""
+    neutral = Core().neutral_pose
+    target = neutral + [0.0, 0.02, 0.02, 0.0, 0.0, 0.0]
+
+    legs = [f"leg[{i}].velocity_ref" for i in range(1, 7)]
+    outputs = {"coupling.order": 0, "outputs.mechanics": legs}
+    run, _ = follow(tmp_path, send_once(target, 0.05), duration=0.4, watchdog=5.0, overrides=outputs)
+    t = run["time"]
+    velocity_ref = np.column_stack([run[n] for n in legs])
+    assert np.abs(velocity_ref[t < 0.04]).max() > 1e-3  # the scene's sine, before the live input
+    assert np.abs(run["pose_ref.y"][-1] - target[1]) < 1e-9  # reached and held
+    assert np.abs(velocity_ref[-1]).max() < 1e-9
 
 
 def test_bad_packets_are_counted_by_kind_and_refused(tmp_path):

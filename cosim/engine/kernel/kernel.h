@@ -137,6 +137,8 @@ typedef struct {
     int listen_fd, live_instance, n_live;
     const int *live_index;            /* per channel: index among the instance's coupled outputs */
     const int *live_column;           /* per channel: its row column, or -1 */
+    const int *live_rate_index;       /* per channel: index of the output that carries its rate, or -1 */
+    const int *live_rate_column;      /* per channel: that output's row column, or -1 */
     const double *rate_max, *acceleration_max, *neutral; /* per channel */
     double late_after, watchdog;      /* [s] simulated age of a late packet; [s] wall silence for the watchdog */
     AdmissibleFn admissible;          /* NULL: every finite value is admissible */

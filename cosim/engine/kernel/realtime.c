@@ -181,6 +181,15 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         if (in->rate_order >= 1) s->exact_rates[at] = r->live[RATE * r->n_live + i];
         if (in->rate_order >= 2) s->exact_rates[s->n_sample_values + at] = r->live[ACCELERATION * r->n_live + i];
         if (r->live_column[i] >= 0) row[r->live_column[i]] = latest[at];
+        if (r->live_rate_index[i] < 0) continue;
+        /* the output that carries the reference's rate (a master that gives no derivatives hands it
+         * to the inputs that take the rate): the live rate, its rate the live acceleration, constant
+         * over the step */
+        const int rate_at = in->output_offset + r->live_rate_index[i];
+        latest[rate_at] = r->live[RATE * r->n_live + i];
+        if (in->rate_order >= 1) s->exact_rates[rate_at] = r->live[ACCELERATION * r->n_live + i];
+        if (in->rate_order >= 2) s->exact_rates[s->n_sample_values + rate_at] = 0.0;
+        if (r->live_rate_column[i] >= 0) row[r->live_rate_column[i]] = latest[rate_at];
     }
 }
 

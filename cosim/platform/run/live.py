@@ -52,8 +52,9 @@ def real_time_plan(scene: Scene, plan: Plan, mechanics_values: dict, factor: flo
 
 
 def live_input(scene: Scene, mechanics_values: dict) -> LiveInput:
-    """The trajectory's pose reference replaced by a live input within the scene's [live] limits;
-    poses checked against the legs' stroke; the platform's neutral pose for the watchdog."""
+    """The trajectory's pose reference replaced by a live input within the scene's [live] limits
+    (its exact rate, pose_ref_rate.*, by the live rate); poses checked against the legs' stroke;
+    the platform's neutral pose for the watchdog."""
     def value(key: str) -> float:
         return float(scene.document.value("live", key))
     core = Core(values=mechanics_values)
@@ -64,6 +65,7 @@ def live_input(scene: Scene, mechanics_values: dict) -> LiveInput:
     check = ctypes.cast(core.dll.platform_pose_within_stroke, ctypes.c_void_p)
     from .system import pose_source
     return LiveInput(pose_source(scene.vehicle is not None), [f"pose_ref.{a}" for a in POSE],
+                     rate_outputs=[f"pose_ref_rate.{a}" for a in POSE],
                      rate_max=[value("velocity_max")] * 3 + [value("angular_velocity_max")] * 3,
                      acceleration_max=[value("acceleration_max")] * 3 + [value("angular_acceleration_max")] * 3,
                      neutral=core.neutral_pose.tolist(), late_after=value("late_after"), watchdog=value("watchdog"),
