@@ -12,7 +12,7 @@ Inputs over a macro step are polynomials in time fitted to the samples of the so
 A source that provides its outputs' time derivatives is not extrapolated from its history: its
 inputs are its Taylor polynomial at t of order min(k, its order). An FMU that does not declare
 canInterpolateInputs gets each input held at its polynomial's value at the step's midpoint and no
-derivatives. At the start the outputs are made consistent with the connected inputs; the first
+derivatives (one that extrapolates held inputs itself, fmi.extrapolate_inputs, the value at t). At the start the outputs are made consistent with the connected inputs; the first
 macro step is iterated to a fixed point (FMU states restored between sweeps).
 """
 
@@ -128,7 +128,7 @@ class CouplingAlgorithm(ABC):
             values.append(v[index]); rates.append(r[index]); curvatures.append(c[index])
         group = coupling.inputs[name]
         if order >= 1 and not coupling.interpolating[name]:  # held at the midpoint value
-            half = 0.5 * (t_new - t)
+            half = 0.0 if coupling.extrapolating[name] else 0.5 * (t_new - t)  # (at t: it extrapolates itself)
             values = [v + r * half + 0.5 * c * half * half for v, r, c in zip(values, rates, curvatures)]
             rates, curvatures = [0.0] * len(values), [0.0] * len(values)
             sent = 0

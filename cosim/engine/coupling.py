@@ -59,6 +59,10 @@ class Coupling:
         self.bond_slopes = [ends(b.slope)[1] if b.slope is not None else None for b in bonds]
         self.interpolating = {n: (interpolating or {}).get(n, self.instances[n].can_interpolate_inputs)
                               for n in self.names}
+        # those that take no derivatives but extrapolate held inputs themselves: given their values at
+        # t, not at the step's midpoint (which they would extrapolate from again)
+        self.extrapolating = {n: not self.interpolating[n] and self.instances[n].extrapolates_inputs
+                              for n in self.names}
         # sources that give their outputs' derivatives (fmi2GetRealOutputDerivatives), with the order
         self.rate_orders = {n: min(2, self.instances[n].max_output_derivative_order) for n in self.outputs
                             if self.instances[n].max_output_derivative_order > 0}

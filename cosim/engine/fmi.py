@@ -202,6 +202,12 @@ class FmuInstance:
         return bool(self.model_description.coSimulation.canInterpolateInputs)
 
     @property
+    def extrapolates_inputs(self) -> bool:
+        """Whether the FMU extrapolates over a step the inputs it is given no derivatives for, from
+        their values at the last communication points (our FMU layer's fmi.extrapolate_inputs, on)."""
+        return "fmi.extrapolate_inputs" in self.variables and bool(self.get("fmi.extrapolate_inputs"))
+
+    @property
     def max_output_derivative_order(self) -> int:
         return int(self.model_description.coSimulation.maxOutputDerivativeOrder or 0)
 

@@ -46,7 +46,7 @@ class _Instance(ctypes.Structure):
                 ("n_outputs", ctypes.c_int), ("output_offset", ctypes.c_int), ("output_vrs", _UINTS),
                 ("n_inputs", ctypes.c_int), ("input_offset", ctypes.c_int), ("input_vrs", _UINTS),
                 ("feed_source", _INTS), ("feed_index", _INTS), ("rate_order", ctypes.c_int),
-                ("interpolating", ctypes.c_int),
+                ("interpolating", ctypes.c_int), ("extrapolating", ctypes.c_int),
                 ("n_record", ctypes.c_int), ("record_offset", ctypes.c_int), ("record_vrs", _UINTS)]
 
 
@@ -223,6 +223,7 @@ class Kernel:
             input_offset += len(inputs)
             c.rate_order = coupling.rate_orders.get(n, 0)
             c.interpolating = int(coupling.interpolating[n])
+            c.extrapolating = int(coupling.extrapolating[n])
             rec = _ints([fmu.vr(v) for v in record_names[n]]).astype(np.uintc)
             c.n_record, c.record_offset, c.record_vrs = len(rec), record_offset, _ptr(rec, _UINTS)
             record_start[n] = record_offset

@@ -12,7 +12,8 @@
  *   Taylor polynomial at t instead, with every derivative it gives whatever the order above 0
  *   (and already during the start's consistency sweeps). Input derivatives go to the FMU through
  *   fmi2SetRealInputDerivatives; an FMU that cannot interpolate gets each input held at its
- *   polynomial's value at the step's midpoint and no derivatives.
+ *   polynomial's value at the step's midpoint and no derivatives (one that extrapolates its held
+ *   inputs itself, fmi.extrapolate_inputs, the value at t).
  *   Start: the outputs are made consistent with the connected inputs (fixed-point sweeps), and the
  *   first macro step, which has no history, is iterated to a fixed point with inputs interpolated
  *   between t and the latest guess at t + h (FMU states restored between sweeps).
@@ -136,7 +137,7 @@ static int set_inputs(Kernel *s, int k, double t, double t_new, int order) {
             polynomial_at(count, times + (n - count), y + (n - count), t, order, p);
         }
         if (order >= 1 && !in->interpolating) { /* held at the polynomial's midpoint value */
-            const double half = 0.5 * (t_new - t);
+            const double half = in->extrapolating ? 0.0 : 0.5 * (t_new - t); /* (at t: it extrapolates itself) */
             p[0] = p[0] + p[1] * half + 0.5 * p[2] * half * half;
             p[1] = p[2] = 0.0;
         }
@@ -714,7 +715,7 @@ static const StructLayout LAYOUT[] = {
     STRUCT_LAYOUT(KernelInstance), I(component), I(set_real), I(get_real), I(set_input_derivatives),
     I(get_output_derivatives), I(do_step), I(get_state), I(set_state), I(free_state), I(n_outputs), I(output_offset),
     I(output_vrs), I(n_inputs), I(input_offset), I(input_vrs), I(feed_source), I(feed_index), I(rate_order),
-    I(interpolating), I(n_record), I(record_offset), I(record_vrs),
+    I(interpolating), I(extrapolating), I(n_record), I(record_offset), I(record_vrs),
 #undef I
 #define K(field) STRUCT_LAYOUT_FIELD(Kernel, field)
     STRUCT_LAYOUT(Kernel), K(n_instances), K(instances), K(sequence), K(gauss_seidel), K(order), K(keep),

@@ -54,6 +54,9 @@ typedef struct {
     const int *feed_index;            /* per input: the index in the source's outputs */
     int rate_order;                   /* output derivatives it provides (0: none; at most 2) */
     int interpolating;                /* takes input derivatives (canInterpolateInputs) */
+    int extrapolating;                /* not interpolating, but extrapolates held inputs itself over a
+                                       * step from its values at the communication points
+                                       * (fmi.extrapolate_inputs): gets them at t, not the midpoint */
     int n_record, record_offset;      /* outputs recorded each step, at record_offset in the scratch */
     const unsigned *record_vrs;
 } KernelInstance;
