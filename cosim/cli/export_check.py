@@ -24,7 +24,7 @@ def add(commands) -> argparse.ArgumentParser:
 def main(args: argparse.Namespace) -> int:
     from ..engine.execution import RunFailed
     from ..engine.ssp import read_ssp, write_tool_steps
-    from ..engine.tools import FIT_TOLERANCE, FLOOR, SYSTEM_HEADER, check_system, system_row
+    from ..engine.tools import FIT_TOLERANCE, FLOOR, SYSTEM_HEADER, TOOL_MASTERS, check_system, fmi3_lines, system_row
     from .common import unwritable
     if args.system.suffix.lower() != ".ssp":
         raise UsageError(f"export-check {args.system}: an SSP archive (.ssp) is needed")
@@ -41,6 +41,8 @@ def main(args: argparse.Namespace) -> int:
           f"the system's own coupling at a 16th of its step ({structure.experiment.step:g} s; every recorded output "
           f"within {FIT_TOLERANCE:.0%} of its own range), halving down to 1/{FLOOR}:")
     print("\n".join([*SYSTEM_HEADER, *(system_row(s) for s in steps)]))
+    if len(steps) < len(TOOL_MASTERS):  # a system of FMI 3.0 FMUs
+        print("\n".join(fmi3_lines()))
     if not args.dry_run:
         write_tool_steps(args.system, [(s.master.tool, s.step, s.within) for s in steps], structure.experiment.step)
         print(f"written: the steps into {args.system} (OMSimulator's system annotation, the OSP annotation's base "

@@ -25,20 +25,32 @@ class ToolMaster:
     master: str            # what its master does, in words
     algorithm: Algorithm   # our engine's emulation of it
     where: str             # where the export writes the step it measured for the tool
+    loads_fmi3: bool       # runs a system of FMI 3.0 FMUs (False: no step is measured for it there)
+    fmi3: str              # what is known of it and FMI 3.0 FMUs, in words
 
 
 TOOL_MASTERS = (
     ToolMaster("OMSimulator", "oms-ma: fixed step, Jacobi, inputs held, outputs that feed through read again",
-               Algorithm("jacobi", 0, feedthrough=True), "the system's oms:FixedStepMaster stepSize"),
+               Algorithm("jacobi", 0, feedthrough=True), "the system's oms:FixedStepMaster stepSize",
+               True, "not checked here (OMSimulator cannot be installed here)"),
     ToolMaster("libcosim", "fixed-step algorithm: Jacobi, inputs held",
                Algorithm("jacobi", 0, initial_sweeps=0), "the OSP annotation's baseStepSize (and an OSP "
-               "configuration's BaseStepSize)"),
+               "configuration's BaseStepSize)",
+               False, "does not load them (libcosimpy 0.0.6 refuses the archive)"),
     ToolMaster("Ecos", "fixed step: Jacobi, inputs held", Algorithm("jacobi", 0, initial_sweeps=0),
-               "our annotation's cosim:ToolStep (Ecos runs at the step it is given)"),
+               "our annotation's cosim:ToolStep (Ecos runs at the step it is given)",
+               True, "runs them (ecospy 0.7.2, tests/platform/test_export_tools.py)"),
     ToolMaster("fmpy.ssp", "fixed step: Jacobi, inputs held, every connection 0 over the first step",
                Algorithm("jacobi", 0, initial_sweeps=0, zero_start=True),
-               "our annotation's cosim:ToolStep (fmpy.ssp runs at the step it is given)"),
+               "our annotation's cosim:ToolStep (fmpy.ssp runs at the step it is given)",
+               False, "does not load them (fmpy 0.3.32's simulate_ssp instantiates every FMU as FMI 1.0 or 2.0)"),
 )
+
+
+def fmi3_lines() -> list[str]:
+    """What the export says of each tool and a system of FMI 3.0 FMUs."""
+    return [f"note: FMI 3.0: {m.tool} {m.fmi3}" + ("" if m.loads_fmi3 else "; no step measured for it")
+            for m in TOOL_MASTERS]
 
 FLOOR = 64  # the finest step tried: the system's step / FLOOR
 CONVERGED = 16  # the converged run: the system's own coupling at its step / CONVERGED
@@ -73,13 +85,14 @@ class ToolStep:
         return self.judgement.ratio
 
 
-def largest_steps(step: float, attempt: Callable[[ToolMaster, float], ToolStep]) -> list[ToolStep]:
-    """Per tool of TOOL_MASTERS, the largest of `step` / 2^k (down to FLOOR) at which `attempt`
-    (the tool's master run at that step, judged) holds, or the trial that came closest (the least
-    ratio, then the largest step). Tools with the same master are run once."""
+def largest_steps(step: float, attempt: Callable[[ToolMaster, float], ToolStep], fmi3: bool = False) -> list[ToolStep]:
+    """Per tool of TOOL_MASTERS (for a system of FMI 3.0 FMUs, `fmi3`, those that load them), the
+    largest of `step` / 2^k (down to FLOOR) at which `attempt` (the tool's master run at that step,
+    judged) holds, or the trial that came closest (the least ratio, then the largest step). Tools
+    with the same master are run once."""
     found: dict[Algorithm, ToolStep] = {}
     out = []
-    for master in TOOL_MASTERS:
+    for master in (m for m in TOOL_MASTERS if m.loads_fmi3 or not fmi3):
         if master.algorithm not in found:
             tried = []
             divisor = 1
@@ -134,7 +147,9 @@ def check_system(structure: SystemStructure) -> tuple[float, list[ToolStep]]:
     """Any system's step per tool: each tool's master run in our engine over the first PROBE
     seconds (at most the experiment), against the system's own coupling at a CONVERGED-th of its
     step, judged by fit over what the system records (its `record` setting, else every connected
-    output). Returns the probe's duration and the steps."""
+    output); for a system with FMI 3.0 FMUs, the tools that load them. Returns the probe's duration
+    and the steps."""
+    from .fmi import loaded
     from .outcome import execute
     from .run import recording
     from .settings import system_settings
@@ -151,4 +166,5 @@ def check_system(structure: SystemStructure) -> tuple[float, list[ToolStep]]:
         outcome = execute(structure, master.algorithm, FixedStep(at), duration, record, names, clock=clock)
         return ToolStep(master, at, fit(outcome.result, converged.result, names), outcome.wall)
 
-    return duration, largest_steps(step, attempt)
+    fmi3 = any(str(loaded(c.fmu)[0].fmiVersion).startswith("3") for c in structure.components)
+    return duration, largest_steps(step, attempt, fmi3)

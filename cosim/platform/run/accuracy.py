@@ -120,6 +120,17 @@ def window_errors(result: np.ndarray, reference: np.ndarray, names: Sequence[str
     return out
 
 
+def converged_twin(scene: "Scene") -> "Scene":
+    """The scene's converged twin: the scene at a 16th of its step throughout (no finer start, no
+    edge windows), on the FMI 2.0 FMUs: the same models as the FMI 3.0 ones
+    (tests/models/test_fmi3.py), which take the coupling's input derivatives (at a 16th of its own
+    step a run on FMI 3.0 FMUs, which extrapolate their inputs themselves, is not converged)."""
+    from ...engine.tools import CONVERGED
+    on_fmi2 = scene.changed({"scene.fmi": 2})
+    return on_fmi2.changed({"scene.step": on_fmi2.step / CONVERGED, "coupling.startup_time": 0.0,
+                            "coupling.edge_time": 0.0, "coupling.step_control": "fixed"})
+
+
 def probe_duration(scene: "Scene") -> float:
     """How long a probe of a scene runs: 2 s, and past its first load pulse and the AFTER after it
     (where the efforts are judged against their own change), at most the scene's duration."""

@@ -122,6 +122,13 @@ def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemS
                                    cueing_values=scene_cueing(scene, mechanics_values), fmi=scene.fmi)
     structure.settings = {**to_strings(scene_algorithm(scene), scene.control),
                           **output_settings(*scene_record(scene), scene.output_interval)}
+    if scene.fmi == 3 and scene.algorithm.order > 0:
+        # FMI 3.0 FMUs take no input derivatives: the coupling's extrapolation reaches them through their
+        # own, from their inputs at the communication points (the reference with its exact rate)
+        from ...engine.checks import variables
+        for component in structure.components:
+            if "fmi.extrapolate_inputs" in variables(component.fmu):
+                component.parameters.setdefault("fmi.extrapolate_inputs", True)
     return structure
 
 

@@ -21,9 +21,9 @@ import numpy as np
 from ...engine.outcome import execute
 from ...engine.settings import Algorithm, FixedStep
 from ...engine.structure import SystemStructure
-from ...engine.tools import CONVERGED, FLOOR, ToolMaster, ToolStep, largest_steps
+from ...engine.tools import FLOOR, ToolMaster, ToolStep, fmi3_lines, largest_steps
 from ..scene import Scene
-from .accuracy import Judgement, judge, probe_duration
+from .accuracy import Judgement, converged_twin, judge, probe_duration
 from .compile import scene_record, scene_structure
 
 def row(measured: ToolStep) -> str:
@@ -41,11 +41,9 @@ HEADER = ["| tool | its master | step written | | pose error [m, rad] | efforts'
 
 
 def converged(scene: Scene, duration: float) -> np.ndarray:
-    """The scene's converged run over `duration`: its own coupling at a 16th of its step
-    throughout (no finer start, no edge windows), as its twin."""
+    """The scene's converged run over `duration`: its converged twin's (converged_twin)."""
     from .runner import run_scene
-    twin = scene.changed({"scene.duration": duration, "scene.step": scene.step / CONVERGED, "coupling.startup_time": 0.0,
-                          "coupling.edge_time": 0.0, "coupling.step_control": "fixed"})
+    twin = converged_twin(scene).changed({"scene.duration": duration})
     return run_scene(twin, progress=False, advice=False, plots=False)[0]
 
 
@@ -70,10 +68,7 @@ def portable_structure(scene: Scene, fmi2_warnings: bool = False) -> tuple[Syste
     structure = scene_structure(scene)
     check_parameters(structure)  # ParameterError before a run on values the FMUs refuse
     lines, without = [], {"fmi.extrapolate_inputs": [], "fmi.warnings_as_ok": []}
-    # FMI 3.0 FMUs stay holding: our engine hands them each input at the step's midpoint, which an FMU
-    # extrapolating from it would count twice
-    switches = (*(() if scene.fmi == 3 else ("fmi.extrapolate_inputs",)),
-                *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
+    switches = ("fmi.extrapolate_inputs", *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
     for component in structure.components:
         known = variables(component.fmu)
         for switch in switches:
@@ -84,17 +79,13 @@ def portable_structure(scene: Scene, fmi2_warnings: bool = False) -> tuple[Syste
     by_name = {c.name: c for c in structure.components}
     for (component, name), value in start_inputs(structure, scene.step).items():
         by_name[component].parameters[name] = value
-    if scene.fmi == 3:
-        lines.append("note: every connected input starts at its source's consistent value (its start value in the "
-                     "parameter sets), so that a master which makes no consistency sweeps starts where ours does")
-    else:
-        lines.append("note: every FMU extrapolates over a step the inputs its master holds (fmi.extrapolate_inputs = "
-                     "true: linearly from their last two communication points, the reference with its exact rate "
-                     "pose_ref_rate.*), and every connected input starts at its source's consistent value (its start "
-                     "value in the parameter sets), so that a master which holds its inputs and makes no consistency "
-                     "sweeps couples at second order from a consistent start"
-                     + (f"; not {', '.join(without['fmi.extrapolate_inputs'])} (its FMU has no such switch)"
-                        if without["fmi.extrapolate_inputs"] else ""))
+    lines.append("note: every FMU extrapolates over a step the inputs its master holds (fmi.extrapolate_inputs = "
+                 "true: linearly from their last two communication points, the reference with its exact rate "
+                 "pose_ref_rate.*), and every connected input starts at its source's consistent value (its start "
+                 "value in the parameter sets), so that a master which holds its inputs and makes no consistency "
+                 "sweeps couples at second order from a consistent start"
+                 + (f"; not {', '.join(without['fmi.extrapolate_inputs'])} (its FMU has no such switch)"
+                    if without["fmi.extrapolate_inputs"] else ""))
     if not fmi2_warnings:
         lines.append("note: every FMU returns fmi2OK where it logs a warning (fmi.warnings_as_ok = true), so that a "
                      "tool that stops at the first fmi2Warning (OMSimulator) runs on past a leg out of its stroke; the "
@@ -133,7 +124,7 @@ def tool_steps(scene: Scene) -> list[ToolStep]:
         result, wall = _run(scene, master, step, duration, structure)
         return ToolStep(master, step, judge(scene, result, reference), wall)
 
-    _MEASURED[key] = largest_steps(scene.step, attempt)
+    _MEASURED[key] = largest_steps(scene.step, attempt, fmi3=scene.fmi == 3)
     return _MEASURED[key]
 
 
@@ -168,8 +159,9 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     except ParameterError as error:
         raise scene_error(scene, error) from None
     if scene.fmi == 3:
-        lines.append("note: the archive holds our FMUs as FMI 3.0 (no input derivatives: each holds its inputs over a "
-                     "step); our engine runs it; which of the other tools load FMI 3.0 FMUs is not checked here")
+        lines.append("note: the archive holds our FMUs as FMI 3.0 (no input derivatives: each extrapolates the inputs "
+                     "its master holds itself, as above); our engine runs it")
+        lines += fmi3_lines()
     steps = tool_steps(scene) if measure else []
     if steps:
         lines += steps_text(scene, steps)

@@ -107,9 +107,12 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
                           tuning=tuning, diverged=outcome.diverged)
     report.name = scene.name
     if scene.fmi == 3 and scene.algorithm.order > 0:
-        report.remarks.append(f"FMI 3.0: the FMUs take no input derivatives, so each holds its inputs over a step; the "
-                              f"coupling's order-{scene.algorithm.order} extrapolation reaches them as the value at "
-                              "the step's start (with coupling.order = 0 the run equals the FMI 2.0 one bit for bit)")
+        from ..scene.reader import FMI3_REFINE
+        report.remarks.append(f"FMI 3.0: the FMUs take no input derivatives, so each extrapolates its inputs itself over "
+                              "a step, linearly from the communication points (fmi.extrapolate_inputs; the reference with "
+                              "its exact rate): first order, as our Jacobi, whatever the coupling; the fixed step is "
+                              f"1/{FMI3_REFINE} of the scene's ({scene.step:g} s), where every shipped scene holds its tolerances (with coupling.order "
+                              "= 0 the run is the FMI 2.0 one at the scene's step, bit for bit)")
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
         if len(result) > 3:
@@ -172,13 +175,12 @@ def write_figures(scene: Scene, result: np.ndarray, report: RunReport, outcome: 
 
 
 def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, float, float]]:
-    """The run against its converged twin, the same scene at a 16th of its step throughout (no
-    finer start, no edge windows): per window (cosim.platform.run.accuracy) the pose's largest
+    """The run against its converged twin (converged_twin: the same scene at a 16th of its step
+    throughout, no finer start, no edge windows): per window (cosim.platform.run.accuracy) the pose's largest
     difference [m, rad] and the drive efforts' (as the legs feel them), absolute and against their
     own change there."""
-    from .accuracy import efforts, window_errors, windows
-    twin = scene.changed({"scene.step": scene.step / 16, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0,
-                          "coupling.step_control": "fixed"})
+    from .accuracy import converged_twin, efforts, window_errors, windows
+    twin = converged_twin(scene)
     reference, _ = run_scene(twin, progress=False, advice=False)
     effort = DRIVES[scene.drive].effort[0]
     spans = windows(float(min(result["time"][-1], reference["time"][-1])), scene.pulses)
