@@ -182,7 +182,7 @@ def test_the_engine_runs_the_meng_scene_on_fmi3_fmus_as_on_fmi2_at_order_0():
         assert not any(r.startswith("FMI 3.0") for r in report.remarks)
 
 
-def test_an_fmi3_run_that_extrapolates_says_its_inputs_are_held(tmp_path, capsys):
+def test_an_fmi3_run_that_extrapolates_says_how_its_inputs_reach_the_fmus(tmp_path, capsys):
     from cosim.cli import main
     assert main(["run", "meng_eq35", "--fmi", "3", "--duration", "0.05", "--no-plots", "--out", str(tmp_path)]) == 0
     assert "FMI 3.0: the FMUs take no input derivatives" in capsys.readouterr().out
