@@ -32,11 +32,12 @@ class ToolMaster:
 TOOL_MASTERS = (
     ToolMaster("OMSimulator", "oms-ma: fixed step, Jacobi, inputs held, outputs that feed through read again",
                Algorithm("jacobi", 0, feedthrough=True), "the system's oms:FixedStepMaster stepSize",
-               True, "not checked here (OMSimulator cannot be installed here)"),
+               True, "is not checked here (OMSimulator cannot be installed here); its step is measured as if it "
+               "runs them"),
     ToolMaster("libcosim", "fixed-step algorithm: Jacobi, inputs held",
                Algorithm("jacobi", 0, initial_sweeps=0), "the OSP annotation's baseStepSize (and an OSP "
                "configuration's BaseStepSize)",
-               False, "does not load them (libcosimpy 0.0.6 refuses the archive)"),
+               False, "does not load them (libcosimpy 0.0.6 refuses such an archive)"),
     ToolMaster("Ecos", "fixed step: Jacobi, inputs held", Algorithm("jacobi", 0, initial_sweeps=0),
                "our annotation's cosim:ToolStep (Ecos runs at the step it is given)",
                True, "runs them (ecospy 0.7.2, tests/platform/test_export_tools.py)"),
@@ -49,7 +50,7 @@ TOOL_MASTERS = (
 
 def fmi3_lines() -> list[str]:
     """What the export says of each tool and a system of FMI 3.0 FMUs."""
-    return [f"note: FMI 3.0: {m.tool} {m.fmi3}" + ("" if m.loads_fmi3 else "; no step measured for it")
+    return [f"note: FMI 3.0 FMUs: {m.tool} {m.fmi3}" + ("" if m.loads_fmi3 else "; no step measured for it")
             for m in TOOL_MASTERS]
 
 FLOOR = 64  # the finest step tried: the system's step / FLOOR

@@ -112,3 +112,19 @@ def test_a_wrong_file_is_one_line(tmp_path, capsys, name, content):
     assert main(["export-check", str(tmp_path / name)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and len(err.strip().splitlines()) == 1 and str(tmp_path / name) in err
+
+
+def test_for_a_system_of_fmi3_fmus_only_the_tools_that_load_them_are_measured():
+    """libcosim (libcosimpy 0.0.6) and fmpy.ssp (0.3.32) do not load FMI 3.0 FMUs: no step is
+    measured for them there, and the export says why; every tool is measured for FMI 2.0."""
+    from cosim.engine.tools import Fit, ToolStep, fmi3_lines, largest_steps
+
+    def attempt(master, step):
+        return ToolStep(master, step, Fit(0.5, "x"), 0.0)
+
+    assert [s.master.tool for s in largest_steps(1e-3, attempt, fmi3=True)] == \
+        [m.tool for m in TOOL_MASTERS if m.tool not in ("libcosim", "fmpy.ssp")]
+    assert [s.master.tool for s in largest_steps(1e-3, attempt)] == [m.tool for m in TOOL_MASTERS]
+    said = fmi3_lines()
+    assert len(said) == len(TOOL_MASTERS)
+    assert [line.split(": ")[2].split(" ")[0] for line in said if "no step measured" in line] == ["libcosim", "fmpy.ssp"]
