@@ -22,7 +22,8 @@ def add(commands) -> argparse.ArgumentParser:
     run.add_argument("--no-plots", action="store_true")
     run.add_argument("--duration", type=str, help="override the scene's duration [s]")
     run.add_argument("--fmi", type=int, choices=(2, 3), help="a scene's FMUs as FMI 2.0 (the default) or FMI 3.0 "
-                     "(scene.fmi; FMI 3.0 has no input derivatives: inputs held over each step)")
+                     "(scene.fmi; FMI 3.0 has no input derivatives: at order 1 or 2 each FMU extrapolates its inputs itself, "
+                     "at an eighth of the scene's fixed step)")
     run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
                      "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
     run.add_argument("--real-time", nargs="?", const="1", metavar="FACTOR", help="pace the run to the wall clock (each "
