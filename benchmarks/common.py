@@ -19,6 +19,11 @@ from fmpy import read_model_description
 from cosim.engine.artifacts import BUILD_DIR, ROOT, fmu_path
 
 HERE = Path(__file__).resolve().parent
+# A benchmark prints its results; with --write (taken off the command line here, before a
+# benchmark's own options are read) it also writes them into the docs.
+WRITE = "--write" in sys.argv
+if WRITE:
+    sys.argv.remove("--write")
 BENCHMARKS_DOC = ROOT / "docs" / "benchmarks.md"
 # the pages that quote benchmark blocks: the README and the user guide
 QUOTING = (ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md")))
@@ -41,14 +46,18 @@ def machine() -> str:
 
 
 def publish(name: str, command: str, lines: list[str], doc_path: Path = BENCHMARKS_DOC,
-            quoting: tuple[Path, ...] = QUOTING) -> None:
-    """Writes a benchmark's results (markdown lines) as block `name` of docs/benchmarks.md (appended
+            quoting: tuple[Path, ...] = QUOTING, write: bool | None = None) -> None:
+    """Prints a benchmark's results; with --write on the command line (or `write`), writes them (markdown lines) as block `name` of docs/benchmarks.md (appended
     the first time) and replaces the block of the same name in each page that quotes it (the
     README, the user guide): those only ever hold copies that a benchmark wrote
     (tests/platform/test_docs.py holds them equal)."""
     stamp = time.strftime("%Y-%m-%d")
     block = "\n".join([f"<!-- benchmark:{name} -->", f"`{command}` ({stamp}, {machine()}):", "", *lines,
                         f"<!-- /benchmark:{name} -->"])
+    if not (WRITE if write is None else write):
+        print(block)
+        print(f"(not written into the docs: `{command} --write` writes block {name})", file=sys.stderr)
+        return
     doc = doc_path.read_text() if doc_path.exists() else (
         "# Benchmarks\n\nEach block below is written by the command it names, in one run; the user guide quotes "
         "these blocks (its copies are rewritten by the same command). Ratios are measured within one run; "

@@ -93,7 +93,8 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
 def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | None = None,
              overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
              out: str | Path | None = None, plots: bool = False, progress: bool = False, twin: bool = False,
-             real_time: float | None = None, stream: str | None = None, listen: str | None = None) -> Run:
+             real_time: float | None = None, stream: str | None = None, listen: str | None = None,
+             listen_key: str | Path | bytes | None = None) -> Run:
     """Runs a scene or an SSP system and returns its named results.
 
     Args:
@@ -113,7 +114,11 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         real_time: pace the run at this factor of the wall clock (1.0: real time); its lateness
             and overruns are in `.report.pacing` (docs/guide/realtime.md).
         stream: send the run's samples live to udp://HOST:PORT[?every=N] (`cosim.realtime.receive`).
-        listen: take a scene's pose reference live from udp://HOST:PORT (`cosim.realtime.send`).
+        listen: take a scene's pose reference live from udp://HOST:PORT (`cosim.realtime.send`),
+            held within the platform's motion envelope; an address other than the loopback
+            (127.0.0.0/8, ::1) needs `listen_key`.
+        listen_key: the shared key (bytes, or a file holding it) every live datagram is tagged
+            with (HMAC-SHA256; docs/guide/realtime.md).
 
     Raises:
         SceneError, SspError, SettingsError: the input cannot run (one line).
@@ -127,7 +132,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
                                               and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
         given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin),
-                                          ("listen", listen)) if value]
+                                          ("listen", listen), ("listen_key", listen_key)) if value]
         if given:
             raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
                              "settings)")
@@ -148,8 +153,18 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     scene = model.changed(overrides or {}) if isinstance(model, Scene) else load_scene(model, overrides)
     if duration is not None:
         scene = scene.changed({"scene.duration": float(duration)})
-    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin, real_time=real_time,
-                               stream=stream, listen=listen)
+    if listen_key is not None and not listen:
+        raise UsageError("simulate: listen_key goes with listen")
+    if isinstance(listen_key, (str, Path)):
+        from .engine.realtime import read_key
+        listen_key = read_key(listen_key, "listen_key")
+    adapt = None
+    if real_time is not None or stream or listen:
+        from .platform.realtime import real_time_plan
+
+        def adapt(plan):
+            return real_time_plan(scene, plan, real_time, stream, listen, listen_key)
+    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin, adapt=adapt)
     return Run(values, report)
 
 

@@ -31,7 +31,10 @@ def add(commands) -> argparse.ArgumentParser:
     run.add_argument("--stream", metavar="udp://HOST:PORT[?every=N]", help="send the run's samples live, one datagram "
                      "every N macro steps (layout: cosim stream-layout)")
     run.add_argument("--listen", metavar="udp://HOST:PORT", help="a scene's pose reference taken live from datagrams "
-                     "sent here (cosim.realtime.send); binds 127.0.0.1 unless a host is named")
+                     "sent here (cosim.realtime.send), held within the platform's motion envelope; binds 127.0.0.1 "
+                     "unless a host is named (any other than the loopback needs --listen-key)")
+    run.add_argument("--listen-key", metavar="FILE", type=Path, help="a file holding the shared key (16 to 256 bytes) "
+                     "that every live datagram is tagged with (HMAC-SHA256)")
     return run
 
 
@@ -67,11 +70,14 @@ def scene_values(items: list[str]) -> dict[str, object]:
 def main(args: argparse.Namespace) -> int:
     duration = seconds("--duration", args.duration)
     factor = seconds("--real-time", args.real_time, "expected a real-time factor > 0 (1: the wall clock's pace)")
+    if args.listen_key is not None and not args.listen:
+        raise UsageError("--listen-key goes with --listen")
     if args.listen:
-        from ..engine.realtime import address
+        from ..engine.realtime import address, is_loopback
         host = address(args.listen, "--listen")[0]
-        if host not in ("127.0.0.1", "localhost", "::1"):
-            print(f"listening on {host}: datagrams from other machines can drive this run's platform", flush=True)
+        if not is_loopback(host) and args.listen_key is not None:
+            print(f"listening on {host}: datagrams from other machines that carry the key of {args.listen_key} can "
+                  "drive this run's platform", flush=True)
     system = args.scene.suffix.lower() in SYSTEM_SUFFIXES
     stem = args.scene.stem
     written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if system or args.no_plots else
@@ -82,4 +88,4 @@ def main(args: argparse.Namespace) -> int:
     given = {"settings": settings(args.set) or None} if system else {"overrides": overrides or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
                                    twin=args.twin, progress=True, real_time=factor, stream=args.stream,
-                                   listen=args.listen, **given).report, written, args.out)
+                                   listen=args.listen, listen_key=args.listen_key, **given).report, written, args.out)

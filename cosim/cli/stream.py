@@ -15,9 +15,9 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..engine.realtime import REFERENCE, SAMPLE
+    from ..engine.realtime import LIVE_VERSION, MAC_SIZE, REFERENCE, SAMPLE
     from ..platform.ports import POSE
-    from ..platform.run.live import stream_fields
+    from ..platform.realtime import stream_fields
     from ..platform.scene import load_scene
     scene = load_scene(args.scene)
     fields = stream_fields(scene)
@@ -32,7 +32,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"  {SAMPLE.size + 8 * k:6d}  float64  {name} [{unit or '1'}]: {description}")
     print('and before the first sample, then once a second, the names: "CSLY", version (uint16), their number '
           "(uint16), then the names, UTF-8, one per line.")
-    print(f"`--listen udp://HOST:PORT` takes: \"CREF\", version (uint16, 1), count (uint16: 6, 12 or 18), sequence "
-          f"(uint64), the simulated time they are for (float64, NaN: on arrival), then at offset {REFERENCE.size} "
-          f"the pose {', '.join(POSE)} [m, rad], then optionally its rates and its accelerations (float64 each).")
+    print(f"`--listen udp://HOST:PORT` takes: \"CREF\", version (uint16, {LIVE_VERSION}), count (uint16: 6, 12 or 18), "
+          "session (uint64, the sender's own: the first sender owns the input until it is silent past the watchdog), "
+          f"sequence (uint64), the simulated time they are for (float64, NaN: on arrival), then at offset "
+          f"{REFERENCE.size} the pose {', '.join(POSE)} [m, rad], then optionally its rates and its accelerations "
+          f"(float64 each); with --listen-key, then the HMAC-SHA256 of all that ({MAC_SIZE} bytes).")
     return 0

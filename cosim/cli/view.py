@@ -44,7 +44,7 @@ def main(args: argparse.Namespace) -> int:
 def live(scene, args: argparse.Namespace) -> int:
     from ..engine.errors import UsageError
     from ..engine.realtime import address
-    from ..platform.report.live import serve
+    from ..platform.realtime.view import serve
     from ..platform.run.compile import scene_values
     address(args.live, "--live")
     if not 0 <= args.port < 65536 or not args.factor > 0:

@@ -38,9 +38,12 @@ class Platform(ctypes.Structure):
     ]
 
 
-class PlatformStroke(ctypes.Structure):
-    """A platform and its legs' stroke [m], for platform_pose_within_stroke (a live input's check)."""
-    _fields_ = [("platform", Platform), ("length_min", D), ("length_max", D)]
+class PlatformEnvelope(ctypes.Structure):
+    """The motion envelope a live reference is held in (fmu/mechanics/envelope.h): the stroke less
+    its margin [m], the joints' largest tilt [rad], the legs' largest speed [m/s] and acceleration
+    [m/s^2], and the reference's own largest acceleration per channel (its braking)."""
+    _fields_ = [("platform", Platform), ("length_min", D), ("length_max", D), ("joint_angle_max", D),
+                ("leg_velocity_max", D), ("leg_acceleration_max", D), ("acceleration_max", D * 6)]
 
 
 class LegGeometry(ctypes.Structure):
@@ -59,7 +62,7 @@ def load() -> ctypes.CDLL:
     dll = ctypes.CDLL(str(path))
     check_layout(dll, "platform_core_layout", path, [(Platform, "Platform"), (LegGeometry, "LegGeometry"),
                                                       (Diagnostics, "PlatformDiagnostics"),
-                                                      (PlatformStroke, "PlatformStroke")])
+                                                      (PlatformEnvelope, "PlatformEnvelope")])
     P = ctypes.POINTER
     dll.mechanics_platform_from_values.argtypes = [P(D), ctypes.c_int, P(Platform)]
     dll.mechanics_platform_from_values.restype = ctypes.c_int

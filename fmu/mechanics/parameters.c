@@ -1,6 +1,8 @@
 /* The mechanics' parameters -> the dynamics core's Platform (see parameters.h). */
 #include "parameters.h"
 
+#include "envelope.h"
+
 #include <string.h>
 
 #if defined(_WIN32)
@@ -79,15 +81,6 @@ MECHANICS_EXPORT int mechanics_platform_from_values(const double *values, int co
     return mechanics_platform(&v, p);
 }
 
-MECHANICS_EXPORT int platform_pose_within_stroke(void *stroke, const double *pose) {
-    const PlatformStroke *s = (const PlatformStroke *)stroke;
-    double length[PLATFORM_LEGS];
-    platform_leg_lengths(&s->platform, pose, length); /* Eq 2 */
-    for (int i = 0; i < PLATFORM_LEGS; i++)
-        if (!(length[i] >= s->length_min && length[i] <= s->length_max)) return 0;
-    return 1;
-}
-
 #define P(field) STRUCT_LAYOUT_FIELD(Platform, field)
 #define L(field) STRUCT_LAYOUT_FIELD(LegGeometry, field)
 #define D(field) STRUCT_LAYOUT_FIELD(PlatformDiagnostics, field)
@@ -100,8 +93,9 @@ static const StructLayout LAYOUT[] = {
     STRUCT_LAYOUT(LegGeometry), L(axis), L(length), L(arm), L(velocity),
     STRUCT_LAYOUT(PlatformDiagnostics), D(mass_matrix), D(kinetic), D(potential), D(drive_power),
     D(transmission_loss), D(friction_loss), D(load_power), D(singular),
-    STRUCT_LAYOUT(PlatformStroke), STRUCT_LAYOUT_FIELD(PlatformStroke, platform),
-    STRUCT_LAYOUT_FIELD(PlatformStroke, length_min), STRUCT_LAYOUT_FIELD(PlatformStroke, length_max),
+#define E(field) STRUCT_LAYOUT_FIELD(PlatformEnvelope, field)
+    STRUCT_LAYOUT(PlatformEnvelope), E(platform), E(length_min), E(length_max), E(joint_angle_max),
+    E(leg_velocity_max), E(leg_acceleration_max), E(acceleration_max),
     STRUCT_LAYOUT_END};
 
 MECHANICS_EXPORT const StructLayout *platform_core_layout(void) { return LAYOUT; }

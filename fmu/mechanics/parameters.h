@@ -19,17 +19,8 @@ int mechanics_platform(const ModelVariables *v, Platform *p);
 int mechanics_platform_from_values(const double *values, int count, Platform *p);
 int mechanics_value_references(void);
 
-/* A platform and its legs' stroke, for a master that checks poses it is sent (a live input). */
-typedef struct {
-    Platform platform;
-    double length_min, length_max; /* [m] */
-} PlatformStroke;
-
-/* 1 if the pose (x, y, z [m], roll, pitch, yaw [rad]) puts every leg of `stroke` (a PlatformStroke)
- * inside its stroke, 0 otherwise: the step kernel's AdmissibleFn. */
-int platform_pose_within_stroke(void *stroke, const double *pose);
-
-/* The layout of Platform, LegGeometry, PlatformDiagnostics and PlatformStroke (see struct_layout.h). */
+/* The layout of Platform, LegGeometry, PlatformDiagnostics and PlatformEnvelope (envelope.h; see
+ * struct_layout.h). */
 const StructLayout *platform_core_layout(void);
 
 #endif

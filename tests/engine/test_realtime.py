@@ -48,9 +48,10 @@ def test_a_sample_decodes_to_its_values_by_name_bit_for_bit():
 
 def test_a_reference_datagram_carries_values_rates_and_accelerations_in_order():
     pose, rates = [0.0, 0.1, 1.7, 0.0, 0.02, 0.0], [0.0] * 5 + [0.3]
-    datagram = reference_datagram(pose, 9, None, rates, [1.0] * 6)
-    magic, version, count, sequence, time = REFERENCE.unpack_from(datagram)
-    assert (magic, version, count, sequence) == (b"CREF", 1, 18, 9) and math.isnan(time)
+    datagram = reference_datagram(pose, 9, None, rates, [1.0] * 6, session=0xfeed)
+    magic, version, count, session, sequence, time = REFERENCE.unpack_from(datagram)
+    assert (magic, version, count, session, sequence) == (b"CREF", 2, 18, 0xfeed, 9) and math.isnan(time)
+    assert REFERENCE.size == 32
     values = np.frombuffer(datagram, "<f8", offset=REFERENCE.size)
     assert values.tolist() == [*pose, *rates, *[1.0] * 6]
     assert len(reference_datagram(pose, 0, 2.0, accelerations=[1.0] * 6)) == REFERENCE.size + 18 * 8  # rates 0
@@ -67,3 +68,33 @@ def test_pacing_figures_come_from_the_steps():
     counts, edges = pacing.histogram(10)
     assert counts.sum() == 5 and edges[-1] == 5e-3
     assert "2 of 5 steps overran" in pacing.lines()[0] and pacing.row()["overruns"] == 2
+
+
+def test_a_keyed_datagram_ends_in_the_hmac_sha256_of_the_rest():
+    import hashlib
+    import hmac
+    key = b"k" * 32
+    datagram = reference_datagram([0.0] * 6, 3, 1.5, session=7, key=key)
+    assert len(datagram) == REFERENCE.size + 6 * 8 + 32
+    assert datagram[-32:] == hmac.new(key, datagram[:-32], hashlib.sha256).digest()
+
+
+@pytest.mark.parametrize("host, loopback", [("127.0.0.1", True), ("127.0.0.2", True), ("127.255.0.9", True),
+                                            ("::1", True), ("localhost", True), ("0.0.0.0", False),
+                                            ("10.0.0.2", False), ("::", False), ("192.168.1.1", False)])
+def test_the_loopback_is_127_0_0_0_8_and_1(host, loopback):
+    from cosim.engine.realtime import is_loopback
+    assert is_loopback(host) is loopback
+
+
+def test_a_key_file_is_read_whole_and_its_length_checked(tmp_path):
+    from cosim.engine.realtime import read_key
+    good = tmp_path / "key"
+    good.write_text("0123456789abcdef0123456789abcdef\n")
+    assert read_key(good) == b"0123456789abcdef0123456789abcdef"
+    for text, message in (("short", "a key of 5 bytes; it takes 16 to 256"), ("x" * 300, "a key of 300 bytes")):
+        good.write_text(text)
+        with pytest.raises(UsageError, match=message):
+            read_key(good)
+    with pytest.raises(UsageError, match="--listen-key .*missing"):
+        read_key(tmp_path / "missing")

@@ -37,9 +37,12 @@ def test_the_guide_quotes_no_benchmark_figure_outside_a_written_block():
 def test_publish_replaces_a_block_in_place_and_appends_a_new_one(tmp_path):
     doc, page = tmp_path / "benchmarks.md", tmp_path / "scenes.md"
     page.write_text("intro\n<!-- benchmark:a -->\nold\n<!-- /benchmark:a -->\nend\n")
-    publish("a", "python a.py", ["| x |", "| 1 |"], doc_path=doc, quoting=(page,))
-    publish("b", "python b.py", ["two"], doc_path=doc, quoting=(page,))
-    publish("a", "python a.py", ["| x |", "| 2 |"], doc_path=doc, quoting=(page,))
+    publish("a", "python a.py", ["| x |", "| 1 |"], doc_path=doc, quoting=(page,), write=True)
+    publish("b", "python b.py", ["two"], doc_path=doc, quoting=(page,), write=True)
+    publish("a", "python a.py", ["| x |", "| 2 |"], doc_path=doc, quoting=(page,), write=True)
+    before = (doc.read_text(), page.read_text())
+    publish("a", "python a.py", ["| x |", "| 3 |"], doc_path=doc, quoting=(page,))  # no --write: printed only
+    assert (doc.read_text(), page.read_text()) == before
     written = blocks(doc.read_text())
     assert list(written) == ["a", "b"]
     assert "| 2 |" in written["a"] and "| 1 |" not in written["a"]

@@ -17,6 +17,7 @@ import pytest
 
 import cosim
 from cosim.cli import main
+from cosim.engine.errors import UsageError
 from cosim.engine.realtime import REFERENCE, Sender, receive
 from cosim.platform.core import Core
 
@@ -194,7 +195,8 @@ def test_bad_packets_are_counted_by_kind_and_refused(tmp_path):
         for sample in samples:
             if sample.time >= 0.1:
                 break
-        with Sender(address) as sender:
+        now = sample.time
+        with Sender(address) as sender, Sender(address) as intruder:
             sender.send(good)
             time.sleep(0.01)
             sender.sequence = 0
@@ -204,30 +206,43 @@ def test_bad_packets_are_counted_by_kind_and_refused(tmp_path):
             sender.sequence = 3
             sender.send(good)                                         # out of order
             sender.sequence = 10
-            sender.send(neutral + [0, 0, 1.0, 0, 0, 0])               # a leg past its stroke
+            sender.send(neutral + [0, 0, 1.0, 0, 0, 0])               # a leg past its stroke: taken, held at it
             sender.send([*neutral[:5], np.inf])                       # non-finite
             sender.send(good, time=0.0)                               # late: for t = 0
-            for junk in (b"junk", b"CREF" + bytes(20), REFERENCE.pack(b"CREF", 2, 6, 99, 0.0) + bytes(48),
-                         REFERENCE.pack(b"CREF", 1, 5, 99, 0.0) + bytes(40),
-                         REFERENCE.pack(b"CREF", 1, 6, 99, 0.0) + bytes(40)):
+            sender.send(good, time=now + 1000.0)                      # for a time far beyond the next step
+            sender.send(good, rates=[0.0, 0.0, 10.0, 0.0, 0.0, 0.0])  # a rate beyond velocity_max
+            intruder.sequence = 2 ** 64 - 1
+            intruder.send(good + [0.0, 0.05, 0.0, 0.0, 0.0, 0.0])    # another sender's
+            session = sender.session
+            for junk in (b"junk", b"CREF" + bytes(28),
+                         REFERENCE.pack(b"CREF", 2, 6, session, 99, 0.0) + bytes(40),   # short of its count
+                         REFERENCE.pack(b"CREF", 2, 5, session, 99, 0.0) + bytes(40),   # count not 6, 12 or 18
+                         REFERENCE.pack(b"CREF", 3, 6, session, 99, 0.0) + bytes(48)):  # an unknown version
                 raw.sendto(junk, (host, int(port)))                   # malformed: 5
+            raw.sendto(struct.pack("<4sHHQd", b"CREF", 1, 6, 99, 0.0) + bytes(48), (host, int(port)))  # version 1
+            time.sleep(0.01)
+            sender.send(good)                                         # the last word: taken
         raw.close()
         for _ in samples:
             pass
 
     run, _ = follow(tmp_path, send, duration=0.8, watchdog=5.0)  # time to spare after the last packet
     live = run.report.pacing.live
-    assert {k: live[k] for k in live} == {"accepted": 2, "late": 1, "repeated": 1, "out_of_order": 1, "malformed": 5,
-                                          "non_finite": 1, "outside": 1, "watchdog": 0}
+    assert live == {"accepted": 3, "outside": 1, "late": 1, "future": 1, "repeated": 1, "out_of_order": 1,
+                    "malformed": 5, "old_version": 1, "non_finite": 1, "beyond_limits": 1, "foreign": 1,
+                    "unauthenticated": 0, "watchdog": 0}
     assert abs(run["pose_ref.z"][-1] - good[2]) < 1e-12  # the last good reference, reached and held
+    assert np.abs(run["pose_ref.y"]).max() == 0.0  # the intruder's y never applied
     line = next(line for line in run.report.text().splitlines() if line.startswith("live input"))
-    assert "refused: 1 late, 1 repeated, 1 out of order, 5 malformed, 1 non-finite, 1 outside the stroke" in line
+    assert ("4 references taken (1 outside the envelope: held at it); refused: 1 late, 1 for a time beyond the next "
+            "step, 1 repeated, 1 out of order, 5 malformed, 1 of the old version 1, 1 non-finite, 1 with rates or "
+            "accelerations beyond the limits, 1 from another sender") in line
 
 
 def test_any_bytes_are_taken_or_refused_none_lost_and_the_run_goes_on(tmp_path):
     from cosim.engine.realtime import reference_datagram
     neutral, rng, sent = Core().neutral_pose, np.random.default_rng(7), 400
-    valid = bytearray(reference_datagram(neutral + [0.0, 0.0, 0.02, 0.0, 0.0, 0.0], 1000, None))
+    valid = bytearray(reference_datagram(neutral + [0.0, 0.0, 0.02, 0.0, 0.0, 0.0], 1000, None, session=5))
 
     def send(address, samples):
         host, port = address[len("udp://"):].split(":")
@@ -249,7 +264,8 @@ def test_any_bytes_are_taken_or_refused_none_lost_and_the_run_goes_on(tmp_path):
     run, _ = follow(tmp_path, send, duration=0.6)
     live = run.report.pacing.live
     assert sum(v for k, v in live.items() if k != "watchdog") == sent  # every datagram counted once
-    assert live["malformed"] > 0.3 * sent and live["non_finite"] + live["outside"] + live["repeated"] > 0
+    assert live["malformed"] > 0.3 * sent
+    assert live["non_finite"] + live["outside"] + live["repeated"] + live["foreign"] + live["beyond_limits"] > 0
     reference = np.column_stack([run[f"pose_ref.{a}"] for a in cosim.platform.ports.POSE])
     assert np.isfinite(reference).all() and np.isfinite(run["pose.z"]).all()
     assert np.all((Core().leg_lengths(reference[-1]) > 1.535) & (Core().leg_lengths(reference[-1]) < 2.2))
@@ -290,15 +306,24 @@ def test_wrong_real_time_options_are_one_line(tmp_path, capsys, arguments, messa
     assert message in err and len(err.strip().splitlines()) == 1
 
 
-def test_a_run_listening_beyond_this_machine_says_so_first(tmp_path, capsys):
-    port = free_port()
-    assert main(["run", str(scene(tmp_path, duration=0.01)), "--no-plots", "--out", str(tmp_path), "--listen",
-                 f"udp://0.0.0.0:{port}"]) == 0
+def test_a_run_listening_beyond_this_machine_needs_a_key_and_says_so_first(tmp_path, capsys):
+    port, key = free_port(), tmp_path / "live.key"
+    key.write_text("0123456789abcdef" * 2)
+    run = ["run", str(scene(tmp_path, duration=0.01)), "--no-plots", "--out", str(tmp_path), "--listen"]
+    assert main([*run, f"udp://0.0.0.0:{port}"]) == 2  # without a key: refused, one line, nothing run
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "0.0.0.0 is not this machine's loopback" in err and "--listen-key" in err
+    with pytest.raises(UsageError, match="0.0.0.0 is not this machine's loopback"):  # the API says the same
+        cosim.simulate(scene(tmp_path, duration=0.01), listen=f"udp://0.0.0.0:{port}")
+    assert main([*run, f"udp://0.0.0.0:{port}", "--listen-key", str(key)]) == 0
     first = capsys.readouterr().out.splitlines()[0]
-    assert first == "listening on 0.0.0.0: datagrams from other machines can drive this run's platform"
-    main(["run", str(scene(tmp_path, duration=0.01)), "--no-plots", "--out", str(tmp_path), "--listen",
-          f"udp://127.0.0.1:{port}"])
-    assert not capsys.readouterr().out.startswith("listening on")
+    assert first == (f"listening on 0.0.0.0: datagrams from other machines that carry the key of {key} can drive "
+                     "this run's platform")
+    for loopback in ("127.0.0.1", "127.0.0.2", "localhost"):  # all of 127.0.0.0/8 is this machine's
+        assert main([*run, f"udp://{loopback}:{port}"]) == 0
+        assert not capsys.readouterr().out.startswith("listening on")
+    assert main(["run", str(scene(tmp_path, duration=0.01)), "--listen-key", str(key)]) == 2
+    assert "--listen-key goes with --listen" in capsys.readouterr().err
 
 
 def test_the_stream_layout_lists_every_value_at_its_offset(capsys):
@@ -316,7 +341,7 @@ def test_the_live_view_draws_the_streamed_platform_in_the_browser(tmp_path):
     import tornado.httpclient
     import tornado.websocket
 
-    from cosim.platform.report.live import serve
+    from cosim.platform.realtime.view import serve
     from cosim.platform.run.compile import scene_values
     path = scene(tmp_path, duration=0.6)
     stream, ports, stop = f"udp://127.0.0.1:{free_port()}", [], threading.Event()
@@ -360,3 +385,16 @@ def test_the_live_view_draws_the_streamed_platform_in_the_browser(tmp_path):
     assert np.abs(np.array(platform["x"][:6]) - joints[:, 0]).max() < 1e-4  # drawn rounded to 0.1 mm
     assert np.abs(np.array(platform["z"][:6]) - joints[:, 2]).max() < 1e-4
     assert int(last["figures"]["samples"]) == len(run["time"]) - 1
+
+
+def test_the_layout_comes_before_the_first_sample(tmp_path):
+    """A receiver written from the guide: a raw socket, the first datagram it gets names the columns."""
+    port = free_port()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as raw:
+        raw.bind(("127.0.0.1", port))
+        raw.settimeout(10)
+        cosim.simulate(scene(tmp_path, duration=0.02), stream=f"udp://127.0.0.1:{port}")
+        first = raw.recv(65535)
+        following = raw.recv(65535)
+    assert first[:4] == b"CSLY" and b"pose_ref.x\npose_ref.y" in first
+    assert following[:4] == b"CSIM" and struct.unpack_from("<Q", following, 8)[0] == 0  # then sample 0

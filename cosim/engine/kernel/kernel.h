@@ -118,12 +118,19 @@ typedef struct {
 /* A run paced to the wall clock, streamed out and driven from outside (realtime.c): every macro
  * step starts at its deadline, origin + (t - t0) / factor on the monotonic clock; after each step
  * the live input's datagrams are taken (the reference they give replaces outputs of one instance
- * in the history, moving towards it within rate and acceleration limits) and every stream_every
- * steps the row's streamed columns go out as one datagram. Layouts: docs/guide/realtime.md. */
-enum { LIVE_ACCEPTED, LIVE_LATE, LIVE_REPEATED, LIVE_OUT_OF_ORDER, LIVE_MALFORMED, LIVE_NON_FINITE, LIVE_OUTSIDE,
-       LIVE_WATCHDOG, LIVE_COUNTS };
+ * in the history, moving towards it within rate and acceleration limits and, through `guard`,
+ * within the application's envelope) and every stream_every steps the row's streamed columns go
+ * out as one datagram. Layouts: docs/guide/realtime.md. */
+enum { LIVE_ACCEPTED, LIVE_OUTSIDE, LIVE_LATE, LIVE_FUTURE, LIVE_REPEATED, LIVE_OUT_OF_ORDER, LIVE_MALFORMED,
+       LIVE_OLD_VERSION, LIVE_NON_FINITE, LIVE_BEYOND_LIMITS, LIVE_FOREIGN, LIVE_UNAUTHENTICATED, LIVE_WATCHDOG,
+       LIVE_COUNTS };
+enum { GUARD_KINDS = 8, LIVE_KEY_MAX = 256, LIVE_MAC = 32 };
 
-typedef int (*AdmissibleFn)(void *context, const double *values); /* 1: the values may be applied */
+typedef int (*AdmissibleFn)(void *context, const double *values); /* 1: the values are within the envelope */
+/* May replace the acceleration (per channel, constant over the next h) that the reference at
+ * value with rate is about to take; returns the bits (< 1 << GUARD_KINDS) of the limits it held
+ * back, 0 if it took it as asked. */
+typedef int (*GuardFn)(void *context, double h, const double *value, const double *rate, double *acceleration);
 
 typedef struct {
     /* pacing (factor <= 0: as fast as it goes) */
@@ -144,17 +151,30 @@ typedef struct {
     const int *live_rate_column;      /* per channel: that output's row column, or -1 */
     const double *rate_max, *acceleration_max, *neutral; /* per channel */
     double late_after, watchdog;      /* [s] simulated age of a late packet; [s] wall silence for the watchdog */
-    AdmissibleFn admissible;          /* NULL: every finite value is admissible */
+    AdmissibleFn admissible;          /* NULL: every finite value is within */
     void *admissible_context;
-    double *live;                     /* [5][n_live]: reference value, rate, acceleration; target, target rate */
+    GuardFn guard;                    /* NULL: the rate and acceleration limits alone */
+    void *guard_context;
+    const unsigned char *key;         /* HMAC-SHA256 key of every datagram (key_size 0: none) */
+    int key_size;
+    double *live;                     /* [6][n_live]: reference value, rate, acceleration; target, its rate, acceleration */
     double target_time, last_good;    /* simulated time the target was given for; wall time of the last good packet */
     int live_active, watchdog_engaged;
+    int owned;                        /* a sender owns the input: owner_address and owner_session */
+    unsigned owner_size;
+    unsigned char owner_address[128]; /* a struct sockaddr_storage's bytes */
+    unsigned long long owner_session;
     unsigned long long live_sequence; /* of the last accepted packet */
     long long counts[LIVE_COUNTS];
+    long long guard_counts[GUARD_KINDS]; /* steps the guard held back the reference, per limit */
     double watchdog_time;             /* simulated time the watchdog last engaged */
     unsigned char *received;          /* scratch: one datagram (receive_size bytes) */
     int receive_size;
 } RealTime;
+
+/* hmac.c: the HMAC-SHA256 tag of message under key. */
+void hmac_sha256(const unsigned char *key, size_t key_size, const unsigned char *message, size_t size,
+                 unsigned char tag[32]);
 
 /* realtime.c: waits for step's deadline (returns how late it started [s]); after the step at t_new,
  * takes the live input into the history and the row and streams the row (returns how far past

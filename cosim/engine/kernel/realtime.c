@@ -10,12 +10,17 @@
  * of values (u16), a sequence number (u64), the simulated time and the wall clock (Unix time) [s]
  * (f64), then the row's streamed columns (f64).
  *
- * Live input: datagrams "CREF", version (u16), count (u16: n, 2 n or 3 n for values, their rates,
- * their accelerations), sequence (u64), the simulated time they are for (f64; NaN: now), then the
- * values. Each is taken or counted by kind and refused (malformed, non-finite, late, repeated, out
- * of order, outside what `admissible` allows). The reference (the outputs it replaces) moves
- * towards the target within each channel's rate and acceleration limits; after `watchdog` seconds
- * without a good packet the target becomes the neutral values.
+ * Live input: datagrams "CREF", version (u16, 2), count (u16: n, 2 n or 3 n for values, their
+ * rates, their accelerations), session (u64), sequence (u64), the simulated time they are for
+ * (f64; NaN: now), the values, and with a key the HMAC-SHA256 of all that (32 bytes). Each is
+ * taken or counted by kind and refused: malformed, of the old version, unauthenticated, foreign
+ * (another sender's while one owns the input), non-finite, late, for a time beyond the next step,
+ * with rates or accelerations beyond the limits, repeated, out of order. A target outside what
+ * `admissible` allows is taken and counted as outside: the guard stops the reference at the
+ * envelope. The reference (the outputs it replaces) moves towards the target within each
+ * channel's rate and acceleration limits, and `guard` holds it within the application's
+ * envelope; after `watchdog` seconds without a good packet the target becomes the neutral
+ * values and the input has no owner.
  */
 #define _POSIX_C_SOURCE 200809L /* clock_nanosleep */
 #include <errno.h>
@@ -31,7 +36,7 @@
 
 #include "kernel.h"
 
-enum { STREAM_HEADER = 32, LIVE_HEADER = 24, VERSION = 1 };
+enum { STREAM_HEADER = 32, LIVE_HEADER = 32, VERSION = 1, LIVE_VERSION = 2, LIVE_OLD_VERSION_1 = 1 };
 enum { VALUE, RATE, ACCELERATION, TARGET, TARGET_RATE, TARGET_ACCELERATION }; /* rows of r->live */
 
 static double clock_seconds(clockid_t id) {
@@ -75,33 +80,76 @@ static void stream_row(RealTime *r, const double *row) {
     if (send(r->stream_fd, p, (size_t)(STREAM_HEADER + 8 * r->n_stream), MSG_DONTWAIT) < 0) r->stream_failed++;
 }
 
-/* One datagram of the live input, classified; a good one becomes the target. */
-static void take_packet(Kernel *s, RealTime *r, ssize_t size, double t_now) {
+/* 1 if every value's extrapolation by its rate and acceleration over +-horizon is finite and
+ * every rate and acceleration within its channel's limits (0: beyond), -1 if any is not finite. */
+static int numbers_within(const RealTime *r, const double *values, int count, double horizon) {
+    const int n = r->n_live;
+    for (int i = 0; i < n; i++) {
+        const double rate = count >= 2 * n ? values[n + i] : 0.0, acceleration = count >= 3 * n ? values[2 * n + i] : 0.0;
+        if (!(fabs(rate) <= r->rate_max[i] * (1.0 + 1e-9)) || !(fabs(acceleration) <= r->acceleration_max[i] * (1.0 + 1e-9)))
+            return 0;
+        const double reach = fabs(values[i]) + fabs(rate) * horizon + 0.5 * fabs(acceleration) * horizon * horizon;
+        if (!isfinite(reach)) return -1;
+    }
+    return 1;
+}
+
+static int constant_time_equal(const unsigned char *a, const unsigned char *b, size_t size) {
+    unsigned char differ = 0;
+    for (size_t i = 0; i < size; i++) differ |= (unsigned char)(a[i] ^ b[i]);
+    return differ == 0;
+}
+
+/* One datagram of the live input from `from`, classified; a good one becomes the target. t_now:
+ * where the reference is applied from (the step just taken ended there). */
+static void take_packet(Kernel *s, RealTime *r, ssize_t size, const void *from, unsigned from_size, double t_now,
+                        double h) {
     const unsigned char *p = r->received;
     const int n = r->n_live;
     uint16_t version, count;
-    uint64_t sequence;
+    uint64_t session, sequence;
     double time, values[3 * 64];
-    if (size < LIVE_HEADER || memcmp(p, "CREF", 4) != 0) { r->counts[LIVE_MALFORMED]++; return; }
+    if (size < 8 || memcmp(p, "CREF", 4) != 0) { r->counts[LIVE_MALFORMED]++; return; }
     memcpy(&version, p + 4, 2);
     memcpy(&count, p + 6, 2);
-    memcpy(&sequence, p + 8, 8);
-    memcpy(&time, p + 16, 8);
-    if (version != VERSION || (count != n && count != 2 * n && count != 3 * n) || count > 3 * 64 ||
-        size != LIVE_HEADER + 8 * (ssize_t)count) {
-        r->counts[LIVE_MALFORMED]++;
+    if (version == LIVE_OLD_VERSION_1) { r->counts[LIVE_OLD_VERSION]++; return; }
+    const ssize_t mac = r->key_size > 0 ? LIVE_MAC : 0;
+    if (version != LIVE_VERSION || (count != n && count != 2 * n && count != 3 * n) || count > 3 * 64 ||
+        size != LIVE_HEADER + 8 * (ssize_t)count + mac) {
+        r->counts[size == LIVE_HEADER + 8 * (ssize_t)count && mac && version == LIVE_VERSION ? LIVE_UNAUTHENTICATED
+                                                                                             : LIVE_MALFORMED]++;
         return;
     }
+    if (mac) {
+        unsigned char tag[LIVE_MAC];
+        hmac_sha256(r->key, (size_t)r->key_size, p, (size_t)(size - mac), tag);
+        if (!constant_time_equal(tag, p + size - mac, LIVE_MAC)) { r->counts[LIVE_UNAUTHENTICATED]++; return; }
+    }
+    memcpy(&session, p + 8, 8);
+    memcpy(&sequence, p + 16, 8);
+    memcpy(&time, p + 24, 8);
+    const int owner = r->owned && from_size == r->owner_size && memcmp(from, r->owner_address, from_size) == 0 &&
+                      session == r->owner_session;
+    if (r->owned && !owner) { r->counts[LIVE_FOREIGN]++; return; }
     memcpy(values, p + LIVE_HEADER, 8 * (size_t)count);
     int finite = !isinf(time);
     for (int i = 0; i < count; i++) finite = finite && isfinite(values[i]);
     if (!finite) { r->counts[LIVE_NON_FINITE]++; return; }
-    const int fresh = !r->live_active || r->watchdog_engaged; /* a sender after a silence may start again at 0 */
-    if (!fresh && sequence == r->live_sequence) { r->counts[LIVE_REPEATED]++; return; }
-    if (!fresh && sequence < r->live_sequence) { r->counts[LIVE_OUT_OF_ORDER]++; return; }
-    if (!isnan(time) && time < t_now - r->late_after) { r->counts[LIVE_LATE]++; return; }
-    if (r->admissible && !r->admissible(r->admissible_context, values)) { r->counts[LIVE_OUTSIDE]++; return; }
-    r->counts[LIVE_ACCEPTED]++;
+    if (!isnan(time) && time > t_now + h * (1.0 + 1e-9)) { r->counts[LIVE_FUTURE]++; return; }
+    if (!isnan(time) && time < t_now - h - r->late_after) { r->counts[LIVE_LATE]++; return; }
+    const int numbers = numbers_within(r, values, count, r->late_after + r->watchdog + h);
+    if (numbers < 0) { r->counts[LIVE_NON_FINITE]++; return; }
+    if (numbers == 0) { r->counts[LIVE_BEYOND_LIMITS]++; return; }
+    if (owner && sequence == r->live_sequence) { r->counts[LIVE_REPEATED]++; return; }
+    if (owner && sequence < r->live_sequence) { r->counts[LIVE_OUT_OF_ORDER]++; return; }
+    const int within = !r->admissible || r->admissible(r->admissible_context, values);
+    r->counts[within ? LIVE_ACCEPTED : LIVE_OUTSIDE]++;
+    if (!owner) { /* the first sender, or the first after a silence, owns the input */
+        r->owned = 1;
+        r->owner_size = from_size;
+        memcpy(r->owner_address, from, from_size);
+        r->owner_session = session;
+    }
     r->live_sequence = sequence;
     r->last_good = clock_seconds(CLOCK_MONOTONIC);
     r->watchdog_engaged = 0;
@@ -128,7 +176,7 @@ static void take_packet(Kernel *s, RealTime *r, ssize_t size, double t_now) {
  * taken with the acceleration chosen for it (not on the step the input starts: it starts where
  * the replaced outputs are), then the next step's acceleration chosen towards the target
  * (extrapolated by its rate and acceleration from the time it was given for) as fast as the
- * limits allow, braking in time. Constant over a step, that acceleration makes the value, rate and
+ * limits allow, braking in time, then held within the envelope by the guard. Constant over a step, that acceleration makes the value, rate and
  * acceleration handed to the inputs the reference's exact motion over the step. */
 static void advance_reference(RealTime *r, double t_new, double h) {
     const int n = r->n_live, carry = r->live_active == 2;
@@ -151,14 +199,24 @@ static void advance_reference(RealTime *r, double t_new, double h) {
         wanted = fmax(-v_max, fmin(v_max, wanted));
         *acceleration = fmax(-a_max, fmin(a_max, (wanted - *rate) / h));
     }
+    if (r->guard) { /* the application's envelope: it may hold the motion back, towards braking */
+        const int held = r->guard(r->guard_context, h, &r->live[VALUE * n], &r->live[RATE * n],
+                                  &r->live[ACCELERATION * n]);
+        for (int k = 0; k < GUARD_KINDS; k++)
+            if (held & (1 << k)) r->guard_counts[k]++;
+    }
     r->live_active = 2;
 }
 
 static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *row) {
     for (;;) {
-        const ssize_t size = recv(r->listen_fd, r->received, (size_t)r->receive_size, MSG_DONTWAIT);
+        struct sockaddr_storage from;
+        socklen_t from_size = sizeof from;
+        memset(&from, 0, sizeof from);
+        const ssize_t size = recvfrom(r->listen_fd, r->received, (size_t)r->receive_size, MSG_DONTWAIT,
+                                      (struct sockaddr *)&from, &from_size);
         if (size < 0) break; /* nothing more waiting (or the socket failed: the input is then silent) */
-        take_packet(s, r, size, t_new - h);
+        take_packet(s, r, size, &from, from_size <= sizeof from ? (unsigned)from_size : (unsigned)sizeof from, t_new, h);
     }
     if (!r->live_active) return;
     if (!r->watchdog_engaged && clock_seconds(CLOCK_MONOTONIC) - r->last_good > r->watchdog) {
@@ -169,6 +227,7 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         }
         r->target_time = t_new;
         r->watchdog_engaged = 1;
+        r->owned = 0; /* the silent owner lets go: the next good sender takes the input */
         r->watchdog_time = t_new;
         r->counts[LIVE_WATCHDOG]++;
     }

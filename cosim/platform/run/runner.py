@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from ...engine.outcome import Outcome, Report
-from ...engine.run import run
+from ...engine.run import Plan, run
 from ..core import mechanics_value
 from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines, vehicle_motion
 from ..ports import DRIVES, POSE, per_leg
@@ -62,23 +63,25 @@ class RunReport(Report):
 
 
 def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progress: bool = True,
-              advice: bool = True, twin: bool = False, real_time: float | None = None, stream: str | None = None,
-              listen: str | None = None) -> tuple[np.ndarray, RunReport]:
+              advice: bool = True, twin: bool = False,
+              adapt: Callable[[Plan], tuple[Plan, str | None]] | None = None) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat, the
     log and (plots) the figures and the interactive report to `out` if given. Raises SceneError
     for a mistake found when the system is built or started, RunStopped (with the partial
     results, also written) when an FMU fails or the coupling diverges. progress: a bar on a
     terminal; advice: a diverged run probes for a step that holds (both off for a sweep's
     points); twin: the report judges the run against its converged twin, window by window.
-    real_time: paced at this factor of the wall clock; stream: its samples sent to this address
-    (udp://HOST:PORT[?every=N]); listen: the pose reference taken from this address
-    (cosim.platform.run.live)."""
+    adapt: the plan made over (a run in real time: cosim.platform.realtime.real_time_plan), with
+    what the run says of it before it starts (None: nothing)."""
     try:
         designed, tuning, notes = scene_design(scene)
         plan = scene_plan(scene, scene_structure(scene, designed))
-        if real_time is not None or stream or listen:
-            from .live import real_time_plan
-            plan = real_time_plan(scene, plan, scene_values(scene)[0], real_time, stream, listen)
+        if adapt is not None:
+            plan, remark = adapt(plan)
+            if remark:
+                notes = [*notes, remark]
+                if progress:  # the command line: before the run starts
+                    print(f"note: {remark}", flush=True)
 
         def report(outcome: Outcome, result: np.ndarray) -> RunReport:
             made = scene_report(scene, result, outcome, tuning)

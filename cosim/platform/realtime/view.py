@@ -21,7 +21,7 @@ import numpy as np
 
 from ...engine.realtime import Sample, receive
 from ..ports import POSE
-from .view3d import Geometry, _traces, figure, frames
+from ..report.view3d import Geometry, _traces, figure, frames
 
 
 @dataclass
@@ -61,18 +61,26 @@ def poses(sample: Sample) -> tuple[np.ndarray, np.ndarray]:
 
 
 def traces(geometry: Geometry, sample: Sample) -> list[dict]:
-    """The view's traces (after the base) at a sample, as plain JSON."""
+    """The view's traces (after the base) at a sample, as plain JSON (a gap in a trace, NaN, as
+    null: JSON has no NaN, and a browser's JSON.parse refuses it)."""
     pose, reference = poses(sample)
     f = frames(geometry, np.array([sample.time]), pose[None], reference[None])
-    return json.loads(json.dumps(_traces(geometry, f, 0, 0.0), default=_plain))
+    return _plain(_traces(geometry, f, 0, 0.0))
 
 
 def _plain(value):
+    """`value` with numpy's arrays and numbers as JSON's, every non-finite number as None."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
     if isinstance(value, np.ndarray):
-        return [None if not np.isfinite(v) else float(v) for v in value.ravel()]
+        return [_plain(v) for v in value.tolist()]
     if isinstance(value, (np.floating, np.integer, np.bool_)):
-        return value.item()
-    raise TypeError(type(value))
+        value = value.item()
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
 
 
 PAGE = """<!DOCTYPE html>
@@ -101,7 +109,7 @@ def make_app(geometry: Geometry, follower: Follower, title: str, address: str, r
     import tornado.web
     import tornado.websocket
     from plotly.offline import get_plotlyjs
-    from .view3d import html_div
+    from ..report.view3d import html_div
     neutral = geometry.core.neutral_pose
     still = frames(geometry, np.zeros(1), neutral[None], None)
     fig = figure(geometry, still, title)
@@ -132,7 +140,7 @@ def make_app(geometry: Geometry, follower: Follower, title: str, address: str, r
             message["traces"] = traces(geometry, sample)
             message["time"] = sample.time
             shown["sequence"] = sample.sequence
-        text = json.dumps(message)
+        text = json.dumps(message, allow_nan=False)
         for client in list(clients):
             client.write_message(text)
 

@@ -1,20 +1,12 @@
-"""Real time: a run paced to the wall clock, streamed out live and driven from outside.
+"""A run in real time: paced to the wall clock, streamed out live and driven from outside.
 
 The stepping stays in C (cosim/engine/kernel/realtime.c): each macro step starts at its deadline
-on the monotonic clock, one datagram goes out every N steps, and the live input's datagrams are
-taken between steps. This module holds what a run is asked for (`RealTime`), the sockets and the
-C side's state over the run (`Session`), what it measured (`Pacing`), and the datagram layouts
-with a receiver and a sender for users and tests (`receive`, `send`). It knows nothing of the
-platform: the application says which columns stream, which outputs the live input replaces, and
-what is admissible (a C function of the values).
-
-Datagrams are little-endian (docs/guide/realtime.md):
-- stream, one a sample: "CSIM", version (u16), n (u16), sequence (u64), simulated time (f64),
-  wall clock as Unix time (f64), then n values (f64);
-- stream layout, before the first sample and then every second: "CSLY", version (u16), n (u16),
-  then the n column names, UTF-8, one per line;
-- live input: "CREF", version (u16), count (u16: n values, then optionally n rates and n
-  accelerations), sequence (u64), the simulated time they are for (f64, NaN: now), the values.
+on the monotonic clock, one datagram goes out every N steps, and the live input's datagrams
+(cosim.engine.realtime.datagrams) are taken between steps. This module holds what a run is asked
+for (`RealTime`, `LiveInput`), the sockets and the C side's state over the run (`Session`), and
+what it measured (`Pacing`). It knows nothing of the platform: the application says which columns
+stream, which outputs the live input replaces, what lies within its envelope and how the
+reference is held there (C functions of the values), and what the guard's limits are called.
 """
 
 from __future__ import annotations
@@ -22,38 +14,18 @@ from __future__ import annotations
 import ctypes
 import math
 import socket
-import struct
-import sys
 import time
 from dataclasses import dataclass, field
-from typing import Iterator, Sequence
-from urllib.parse import parse_qs, urlsplit
+from typing import Sequence
 
 import numpy as np
 
-from .errors import UsageError
+from ..errors import UsageError
+from .datagrams import MAC_SIZE, MAX_VALUES, REFERENCE, SAMPLE, address, is_loopback, layout_datagram
 
-VERSION = 1
-SAMPLE = struct.Struct("<4sHHQdd")   # magic, version, n, sequence, time, wall
-LAYOUT = struct.Struct("<4sHH")      # magic, version, n; then the names
-REFERENCE = struct.Struct("<4sHHQd")  # magic, version, count, sequence, time
-MAX_VALUES = (65507 - SAMPLE.size) // 8  # what one UDP datagram holds
-LIVE_KINDS = ("accepted", "late", "repeated", "out_of_order", "malformed", "non_finite", "outside", "watchdog")
-DEFAULT_HOST = "127.0.0.1"
-
-
-def address(text: str, option: str) -> tuple[str, int, dict[str, str]]:
-    """udp://HOST:PORT[?key=value] (HOST may be left out: 127.0.0.1) as (host, port, query);
-    a UsageError naming `option` for anything else."""
-    parts = urlsplit(text if "://" in text else f"udp://{text}")
-    try:
-        port = parts.port
-    except ValueError:
-        port = None
-    if parts.scheme != "udp" or port is None or parts.path not in ("", "/"):
-        raise UsageError(f"{option} {text}: expected udp://HOST:PORT (HOST defaults to {DEFAULT_HOST})")
-    query = {k: v[-1] for k, v in parse_qs(parts.query, keep_blank_values=True).items()}
-    return parts.hostname or DEFAULT_HOST, port, query
+LIVE_KINDS = ("accepted", "outside", "late", "future", "repeated", "out_of_order", "malformed", "old_version",
+              "non_finite", "beyond_limits", "foreign", "unauthenticated", "watchdog")
+GUARD_KINDS = 8  # the guard's limits, as bits (kernel.h)
 
 
 @dataclass(frozen=True)
@@ -65,7 +37,11 @@ class LiveInput:
     C function int(void *context, const double *values) and its context (None: any finite value),
     `refusal`: what a refused value is called in the report ('outside the workspace');
     `rate_outputs`: per output, the instance's output that carries its rate ("" where none), set
-    to the live rate (the inputs that take a rate where the master gives no derivatives)."""
+    to the live rate (the inputs that take a rate where the master gives no derivatives);
+    `guard`: a C function int(void *context, double h, const double *value, const double *rate,
+    double *acceleration) that holds the reference within the envelope, and its context;
+    `guard_kinds`: what its bits 0, 1, .. are called in the report ('the stroke'); `key`: the
+    shared key every datagram must be tagged with (None: none)."""
     instance: str
     outputs: Sequence[str]
     rate_max: Sequence[float]
@@ -77,6 +53,10 @@ class LiveInput:
     admissible_context: object = None  # what it points at, kept alive with it
     refusal: str = "not admissible"
     rate_outputs: Sequence[str] = ()
+    guard: object = None  # a ctypes function pointer
+    guard_context: object = None
+    guard_kinds: Sequence[str] = ()
+    key: bytes | None = None
 
 
 @dataclass(frozen=True)
@@ -102,9 +82,13 @@ class RealTime:
             if "every" in query and not (query["every"].isdigit() and int(query["every"]) >= 1):
                 raise UsageError(f"--stream {self.stream}: every={query['every']} is not a whole number >= 1")
         if self.listen is not None:
-            address(self.listen, "--listen")
+            host = address(self.listen, "--listen")[0]
             if self.live is None:
                 raise UsageError("--listen: this system names no outputs for a live input to replace")
+            if not is_loopback(host) and not self.live.key:
+                raise UsageError(f"--listen {self.listen}: {host} is not this machine's loopback (127.0.0.0/8, ::1), "
+                                 "so datagrams from other machines could drive the run: give a shared key "
+                                 "(--listen-key FILE) that every datagram is tagged with")
 
     @property
     def every(self) -> int:
@@ -121,9 +105,12 @@ class _RealTime(ctypes.Structure):
                 ("live_instance", ctypes.c_int), ("n_live", ctypes.c_int), ("live_index", _I),
                 ("live_column", _I), ("live_rate_index", _I), ("live_rate_column", _I), ("rate_max", _D), ("acceleration_max", _D), ("neutral", _D),
                 ("late_after", ctypes.c_double), ("watchdog", ctypes.c_double), ("admissible", _P),
-                ("admissible_context", _P), ("live", _D), ("target_time", ctypes.c_double),
+                ("admissible_context", _P), ("guard", _P), ("guard_context", _P), ("key", _P),
+                ("key_size", ctypes.c_int), ("live", _D), ("target_time", ctypes.c_double),
                 ("last_good", ctypes.c_double), ("live_active", ctypes.c_int), ("watchdog_engaged", ctypes.c_int),
-                ("live_sequence", ctypes.c_ulonglong), ("counts", ctypes.c_longlong * len(LIVE_KINDS)),
+                ("owned", ctypes.c_int), ("owner_size", ctypes.c_uint), ("owner_address", ctypes.c_ubyte * 128),
+                ("owner_session", ctypes.c_ulonglong), ("live_sequence", ctypes.c_ulonglong),
+                ("counts", ctypes.c_longlong * len(LIVE_KINDS)), ("guard_counts", ctypes.c_longlong * GUARD_KINDS),
                 ("watchdog_time", ctypes.c_double), ("received", _P), ("receive_size", ctypes.c_int)]
 
 
@@ -131,8 +118,9 @@ class _RealTime(ctypes.Structure):
 class Pacing:
     """What a real-time run measured: per macro step how late it started past its deadline and
     how far past the next deadline it ended [s] (> 0: an overrun), the stream's datagrams sent
-    and refused by the socket, the live input's packets by kind (LIVE_KINDS) and where the
-    watchdog last engaged [s simulated]."""
+    and refused by the socket, the live input's packets by kind (LIVE_KINDS), the steps at which
+    the guard held the reference back, per limit (`held`), and where the watchdog last engaged
+    [s simulated]."""
     factor: float | None
     lateness: np.ndarray
     finish: np.ndarray
@@ -142,6 +130,7 @@ class Pacing:
     live: dict[str, int] = field(default_factory=dict)
     watchdog_time: float | None = None
     refusal: str = "not admissible"
+    held: dict[str, int] = field(default_factory=dict)
 
     @property
     def overruns(self) -> int:
@@ -170,10 +159,17 @@ class Pacing:
             out.append(f"streamed {self.streamed} samples" + (f" ({self.stream_failed} not taken by the socket: no "
                                                                "receiver)" if self.stream_failed else ""))
         if self.live:
-            refused = {k: v for k, v in self.live.items() if k not in ("accepted", "watchdog") and v}
-            names = {"outside": self.refusal, "out_of_order": "out of order", "non_finite": "non-finite"}
-            out.append(f"live input: {self.live.get('accepted', 0)} references taken" + (
-                "; refused: " + ", ".join(f"{v} {names.get(k, k)}" for k, v in refused.items()) if refused else "") +
+            refused = {k: v for k, v in self.live.items() if k not in ("accepted", "outside", "watchdog") and v}
+            names = {"out_of_order": "out of order", "non_finite": "non-finite", "old_version": "of the old version 1",
+                     "beyond_limits": "with rates or accelerations beyond the limits",
+                     "future": "for a time beyond the next step", "foreign": "from another sender"}
+            taken = self.live.get("accepted", 0) + self.live.get("outside", 0)
+            held = {k: v for k, v in self.held.items() if v}
+            out.append(f"live input: {taken} references taken" + (
+                f" ({self.live['outside']} {self.refusal}: held at it)" if self.live.get("outside") else "") + (
+                "; refused: " + ", ".join(f"{v} {names.get(k, k)}" for k, v in refused.items()) if refused else "") + (
+                "; the envelope held the reference back at " + ", ".join(f"{v} steps by {k}" for k, v in held.items())
+                if held else "") +
                 (f"; the watchdog engaged {self.live['watchdog']} times, last at t = {self.watchdog_time:.3f} s "
                  "(no input: back to neutral)" if self.live.get("watchdog") else ""))
         return out
@@ -237,6 +233,7 @@ class Session:
             ctypes.POINTER(ctypes.c_int))
         r.packet = self._array(np.zeros(SAMPLE.size // 8 + len(names))).ctypes.data
         self.layout_datagram = layout_datagram(names)
+        self.between_batches()  # the layout, before the first sample
 
     def _open_listen(self, options: RealTime, record: list[tuple[str, str]], instances: list[str],
                      outputs: dict[str, Sequence[str]]) -> None:
@@ -274,8 +271,16 @@ class Session:
             r.admissible = ctypes.cast(live.admissible, ctypes.c_void_p).value
             r.admissible_context = ctypes.cast(live.admissible_context, ctypes.c_void_p).value
             self._keep.append((live.admissible, live.admissible_context))
+        if live.guard is not None:
+            r.guard = ctypes.cast(live.guard, ctypes.c_void_p).value
+            r.guard_context = ctypes.cast(live.guard_context, ctypes.c_void_p).value
+            self._keep.append((live.guard, live.guard_context))
+        if live.key:
+            key = ctypes.create_string_buffer(live.key, len(live.key))
+            self._keep.append(key)
+            r.key, r.key_size = ctypes.cast(key, ctypes.c_void_p).value, len(live.key)
         r.live = self._array(np.zeros(6 * n)).ctypes.data_as(doubles)
-        r.receive_size = REFERENCE.size + 8 * 3 * n + 8
+        r.receive_size = REFERENCE.size + 8 * 3 * n + MAC_SIZE + 8
         r.received = self._array(np.zeros(r.receive_size // 8 + 1)).ctypes.data
 
     def _socket(self, host: str) -> socket.socket:
@@ -313,7 +318,7 @@ class Session:
 
     def news(self) -> list:
         """What the master logs of the live input since the last call: the watchdog engaging."""
-        from .fmi import LogMessage
+        from ..fmi import LogMessage
         engaged = int(self.state.counts[LIVE_KINDS.index("watchdog")])
         out = []
         if engaged > self.watchdog_said:
@@ -330,11 +335,13 @@ class Session:
     def pacing(self) -> Pacing:
         r = self.state
         live = dict(zip(LIVE_KINDS, list(r.counts))) if r.listen_fd >= 0 else {}
+        kinds = self.options.live.guard_kinds if self.options.live else ()
+        held = {kind: int(r.guard_counts[k]) for k, kind in enumerate(kinds)} if live else {}
         return Pacing(self.options.factor, np.concatenate(self.lateness) if self.lateness else np.zeros(0),
                       np.concatenate(self.finish) if self.finish else np.zeros(0), waited=float(r.waited),
                       streamed=int(r.stream_sequence), stream_failed=int(r.stream_failed), live=live,
                       watchdog_time=float(r.watchdog_time) if live.get("watchdog") else None,
-                      refusal=self.options.live.refusal if self.options.live else "not admissible")
+                      refusal=self.options.live.refusal if self.options.live else "not admissible", held=held)
 
     def close(self) -> None:
         for sock in self.sockets:
@@ -349,132 +356,3 @@ def batch_size(options: RealTime, h: float) -> int:
     if options.factor is None:
         return 1000
     return int(min(4000, max(1, round(0.2 * options.factor / h))))
-
-
-# -- the datagrams, for users and tests -------------------------------------------------------
-
-def layout_datagram(names: Sequence[str]) -> bytes:
-    return LAYOUT.pack(b"CSLY", VERSION, len(names)) + "\n".join(names).encode()
-
-
-@dataclass(frozen=True)
-class Sample:
-    """One streamed sample: its sequence number, simulated time, wall clock (Unix time) when it
-    was sent, and its values by name (`sample["pose.z"]`)."""
-    sequence: int
-    time: float
-    wall: float
-    names: tuple[str, ...]
-    values: np.ndarray
-
-    def __getitem__(self, name: str) -> float:
-        try:
-            return float(self.values[self.names.index(name)])
-        except ValueError:
-            raise KeyError(f"'{name}' is not streamed (streamed: {', '.join(self.names)})") from None
-
-    def as_dict(self) -> dict[str, float]:
-        return dict(zip(self.names, self.values.tolist()))
-
-
-def decode(datagram: bytes, names: Sequence[str] | None = None) -> Sample | list[str] | None:
-    """A sample (named by `names`, else value[k]), a layout (its names), or None for anything else."""
-    if datagram[:4] == b"CSLY" and len(datagram) >= LAYOUT.size:
-        _, version, n = LAYOUT.unpack_from(datagram)
-        listed = datagram[LAYOUT.size:].decode("utf-8", "replace").split("\n") if n else []
-        return listed if version == VERSION and len(listed) == n else None
-    if datagram[:4] != b"CSIM" or len(datagram) < SAMPLE.size:
-        return None
-    _, version, n, sequence, simulated, wall = SAMPLE.unpack_from(datagram)
-    if version != VERSION or len(datagram) != SAMPLE.size + 8 * n:
-        return None
-    values = np.frombuffer(datagram, dtype="<f8", count=n, offset=SAMPLE.size).copy()
-    named = tuple(names) if names is not None and len(names) == n else tuple(f"value[{k}]" for k in range(n))
-    return Sample(sequence, simulated, wall, named, values)
-
-
-def receive(where: str, timeout: float | None = 10.0, names: Sequence[str] | None = None,
-            ready=None, until=None) -> Iterator[Sample]:
-    """The samples a run streams to `where` (udp://HOST:PORT, HOST default 127.0.0.1), decoded and
-    named by the layout the stream sends (or by `names`); ends when nothing arrives for `timeout`
-    seconds (None: never) or, if `until` (a threading.Event) is given, only once it is set.
-    `ready`, if given, is called once the socket is bound (a test starts the run then). Samples
-    that arrive before the first layout are held until it comes."""
-    host, port, _ = address(where, "receive")
-    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
-        sock.bind((host, port))
-        sock.settimeout(0.2 if until is not None else timeout)
-        if ready is not None:
-            ready()
-        layout, held = list(names) if names is not None else None, []
-        while until is None or not until.is_set():
-            try:
-                datagram = sock.recv(65535)
-            except (socket.timeout, TimeoutError):
-                if until is not None:
-                    continue
-                break
-            decoded = decode(datagram, layout)
-            if isinstance(decoded, list):
-                if layout is None or decoded != layout:  # a new run may stream other columns
-                    layout = decoded
-                    yield from (decode(d, layout) for d in held)
-                    held = []
-            elif decoded is not None:
-                if layout is None:
-                    held.append(datagram)
-                else:
-                    yield decoded
-        yield from (decode(d, layout) for d in held)
-    finally:
-        sock.close()
-
-
-def reference_datagram(values: Sequence[float], sequence: int, time: float | None = None,
-                       rates: Sequence[float] | None = None, accelerations: Sequence[float] | None = None) -> bytes:
-    """One live-input datagram: the values (and their rates, and then accelerations, if given) for
-    simulated time `time` (None: apply on arrival)."""
-    parts = [list(values)]
-    if rates is not None:
-        parts.append(list(rates))
-    if accelerations is not None:
-        if rates is None:
-            parts.append([0.0] * len(parts[0]))
-        parts.append(list(accelerations))
-    if any(len(p) != len(parts[0]) for p in parts):
-        raise UsageError("send: values, rates and accelerations must be as many each")
-    flat = [float(v) for p in parts for v in p]
-    return REFERENCE.pack(b"CREF", VERSION, len(flat), sequence, math.nan if time is None else float(time)) + \
-        struct.pack(f"<{len(flat)}d", *flat)
-
-
-class Sender:
-    """Sends live-input datagrams to `where` (udp://HOST:PORT), numbering them."""
-
-    def __init__(self, where: str):
-        host, port, _ = address(where, "send")
-        self.socket = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
-        self.target, self.sequence = (host, port), 0
-
-    def send(self, values: Sequence[float], time: float | None = None, rates: Sequence[float] | None = None,
-             accelerations: Sequence[float] | None = None) -> int:
-        """Sends one; returns its sequence number."""
-        sequence = self.sequence
-        self.socket.sendto(reference_datagram(values, sequence, time, rates, accelerations), self.target)
-        self.sequence += 1
-        return sequence
-
-    def close(self) -> None:
-        self.socket.close()
-
-    def __enter__(self) -> "Sender":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
-if sys.byteorder != "little":  # the kernel writes and reads the datagrams in the host's order
-    raise ImportError("cosim.engine.realtime: the datagrams are little-endian and this host is not")

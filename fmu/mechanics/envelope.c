@@ -1,0 +1,120 @@
+/* The motion envelope of a live reference (envelope.h).
+ *
+ * The reference moves with a constant acceleration over each step. A motion is safe when the
+ * state it ends in can still stop inside the envelope: braking, every channel decelerates at the
+ * same fraction of its speed (a straight line in pose space along its rate, stopping at a step's
+ * end, within each channel's largest acceleration), and the braking that lasts one step more than
+ * that is checked at BRAKING_SAMPLES points along its path. Braking from a safe state is safe
+ * again (its path is the rest of the one checked), so a reference that starts safe stays so: the
+ * guard takes the asked acceleration if it is safe, else the largest blend of it with braking
+ * that is (bisection), and braking itself when none is. */
+#include "envelope.h"
+
+#include <math.h>
+
+#if defined(_WIN32)
+#define ENVELOPE_EXPORT __declspec(dllexport)
+#else
+#define ENVELOPE_EXPORT __attribute__((visibility("default")))
+#endif
+
+enum { BRAKING_SAMPLES = 8, BISECTIONS = 6 };
+
+/* The limits a pose moving at `rate` breaks; each leg's speed into `leg_velocity`. */
+static int pose_violations(const PlatformEnvelope *e, const LegGeometry neutral[PLATFORM_LEGS], const double pose[6],
+                           const double rate[6], double leg_velocity[PLATFORM_LEGS]) {
+    double x[PLATFORM_STATES], R[9];
+    LegGeometry legs[PLATFORM_LEGS];
+    platform_state_from_pose(pose, rate, x);
+    platform_legs(&e->platform, x, legs); /* Eq 2-3: lengths, directions, extension rates */
+    platform_rotation_from_euler(pose[3], pose[4], pose[5], R);
+    const double cos_max = cos(e->joint_angle_max);
+    int broken = 0;
+    for (int i = 0; i < PLATFORM_LEGS; i++) {
+        double lower, upper;
+        platform_joint_cosines(R, legs[i].axis, neutral[i].axis, &lower, &upper);
+        if (!(legs[i].length >= e->length_min && legs[i].length <= e->length_max)) broken |= ENVELOPE_STROKE;
+        if (!(lower >= cos_max && upper >= cos_max)) broken |= ENVELOPE_JOINT;
+        if (!(fabs(legs[i].velocity) <= e->leg_velocity_max)) broken |= ENVELOPE_LEG_VELOCITY;
+        leg_velocity[i] = legs[i].velocity;
+    }
+    return broken;
+}
+
+static void neutral_legs(const PlatformEnvelope *e, LegGeometry neutral[PLATFORM_LEGS]) {
+    const double at_rest[6] = {0, 0, 0, 0, 0, 0};
+    double x[PLATFORM_STATES];
+    platform_state_from_pose(e->platform.neutral_pose, at_rest, x);
+    platform_legs(&e->platform, x, neutral);
+}
+
+/* Steps of h the braking from `rate` takes, each channel at most its largest deceleration. */
+static double braking_steps(const PlatformEnvelope *e, const double rate[6], double h) {
+    double time = 0.0;
+    for (int i = 0; i < 6; i++) time = fmax(time, fabs(rate[i]) / e->acceleration_max[i]);
+    return ceil(time / h - 1e-9);
+}
+
+/* The limits broken by moving from (pose, rate) with `acceleration` over h, or by braking after. */
+static int motion_violations(const PlatformEnvelope *e, const LegGeometry neutral[PLATFORM_LEGS], double h,
+                             const double pose[6], const double rate[6], const double leg_velocity[PLATFORM_LEGS],
+                             const double acceleration[6]) {
+    double end[6], end_rate[6], end_leg_velocity[PLATFORM_LEGS], scratch[PLATFORM_LEGS];
+    for (int i = 0; i < 6; i++) {
+        end[i] = pose[i] + rate[i] * h + 0.5 * acceleration[i] * h * h;
+        end_rate[i] = rate[i] + acceleration[i] * h;
+    }
+    int broken = pose_violations(e, neutral, end, end_rate, end_leg_velocity);
+    for (int i = 0; i < PLATFORM_LEGS; i++)
+        if (!(fabs(end_leg_velocity[i] - leg_velocity[i]) <= e->leg_acceleration_max * h))
+            broken |= ENVELOPE_LEG_ACCELERATION;
+    /* braking one step longer than it takes: the path from end to end + rate T / 2, its speed
+     * falling as sqrt(1 - d) of the way d */
+    const double reach = 0.5 * (braking_steps(e, end_rate, h) + 1.0) * h;
+    for (int k = 1; k <= BRAKING_SAMPLES; k++) {
+        const double d = (double)k / BRAKING_SAMPLES, slower = sqrt(fmax(0.0, 1.0 - d));
+        double at[6], at_rate[6];
+        for (int i = 0; i < 6; i++) {
+            at[i] = end[i] + end_rate[i] * reach * d;
+            at_rate[i] = end_rate[i] * slower;
+        }
+        broken |= pose_violations(e, neutral, at, at_rate, scratch) & (ENVELOPE_STROKE | ENVELOPE_JOINT);
+    }
+    return broken;
+}
+
+ENVELOPE_EXPORT int platform_envelope_contains(void *envelope, const double *pose) {
+    const PlatformEnvelope *e = (const PlatformEnvelope *)envelope;
+    const double at_rest[6] = {0, 0, 0, 0, 0, 0};
+    double leg_velocity[PLATFORM_LEGS];
+    LegGeometry neutral[PLATFORM_LEGS];
+    neutral_legs(e, neutral);
+    return (pose_violations(e, neutral, pose, at_rest, leg_velocity) & (ENVELOPE_STROKE | ENVELOPE_JOINT)) == 0;
+}
+
+ENVELOPE_EXPORT int platform_envelope_guard(void *envelope, double h, const double *pose, const double *rate,
+                                            double *acceleration) {
+    const PlatformEnvelope *e = (const PlatformEnvelope *)envelope;
+    LegGeometry neutral[PLATFORM_LEGS];
+    double leg_velocity[PLATFORM_LEGS];
+    neutral_legs(e, neutral);
+    pose_violations(e, neutral, pose, rate, leg_velocity);
+    const int asked = motion_violations(e, neutral, h, pose, rate, leg_velocity, acceleration);
+    if (!asked) return 0;
+    /* braking: to rest at the end of a whole number of steps, the same deceleration each step */
+    const double steps = braking_steps(e, rate, h);
+    double wanted[6], braking[6], blend[6];
+    for (int i = 0; i < 6; i++) {
+        wanted[i] = acceleration[i];
+        braking[i] = steps > 0.0 ? -rate[i] / (steps * h) : 0.0;
+    }
+    double safe = 0.0, unsafe = 1.0;
+    for (int k = 0; k < BISECTIONS; k++) {
+        const double s = 0.5 * (safe + unsafe);
+        for (int i = 0; i < 6; i++) blend[i] = braking[i] + s * (wanted[i] - braking[i]);
+        if (motion_violations(e, neutral, h, pose, rate, leg_velocity, blend)) unsafe = s;
+        else safe = s;
+    }
+    for (int i = 0; i < 6; i++) acceleration[i] = braking[i] + safe * (wanted[i] - braking[i]);
+    return asked;
+}
