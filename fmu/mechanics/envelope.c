@@ -18,7 +18,8 @@
 #define ENVELOPE_EXPORT __attribute__((visibility("default")))
 #endif
 
-enum { BRAKING_SAMPLES = 8, BISECTIONS = 6 };
+enum { BRAKING_SAMPLES_MAX = 8, BISECTIONS = 6 };
+static const double SAMPLE_SPACING = 1e-3; /* [m] of a joint's travel between two checked points of a braking path */
 
 /* The limits a pose moving at `rate` breaks; each leg's speed into `leg_velocity`. */
 static int pose_violations(const PlatformEnvelope *e, const LegGeometry neutral[PLATFORM_LEGS], const double pose[6],
@@ -69,10 +70,16 @@ static int motion_violations(const PlatformEnvelope *e, const LegGeometry neutra
         if (!(fabs(end_leg_velocity[i] - leg_velocity[i]) <= e->leg_acceleration_max * h))
             broken |= ENVELOPE_LEG_ACCELERATION;
     /* braking one step longer than it takes: the path from end to end + rate T / 2, its speed
-     * falling as sqrt(1 - d) of the way d */
+     * falling as sqrt(1 - d) of the way d, checked every millimetre an upper joint travels (its
+     * end always; a slow reference's short path at one point) */
     const double reach = 0.5 * (braking_steps(e, end_rate, h) + 1.0) * h;
-    for (int k = 1; k <= BRAKING_SAMPLES; k++) {
-        const double d = (double)k / BRAKING_SAMPLES, slower = sqrt(fmax(0.0, 1.0 - d));
+    const double travel = reach * (sqrt(end_rate[0] * end_rate[0] + end_rate[1] * end_rate[1] + end_rate[2] * end_rate[2]) +
+                                   e->arm * sqrt(end_rate[3] * end_rate[3] + end_rate[4] * end_rate[4] +
+                                                 end_rate[5] * end_rate[5]));
+    const int samples = travel < BRAKING_SAMPLES_MAX * SAMPLE_SPACING ? 1 + (int)(travel / SAMPLE_SPACING)
+                                                                      : BRAKING_SAMPLES_MAX;
+    for (int k = 1; k <= samples; k++) {
+        const double d = (double)k / samples, slower = sqrt(fmax(0.0, 1.0 - d));
         double at[6], at_rate[6];
         for (int i = 0; i < 6; i++) {
             at[i] = end[i] + end_rate[i] * reach * d;

@@ -14,6 +14,7 @@ typedef struct {
     double leg_velocity_max;             /* [m/s] */
     double leg_acceleration_max;         /* [m/s^2] */
     double acceleration_max[6];          /* the reference's own largest acceleration per channel: its braking */
+    double arm;                          /* [m] the farthest upper joint from the platform's origin */
 } PlatformEnvelope;
 
 /* What a guard reports it held back (bits), and so what the kernel counts per step. */

@@ -192,8 +192,8 @@ X(Real, limit_leg_length_min, "limit.leg_length_min", parameter, fixed, "m", 1.5
 X(Real, limit_leg_length_max, "limit.leg_length_max", parameter, fixed, "m", 2.2, 0.0, FMU_INF, "Longest leg of the stroke (Table 4)") \
 X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, "Largest tilt of a leg from its neutral direction at either joint (20 deg, Halder et al.)") \
 X(Real, limit_stroke_margin, "limit.stroke_margin", parameter, fixed, "m", 0.01, 0.0, FMU_INF, "Motion envelope: the stroke a live reference may use is limit.leg_length_min/max less this at each end (covers the drives' tracking error; docs/guide/realtime.md)") \
-X(Real, limit_leg_velocity, "limit.leg_velocity", parameter, fixed, "m/s", 0.5, 0.0, FMU_INF, "Motion envelope: a live reference's largest leg extension rate") \
-X(Real, limit_leg_acceleration, "limit.leg_acceleration", parameter, fixed, "m/s2", 5.0, 0.0, FMU_INF, "Motion envelope: a live reference's largest leg acceleration") \
+X(Real, limit_leg_velocity, "limit.leg_velocity", parameter, fixed, "m/s", 1.0, 0.0, FMU_INF, "Motion envelope: a live reference's largest leg extension rate") \
+X(Real, limit_leg_acceleration, "limit.leg_acceleration", parameter, fixed, "m/s2", 10.0, 0.0, FMU_INF, "Motion envelope: a live reference's largest leg acceleration") \
 X(Boolean, limit_hard_stop, "limit.hard_stop", parameter, fixed, "", 0, 0, 1, "false: leaving the stroke or a joint limit is a logged warning; true: an error that stops the run") \
 FMU_SOLVER_VARIABLES(X, 1, 1e-3, 1e-8, 1e-10) \
 LEG_PLANT_VARIABLES(X, 1) LEG_PLANT_VARIABLES(X, 2) LEG_PLANT_VARIABLES(X, 3) \

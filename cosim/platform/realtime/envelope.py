@@ -53,8 +53,9 @@ class Envelope:
 
     def c_struct(self, core: Core, acceleration_max: Sequence[float]) -> PlatformEnvelope:
         """The C side's envelope for `core`'s platform, braking at `acceleration_max` per channel."""
+        arm = float(np.linalg.norm(np.array(core.p.upper_joint[:]).reshape(-1, 3), axis=1).max())
         return PlatformEnvelope(core.p, *self.usable, self.joint_angle, self.leg_velocity, self.leg_acceleration,
-                                (ctypes.c_double * 6)(*acceleration_max))
+                                (ctypes.c_double * 6)(*acceleration_max), arm)
 
 
 def within(core: Core, envelope: PlatformEnvelope, poses: np.ndarray) -> np.ndarray:
