@@ -84,8 +84,11 @@ def main(args: argparse.Namespace) -> int:
                                                      f", plots and the report {stem}.html")
     if args.fmi is not None and system:
         raise UsageError(f"--fmi: for a scene; {args.scene.name} names its own FMUs")
-    overrides = {**scene_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
-    given = {"settings": settings(args.set) or None} if system else {"overrides": overrides or None}
+    if system:  # an SSP's run settings by name (cosim.engine.settings), checked by the engine
+        given = {"settings": settings(args.set) or None}
+    else:  # a scene's keys
+        given = {"overrides": {**scene_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
+                 or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
                                    twin=args.twin, progress=True, real_time=factor, stream=args.stream,
                                    listen=args.listen, listen_key=args.listen_key, **given).report, written, args.out)

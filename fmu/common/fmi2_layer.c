@@ -23,8 +23,11 @@ void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, co
      * itself is never const: models only get read access to it) */
     if (status == fmi2Warning) ((FmuInstance *)fmu)->warned = 1;
     if (!fmu->callbacks.logger) return;
+    /* errors and the warnings a call returns always carry their reason, logging on or off (FMI 3.0
+     * requires it of a warning, FMI 2.0 permits it): a tool that stops at a warning can say why;
+     * a warning returned as fmi2OK (fmi.warnings_as_ok) is logged only where warnings are asked for */
     int enabled = fmu->log_all || (status >= fmi2Error && fmu->log_errors) ||
-                  (status == fmi2Warning && fmu->log_warnings) ||
+                  (status == fmi2Warning && (fmu->log_warnings || !fmu->s.v.fmi_warnings_as_ok)) ||
                   (strcmp(category, "logEvents") == 0 && fmu->log_events);
     if (!enabled) return;
     char message[1024], escaped[2048];
@@ -389,7 +392,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!fmu->instance_name) { functions->freeMemory(fmu); return NULL; }
     strcpy(fmu->instance_name, instanceName);
     fmu->logging_on = loggingOn;
-    fmu->log_errors = 1; /* errors are always reported; the rest only with logging on (FMI 2.0) */
+    fmu->log_errors = 1; /* errors and returned warnings are always reported; the rest only with logging on */
     fmu->log_warnings = fmu->log_events = fmu->log_all = loggingOn;
     for (int vr = 1; vr < VR_COUNT; vr++)
         if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL)

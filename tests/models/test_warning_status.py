@@ -54,3 +54,35 @@ def test_the_export_sets_it_on_every_component_when_asked(tmp_path, capsys):
     with zipfile.ZipFile(archive) as z:
         ssvs = [z.read(n).decode() for n in z.namelist() if n.endswith(".ssv")]
     assert len(ssvs) == 8 and all('name="fmi.warnings_as_ok"' in text for text in ssvs)
+
+
+@pytest.mark.parametrize("warnings_as_ok, logged", [(False, True), (True, False)])
+def test_a_returned_warning_carries_its_reason_with_logging_off(tmp_path, warnings_as_ok, logged):
+    """An importer that instantiates with logging off (fmusim's default) and stops at a warning
+    still gets the reason; a warning returned as fmi2OK (fmi.warnings_as_ok) stays quiet there."""
+    from fmpy import extract
+    from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    description = read_model_description(str(fmu_path("mechanics")))
+    vrs = {v.name: v.valueReference for v in description.modelVariables}
+    said = []
+    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu_path("mechanics")), str(tmp_path)),
+                      modelIdentifier=description.coSimulation.modelIdentifier, instanceName="mechanics")
+
+    def logger(environment, instance, status, category, message):
+        said.append((status, message.decode()))
+    callbacks = fmi2CallbackFunctions()  # fmpy's, but a logger that records what it is told
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    callbacks.allocateMemory, callbacks.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
+    slave.instantiate(loggingOn=False, callbacks=callbacks)
+    slave.setupExperiment(startTime=0.0)
+    slave.setReal([vrs["initial.pose.z"]], [2.2])
+    slave.setBoolean([vrs["fmi.warnings_as_ok"]], [warnings_as_ok])
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    said.clear()
+    status = slave.fmi2DoStep(slave.component, 0.0, 1e-3, 0)
+    slave.terminate()
+    slave.freeInstance()
+    assert status == (0 if warnings_as_ok else 1)
+    warnings = [m for s, m in said if s == 1]
+    assert bool(warnings) == logged and (not logged or "outside the stroke" in warnings[0])

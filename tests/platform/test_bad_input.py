@@ -234,6 +234,24 @@ def test_set_on_a_scene_sets_its_keys_or_refuses_in_one_line(tmp_path, capsys):
         assert err.count("\n") == 1 and message in err, err
 
 
+def test_set_on_an_ssp_sets_its_run_settings_or_refuses_in_one_line(tmp_path, capsys):
+    """`cosim run SYSTEM.ssp --set`: the system's run settings by name (cosim.engine.settings), as
+    `cosim.simulate(ssp, settings=...)` takes them; a scene's keys are not the system's."""
+    from cosim.api import export_ssp
+    archive = export_ssp("meng_eq35", tmp_path / "meng.ssp", measure=False)
+    brief = ["--duration", "0.01", "--out", str(tmp_path / "out")]
+    assert main(["run", str(archive), *brief, "--set", "windows=", "--set", "startup_time=0", "--set", "step=5e-4"]) == 0
+    capsys.readouterr()
+    import numpy as np
+    times = np.genfromtxt(tmp_path / "out" / "meng.csv", delimiter=",", names=True)["time"]
+    assert np.allclose(np.diff(times), 5e-4)
+    for setting, message in (("bogus=1", "meng.ssp: unknown setting 'bogus'"),
+                             ("step=fast", "meng.ssp: step 'fast'")):
+        assert main(["run", str(archive), *brief, "--set", setting]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, err
+
+
 def test_a_closed_pipe_ends_the_command_quietly(tmp_path):
     """`cosim run ... | head -1` and `cosim copy | head -1`, the reader gone before the output is
     printed: exit 0 and nothing on stderr (as `cat` does), not a BrokenPipeError."""
@@ -263,3 +281,29 @@ def test_ctrl_c_during_a_run_is_one_line(tmp_path):
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=120)
     assert process.returncode == 130 and err == "interrupted\n" and out == "", (err, out)
+
+
+VEHICLE_HEADER = "time,specific_force.x,specific_force.y,specific_force.z,angular_rate.x,angular_rate.y,angular_rate.z"
+VEHICLE_ROWS = [f"{0.01 * k:g},{0.5 * (k > 5):g},0,9.80665,0,0,0" for k in range(40)]
+
+
+@pytest.mark.parametrize("break_it, reason", [
+    (lambda rows: rows[:5] + ["0.005,0,0,9.8,0,0,0"] + rows[6:], "does not increase"),               # time goes back
+    (lambda rows: rows[:5] + ["0.05,0,0,9.8,nan,0,0"] + rows[6:], "finite numbers"),                 # a NaN cell
+    (lambda rows: [",".join(r.split(",")[1:]) for r in rows], "the first column must be 'time'"),    # no time column
+    (lambda rows: [rows[0].replace("specific_force.x", "specfic_force.x"), *rows[1:]], "'specfic_force.x' is unknown"),
+    (lambda rows: rows[:5] + ["0.05,0,,9.8,0,0,0"] + rows[6:], "finite numbers"),                    # an empty cell
+])
+@pytest.mark.parametrize("command", ["run", "tune"])
+def test_a_bad_vehicle_table_is_one_line_through_run_and_tune(tmp_path, capsys, break_it, reason, command):
+    """The cueing FMU refuses the table with its file and line; the command names the scene's
+    motion.vehicle key beside it, exit 2 (the error path names the cueing component by its name:
+    no component is taken for a drive)."""
+    (tmp_path / "drive.csv").write_text("\n".join(break_it([VEHICLE_HEADER, *VEHICLE_ROWS])) + "\n")
+    scene = tmp_path / "car.toml"
+    scene.write_text('[scene]\nduration = 0.3\n\n[drive]\nkind = "pmsm"\n\n[motion]\nvehicle = "drive.csv"\n')
+    code = main([command, str(scene), *(["--no-plots", "--out", str(tmp_path / "out")] if command == "run" else [])])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert f"{scene}:8: motion.vehicle: rejected by cueing: vehicle.file {tmp_path / 'drive.csv'}:" in err
+    assert reason in err

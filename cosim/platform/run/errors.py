@@ -21,6 +21,8 @@ def scene_key(component: str, variable: str) -> tuple[str, str]:
     """The scene table and key that a component's parameter comes from."""
     if component == "mechanics":
         return "mechanics.parameters", variable
+    if component == "cueing":
+        return ("motion", "vehicle") if variable.startswith("vehicle.") else ("cueing.parameters", variable)
     if component == "trajectory":
         if variable.startswith("load."):
             return "load", "pulses"
@@ -40,11 +42,21 @@ def located(scene: Scene, component: str, variable: str) -> str:
         shown = f'{table}."{key}"'
     elif table == "load":
         shown = f"load.pulses ({variable})"
+    elif table == "motion":
+        shown = "motion.vehicle"
     else:  # x.sine[1].amplitude -> trajectory.x.sines[1].amplitude
         rest = variable.split(".", 1)[1]
         item = re.match(r"(sine|step|ramp)\[(\d+)\]\.(\w+)$", rest)
         shown = f"{table}.{item.group(1)}s[{item.group(2)}].{item.group(3)}" if item else f"{table}.{rest}"
     return f"{scene.path}:{line}: {shown}" + ("" if line else f" (from parameter set {scene.parameter_set})")
+
+
+def component_fmu(scene: Scene, component: str):
+    """The FMU of a scene's component by its name (a drive's by its leg number), None if unknown."""
+    if component in ("trajectory", "mechanics", "cueing"):
+        return fmu_path(component)
+    leg = re.fullmatch(r"\D+([1-6])", component)
+    return drive_fmus(scene)[int(leg.group(1)) - 1] if leg else None
 
 
 def scene_error(scene: Scene, error: Exception) -> SceneError | None:
@@ -56,11 +68,12 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     if isinstance(error, FmuError) and error.call.startswith(("fmi2Instantiate", "fmi2Set", "fmi2Enter", "fmi2Exit",
                                                              "fmi2Setup")):
         detail = "; ".join(m.text for m in error.messages) or "the FMU logged no reason"
-        named = re.search(r"'([^']+)'", detail)  # the variable the FMU names, if it is one of its variables
-        fmu = {"trajectory": fmu_path("trajectory"), "mechanics": fmu_path("mechanics")}.get(
-            error.instance) or drive_fmus(scene)[int(error.instance[-1]) - 1]
-        known = named is not None and named.group(1) in variables(fmu)
-        where = located(scene, error.instance, named.group(1)) if known else f"{scene.path}"
+        # the variable the FMU names (quoted, or opening its message), if it is one of its variables
+        fmu = component_fmu(scene, error.instance)
+        names = set(variables(fmu)) if fmu is not None else set()
+        named = next((m.group(1) for m in (re.search(r"'([^']+)'", detail), re.match(r"([\w.\[\]]+)[ :]", detail))
+                      if m is not None and m.group(1) in names), None)
+        where = located(scene, error.instance, named) if named else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):
         return SceneError(f"{scene.path}:{scene.document.line('scene.step')}: scene.step = "
