@@ -15,7 +15,7 @@ status=0
 if [ "$status" -eq 5 ]; then
   echo "pytest collected no tests: failing the run" >&2
 fi
-# Every shipped scene's export in the other tools (libcosim, Ecos, fmpy.ssp) at the steps it wrote
+# Every shipped scene's export in the other tools (OMSimulator from ../shared/peers, libcosim, Ecos, fmpy.ssp) at the steps it wrote
 # for them; the FMUs under hostile use: random FMI call sequences under sanitizers, threads under
 # TSan; and the wheel, installed outside the checkout, running a scene, its SSP and a cluster sweep.
 if [ "$#" -eq 0 ]; then

@@ -4,9 +4,9 @@ each tool gets, measured with these emulations (largest_steps: the scene's step 
 tool's master holds the tolerances). The platform's export measures with its own judge (the pose,
 the drive efforts per window: cosim.platform.run.portable); any SSP system (`cosim export-check`)
 with check_system's: every recorded output within FIT_TOLERANCE of its own range.
-tests/platform/test_ssp_tools.py holds the emulations to the tools themselves (Ecos and fmpy.ssp
-bit for bit, libcosim to round-off, OMSimulator, which cannot be installed here, as issue 38
-measured it by hand: to 5e-12 m)."""
+The tools stage of the test command (tests/platform/test_export_tools.py) holds the emulations to
+the tools themselves on every shipped scene: Ecos and fmpy.ssp bit for bit, libcosim and
+OMSimulator (b3cd458, from ../shared/peers) to round-off at the steps the export wrote."""
 
 from __future__ import annotations
 
@@ -32,8 +32,8 @@ class ToolMaster:
 TOOL_MASTERS = (
     ToolMaster("OMSimulator", "oms-ma: fixed step, Jacobi, inputs held, outputs that feed through read again",
                Algorithm("jacobi", 0, feedthrough=True), "the system's oms:FixedStepMaster stepSize",
-               True, "is not checked here (OMSimulator cannot be installed here); its step is measured as if it "
-               "runs them"),
+               True, "runs them (OMSimulator b3cd458: every shipped scene's FMI 3.0 export within its tolerances "
+               "at the step written, in the test command's tools stage)"),
     ToolMaster("libcosim", "fixed-step algorithm: Jacobi, inputs held",
                Algorithm("jacobi", 0, initial_sweeps=0), "the OSP annotation's baseStepSize (and an OSP "
                "configuration's BaseStepSize)",
