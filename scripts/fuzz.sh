@@ -8,8 +8,9 @@
 #   bash scripts/fuzz.sh replay MODEL SEED INDEX    one sequence, every call printed (replay3: FMI 3.0)
 #   bash scripts/fuzz.sh long-inputs              10 000 mutants of each input file kind (seed 1)
 # CI also fuzzes the files a user writes (tests/fuzz/fuzz_inputs.py): seeded mutations of every
-# shipped scene and sweep file and of an exported SSD, SSV and archive (hostile entries too), each
-# run briefly through the CLI, and the places they go: a disk filled before a run, export, sweep or
+# shipped scene and sweep file, of an exported SSD, SSV and archive (hostile entries too), of a
+# vehicle's motion and its cueing scene, each run briefly through every command that reads it, and
+# the places they go: a disk filled before a run, export, sweep or
 # design writes to it (a tmpfs: root), a sweep cache with planted files or the wrong owner or mode;
 # any traceback, hang, exit other than 0/1/2, multi-line error, unpacked copy left behind,
 # half-written file or planted file run fails it.

@@ -1,7 +1,9 @@
 """The files a user writes, under hostile edits: seeded mutations of every shipped scene, every
-shipped sweep file, the Meng scene's exported SSP archive and its SSD and SSV, and a trajectory
-table (CSV) a scene reads, each run briefly through the CLI
-(`python -m cosim run` / `sweep`), asserting that it ends with exit 0 (ran), 1 (a run that
+shipped sweep file, the Meng scene's exported SSP archive and its SSD and SSV, a trajectory table
+(CSV) a scene reads, a vehicle's motion (CSV) and the scene that takes it through the cueing, each
+run briefly through every command of the CLI that reads it (a scene: run, export, view,
+stream-layout; a sweep file: sweep; an archive: run, export-check; a vehicle's motion and its
+scene: run, tune; a study: design), asserting that it ends with exit 0 (ran), 1 (a run that
 failed, with its report) or 2 (one line: the file, the place, what and why), never with a
 traceback, an exit 3 or a hang. And the places they are read from and written to: hostile
 archives (bombs, names that climb out, links, thousands of entries: nothing unpacked may stay
@@ -58,7 +60,7 @@ BINARY = ("ssp", "archive")  # kinds whose file is bytes (held as latin-1 text)
 
 @dataclass
 class Base:
-    kind: str        # scene, sweep, ssd, ssv, table, ssp, archive, disk, cache, study
+    kind: str        # scene, sweep, ssd, ssv, table, ssp, archive, disk, cache, study, vehicle, cueing
     name: str | None  # the mutant's path in the work tree (beside the files it refers to); None: no file
     text: str        # the unmutated file
     command: list    # the CLI call; {root} is the work tree, {out} the output folder, {disk} the small disk
@@ -76,10 +78,14 @@ def bases(root: Path) -> dict[str, list[Base]]:
     shutil.copytree(ROOT / "scenes", root / "scenes")
     shutil.copytree(ROOT / "sweeps", root / "sweeps")
     out: dict[str, list[Base]] = {"scene": [], "sweep": [], "ssd": [], "ssv": [], "table": [], "ssp": [],
-                                  "archive": [], "disk": [], "cache": [], "study": []}
-    for path in sorted((root / "scenes").glob("*.toml")):
-        out["scene"].append(Base("scene", "scenes/mutant.toml", path.read_text(),
-                                 ["run", "{root}/scenes/mutant.toml", "--duration", "0.02", "--no-plots", "--out", "{out}"]))
+                                  "archive": [], "disk": [], "cache": [], "study": [], "vehicle": [], "cueing": []}
+    scene_commands = (["run", "{root}/scenes/mutant.toml", "--duration", "0.02", "--no-plots", "--out", "{out}"],
+                      ["export", "{root}/scenes/mutant.toml", "--ssp", "{out}/mutant.ssp", "--scene-step"],
+                      ["view", "{root}/scenes/mutant.toml", "--out", "{out}"],
+                      ["stream-layout", "{root}/scenes/mutant.toml"])
+    for path in sorted((root / "scenes").glob("*.toml")):  # every scene through every command that reads one
+        for command in scene_commands:
+            out["scene"].append(Base("scene", "scenes/mutant.toml", path.read_text(), command))
     for path in sorted((root / "sweeps").glob("*.toml")):
         out["sweep"].append(Base("sweep", "sweeps/mutant.toml", _brief_sweep(path.read_text()),
                                  ["sweep", "{root}/sweeps/mutant.toml", "--workers", "0", "--out", "{out}"]))
@@ -88,8 +94,9 @@ def bases(root: Path) -> dict[str, list[Base]]:
         assert main(["export", str(ROOT / "scenes" / "meng_eq35.toml"), "--ssp", str(archive), "--scene-step"]) == 0
     with zipfile.ZipFile(archive) as z:
         z.extractall(root / "ssp")
-    out["ssp"].append(Base("ssp", "meng.ssp", archive.read_bytes().decode("latin-1"),
-                           ["run", "{root}/meng.ssp", "--duration", "0.02", "--out", "{out}"]))
+    for command in (["run", "{root}/meng.ssp", "--duration", "0.02", "--out", "{out}"],
+                    ["export-check", "{root}/meng.ssp", "--dry-run"]):
+        out["ssp"].append(Base("ssp", "meng.ssp", archive.read_bytes().decode("latin-1"), command))
     ssd = root / "ssp" / "SystemStructure.ssd"
     out["ssd"].append(Base("ssd", "ssp/mutant.ssd", ssd.read_text(),
                            ["run", "{root}/ssp/mutant.ssd", "--duration", "0.02", "--out", "{out}"]))
@@ -119,6 +126,17 @@ def bases(root: Path) -> dict[str, list[Base]]:
     (root / "studies" / "tiny.toml").write_text(tiny)
     out["study"].append(Base("study", "studies/mutant.toml", tiny, ["design", "{root}/studies/mutant.toml", "--out",
                                                                     "{out}"]))
+    # a vehicle's motion (examples/vehicle) and the scene that takes it through the cueing, briefly, each
+    # through run and tune (a search of one generation of one point, in this process)
+    drive = (ROOT / "examples" / "vehicle" / "drive.csv").read_text().split("\n")
+    (root / "scenes" / "drive.csv").write_text("\n".join(drive[:2 + 40]) + "\n")  # its first 0.4 s
+    car = (ROOT / "examples" / "vehicle" / "car_drive.toml").read_text().replace("duration = 20.0", "duration = 0.3")
+    car += "\n[cueing.tune]\niterations = 1\npopulation = 1\n"
+    (root / "scenes" / "car.toml").write_text(car)
+    for command in (["run", "{root}/scenes/car.toml", "--no-plots", "--out", "{out}"],
+                    ["tune", "{root}/scenes/car.toml", "--workers", "0", "--out", "{out}"]):
+        out["vehicle"].append(Base("vehicle", "scenes/drive.csv", (root / "scenes" / "drive.csv").read_text(), command))
+        out["cueing"].append(Base("cueing", "scenes/car.toml", car, command))
     for command in (["run", "{root}/scenes/meng_eq35.toml", "--duration", "0.3", "--out", "{disk}/out"],
                     ["run", "{root}/scenes/meng_eq35.toml", "--duration", "1.0", "--no-plots", "--out", "{disk}/out"],
                     ["run", "{root}/meng.ssp", "--duration", "0.5", "--out", "{disk}/out"],
@@ -257,7 +275,8 @@ def mutant(bases_of_kind: list[Base], seed: int, index: int) -> tuple[Base, str,
         setup, what = (disk_setup if base.kind == "disk" else cache_setup)(rng)
         text, what = base.text, f"{' '.join(base.command[:2])}: {what}"
     else:
-        text, what = mutate(base.text, rng, {"ssd": "xml", "ssv": "xml", "table": "csv"}.get(base.kind, "toml"))
+        text, what = mutate(base.text, rng, {"ssd": "xml", "ssv": "xml", "table": "csv", "vehicle": "csv"}.get(base.kind,
+                                                                                                         "toml"))
     return base, text, what, setup
 
 
@@ -516,9 +535,10 @@ def small_disks(folder: Path, parallel: int = 2):
 def arguments() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--mutants", type=int, default=40, help="mutants per file kind and seed (CI)")
-    parser.add_argument("--long", action="store_true", help="10 000 mutants per file kind, seed 1")
+    parser.add_argument("--long", action="store_true", help="10 000 mutants per file kind, seed 1 (every command "
+                        "that reads a kind takes its share)")
     parser.add_argument("--seed", type=int, help="one seed instead of 1 and a new one")
-    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv,table,ssp,archive,disk,cache,study")
+    parser.add_argument("--kinds", default="scene,sweep,ssd,ssv,table,ssp,archive,disk,cache,study,vehicle,cueing")
     parser.add_argument("--replay", nargs=3, metavar=("KIND", "SEED", "INDEX"))
     return parser.parse_args()
 
