@@ -10,14 +10,19 @@ the mechanics and the drives) glibc's and the MinGW runtime's may differ in the 
 stable model carries at round-off: 1e-12 of each output's range over the run, 1e-12 absolute for
 an output that stays at zero.
 
-The fmpy route (simulate_fmu(..., remote_platform="win64")) was tried here: its RPC over Wine hangs
-after some 40 steps (fmpy 0.3.32, Wine 8), so the harness runs the DLL in Wine directly."""
+And by an importer we did not write: fmpy's remoting (simulate_fmu(..., remote_platform="win64"): its
+Linux client drives the DLL in a Windows server under Wine over TCP) runs each FMI 2.0 DLL through
+the same experiment as fmpy runs the Linux binary, to the same tolerance. It runs as an unprivileged
+user: as root, fmpy 0.3.32's client hangs (docs/guide/fmus.md: its lock file is created with mode
+0000, which only root can open again, so the server under Wine takes the client for gone and exits
+while the client waits for it)."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -125,3 +130,73 @@ def test_under_wine_the_windows_binary_gives_the_linux_outputs(name, fmi, tmp_pa
     assert np.ptp(linux[:, 1:], axis=0).max() > 0  # the experiment moves something
     # the state kept at the half, through its bytes, set back: the second half again, bit for bit
     assert np.array_equal(linux_again, linux[STEPS // 2:]) and np.array_equal(windows_again, windows[STEPS // 2:])
+
+
+REMOTE_STEPS = {"cueing": 600}  # past the drive's braking at 2 s; the others 300 steps
+REMOTE_RUN = """
+import json, sys, zipfile
+import numpy as np
+from fmpy import simulate_fmu
+fmu, start, step, folder, steps = sys.argv[1], json.loads(sys.argv[2]), float(sys.argv[3]), sys.argv[4], int(sys.argv[5])
+windows_only = folder + "/windows_only.fmu"  # (fmpy remotes only an FMU without a binary for this platform)
+with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(windows_only, "w") as target:
+    for item in source.infolist():
+        if not item.filename.startswith("binaries/linux64/"):
+            target.writestr(item, source.read(item.filename))
+run = dict(start_values=start, stop_time=steps * step, step_size=step, output_interval=step)
+linux = simulate_fmu(fmu, **run)
+windows = simulate_fmu(windows_only, remote_platform="win64", **run)
+np.savez(folder + "/runs.npz", linux=linux, windows=windows)
+"""
+
+
+def unprivileged(folder: Path) -> list[str]:
+    """The command prefix that runs as an unprivileged user (nobody, where this is root) with its
+    own home and Wine prefix in `folder`; skips where that user cannot reach this checkout."""
+    if os.geteuid() != 0:
+        return []
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("setpriv (util-linux) is missing: cannot run as an unprivileged user")
+    os.chown(folder, 65534, 65534)
+    prefix = [setpriv, "--reuid=65534", "--regid=65534", "--clear-groups"]
+    if subprocess.run([*prefix, sys.executable, "-c", "import fmpy, numpy"], capture_output=True).returncode != 0:
+        pytest.skip(f"an unprivileged user cannot run {sys.executable} (this checkout is not readable by others)")
+    return prefix
+
+
+@pytest.fixture
+def remote_folder():
+    """A folder the unprivileged user can reach (pytest's own are the user's alone), removed after."""
+    import tempfile
+    folder = Path(tempfile.mkdtemp(prefix="cosim-remoting-"))
+    folder.chmod(0o755)
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_fmpys_remoting_runs_the_windows_binary_as_its_linux_twin(name, remote_folder):
+    import json
+    folder = remote_folder
+    fmu = folder / f"{name}.fmu"
+    shutil.copy(fmu_path(name), fmu)
+    fmu.chmod(0o644)
+    (folder / "run.py").write_text(REMOTE_RUN)
+    env = {**os.environ, "HOME": str(folder), "TMPDIR": str(folder), "WINEDEBUG": "-all",
+           "PATH": f"{Path(WINE).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    prefix = unprivileged(folder)
+    done = subprocess.run([*prefix, sys.executable, str(folder / "run.py"), str(fmu), json.dumps(EXPERIMENTS[name]),
+                           repr(STEP_OF.get(name, STEP)), str(folder), str(REMOTE_STEPS.get(name, 300))],
+                          capture_output=True, text=True, env=env,
+                          timeout=600)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    runs = np.load(folder / "runs.npz")
+    linux, windows = runs["linux"], runs["windows"]
+    assert len(linux) == len(windows) == REMOTE_STEPS.get(name, 300) + 1
+    moved = False
+    for column in linux.dtype.names:
+        scale = max(float(np.ptp(linux[column])), 1.0)
+        assert np.all(np.abs(windows[column] - linux[column]) <= 1e-12 * scale), column
+        moved = moved or (column != "time" and np.ptp(linux[column]) > 0)
+    assert moved  # the experiment moves something
