@@ -134,18 +134,15 @@ def test_under_wine_the_windows_binary_gives_the_linux_outputs(name, fmi, tmp_pa
 
 REMOTE_STEPS = {"cueing": 600}  # past the drive's braking at 2 s; the others 300 steps
 REMOTE_RUN = """
-import json, sys, zipfile
+import json, shutil, sys
 import numpy as np
-from fmpy import simulate_fmu
+from fmpy import extract, simulate_fmu
 fmu, start, step, folder, steps = sys.argv[1], json.loads(sys.argv[2]), float(sys.argv[3]), sys.argv[4], int(sys.argv[5])
-windows_only = folder + "/windows_only.fmu"  # (fmpy remotes only an FMU without a binary for this platform)
-with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(windows_only, "w") as target:
-    for item in source.infolist():
-        if not item.filename.startswith("binaries/linux64/"):
-            target.writestr(item, source.read(item.filename))
+linux_dir, windows_dir = (str(extract(fmu, folder + "/" + part)) for part in ("linux", "windows"))
+shutil.rmtree(windows_dir + "/binaries/linux64")  # (fmpy remotes only an FMU without a binary for this platform)
 run = dict(start_values=start, stop_time=steps * step, step_size=step, output_interval=step)
-linux = simulate_fmu(fmu, **run)
-windows = simulate_fmu(windows_only, remote_platform="win64", **run)
+linux = simulate_fmu(linux_dir, **run)
+windows = simulate_fmu(windows_dir, remote_platform="win64", **run)
 np.savez(folder + "/runs.npz", linux=linux, windows=windows)
 """
 
