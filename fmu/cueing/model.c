@@ -67,6 +67,28 @@ static const int ROTATION[3][4] = {
 static const char *const MOTION_NAMES[6] = {"specific_force.x", "specific_force.y", "specific_force.z",
                                             "angular_rate.x", "angular_rate.y", "angular_rate.z"};
 
+/* What any vehicle's recorded motion stays within: 100 g of specific force, 100 rad/s of angular rate
+ * (a value beyond is a broken file, not a vehicle: its cue would overflow the filters). */
+static const double MOTION_BOUND[6] = {1000.0, 1000.0, 1000.0, 100.0, 100.0, 100.0};
+static const char *const MOTION_UNITS[6] = {"m/s2", "m/s2", "m/s2", "rad/s", "rad/s", "rad/s"};
+
+/* 1 if every value of the vehicle's table is within MOTION_BOUND; logs the first that is not. */
+static int motion_within_bounds(FmuInstance *fmu, const FmuTable *table) {
+    for (int k = 0; k < 6; k++) {
+        const int c = table->column_of[k];
+        if (c < 0) continue;
+        for (int r = 0; r < table->rows; r++) {
+            const double value = table->values[r * table->columns + c];
+            if (fabs(value) <= MOTION_BOUND[k]) continue;
+            fmu_log(fmu, fmi2Error, "logStatusError", "vehicle.file %s: %s = %g %s at t = %g s is beyond any vehicle's "
+                    "motion (at most %g %s)", table->path, MOTION_NAMES[k], value, MOTION_UNITS[k], table->time[r],
+                    MOTION_BOUND[k], MOTION_UNITS[k]);
+            return 0;
+        }
+    }
+    return 1;
+}
+
 /* The model data: the phi-functions per step size (derived) and the vehicle table (read once). */
 typedef struct PhiCache PhiCache;
 typedef struct {
@@ -264,6 +286,11 @@ fmi2Status model_validate(FmuInstance *fmu) {
         fmu_table_free(fmu, data->vehicle);
         data->vehicle = fmu_table_read(fmu, VR_vehicle_file, path, MOTION_NAMES, 6);
         if (!data->vehicle) return fmi2Error;
+        if (!motion_within_bounds(fmu, data->vehicle)) {
+            fmu_table_free(fmu, data->vehicle);
+            data->vehicle = NULL;
+            return fmi2Error;
+        }
     }
     return fmi2OK;
 }

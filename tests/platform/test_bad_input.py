@@ -293,6 +293,8 @@ VEHICLE_ROWS = [f"{0.01 * k:g},{0.5 * (k > 5):g},0,9.80665,0,0,0" for k in range
     (lambda rows: [",".join(r.split(",")[1:]) for r in rows], "the first column must be 'time'"),    # no time column
     (lambda rows: [rows[0].replace("specific_force.x", "specfic_force.x"), *rows[1:]], "'specfic_force.x' is unknown"),
     (lambda rows: rows[:5] + ["0.05,0,,9.8,0,0,0"] + rows[6:], "finite numbers"),                    # an empty cell
+    (lambda rows: rows[:2] + ["0.01,0,0,9.8,0,0,1e300"] + rows[3:],                                   # no vehicle's
+     "angular_rate.z = 1e+300 rad/s at t = 0.01 s is beyond any vehicle's motion (at most 100 rad/s)"),
 ])
 @pytest.mark.parametrize("command", ["run", "tune"])
 def test_a_bad_vehicle_table_is_one_line_through_run_and_tune(tmp_path, capsys, break_it, reason, command):
