@@ -185,8 +185,8 @@ def test_fmpys_remoting_runs_the_windows_binary_as_its_linux_twin(name, remote_f
     prefix = unprivileged(folder)
     done = subprocess.run([*prefix, sys.executable, str(folder / "run.py"), str(fmu), json.dumps(EXPERIMENTS[name]),
                            repr(STEP_OF.get(name, STEP)), str(folder), str(REMOTE_STEPS.get(name, 300))],
-                          capture_output=True, text=True, env=env,
-                          timeout=600)
+                          capture_output=True, text=True, env=env, cwd=folder,  # (fmpy returns to its start
+                          timeout=600)                                          # folder, which must be the user's)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     runs = np.load(folder / "runs.npz")
     linux, windows = runs["linux"], runs["windows"]
