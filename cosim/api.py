@@ -160,10 +160,10 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         listen_key = read_key(listen_key, "listen_key")
     adapt = None
     if real_time is not None or stream or listen:
-        from .platform.realtime import real_time_plan
+        from functools import partial
 
-        def adapt(plan):
-            return real_time_plan(scene, plan, real_time, stream, listen, listen_key)
+        from .platform.realtime import real_time_plan
+        adapt = partial(real_time_plan, scene, factor=real_time, stream=stream, listen=listen, key=listen_key)
     values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin, adapt=adapt)
     return Run(values, report)
 

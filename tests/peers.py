@@ -9,6 +9,7 @@ import subprocess
 import tarfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim.engine.artifacts import BUILD_DIR, ROOT
@@ -32,12 +33,11 @@ def omsimulator() -> Path:
     return binary
 
 
-def run_omsimulator(archive: Path, signals: list[str], stop: float, folder: Path) -> dict[str, "np.ndarray"]:
+def run_omsimulator(archive: Path, signals: list[str], stop: float, folder: Path) -> dict[str, np.ndarray]:
     """OMSimulator's command line running `archive` (its fixed-step master at the step of the
     archive's annotation) to `stop`, recording `signals` (component.variable): a column each, by
     name, and "time", one row per communication point. Raises AssertionError with its log if it
     reports an error (its exit status is 0 even then)."""
-    import numpy as np
     binary = omsimulator()
     result = folder / "omsimulator.csv"
     lines = [f'model, status = oms_importFile("{archive}")',

@@ -42,9 +42,11 @@ class PlatformEnvelope(ctypes.Structure):
     """The motion envelope a live reference is held in (fmu/mechanics/envelope.h): the stroke less
     its margin [m], the joints' largest tilt [rad], the legs' largest speed [m/s] and acceleration
     [m/s^2], the reference's own largest acceleration per channel (its braking), and the farthest
-    upper joint from the platform's origin [m] (how far a rotation moves a joint)."""
+    upper joint from the platform's origin [m] (how far a rotation moves a joint); the legs' neutral
+    directions are the C side's to fill (prepared 0)."""
     _fields_ = [("platform", Platform), ("length_min", D), ("length_max", D), ("joint_angle_max", D),
-                ("leg_velocity_max", D), ("leg_acceleration_max", D), ("acceleration_max", D * 6), ("arm", D)]
+                ("leg_velocity_max", D), ("leg_acceleration_max", D), ("acceleration_max", D * 6), ("arm", D),
+                ("neutral_axis", D * 3 * LEGS), ("prepared", ctypes.c_int)]
 
 
 class LegGeometry(ctypes.Structure):

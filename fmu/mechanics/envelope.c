@@ -22,8 +22,8 @@ enum { BRAKING_SAMPLES_MAX = 8, BISECTIONS = 6 };
 static const double SAMPLE_SPACING = 1e-3; /* [m] of a joint's travel between two checked points of a braking path */
 
 /* The limits a pose moving at `rate` breaks; each leg's speed into `leg_velocity`. */
-static int pose_violations(const PlatformEnvelope *e, const LegGeometry neutral[PLATFORM_LEGS], const double pose[6],
-                           const double rate[6], double leg_velocity[PLATFORM_LEGS]) {
+static int pose_violations(const PlatformEnvelope *e, const double pose[6], const double rate[6],
+                           double leg_velocity[PLATFORM_LEGS]) {
     double x[PLATFORM_STATES], R[9];
     LegGeometry legs[PLATFORM_LEGS];
     platform_state_from_pose(pose, rate, x);
@@ -33,7 +33,7 @@ static int pose_violations(const PlatformEnvelope *e, const LegGeometry neutral[
     int broken = 0;
     for (int i = 0; i < PLATFORM_LEGS; i++) {
         double lower, upper;
-        platform_joint_cosines(R, legs[i].axis, neutral[i].axis, &lower, &upper);
+        platform_joint_cosines(R, legs[i].axis, e->neutral_axis[i], &lower, &upper);
         if (!(legs[i].length >= e->length_min && legs[i].length <= e->length_max)) broken |= ENVELOPE_STROKE;
         if (!(lower >= cos_max && upper >= cos_max)) broken |= ENVELOPE_JOINT;
         if (!(fabs(legs[i].velocity) <= e->leg_velocity_max)) broken |= ENVELOPE_LEG_VELOCITY;
@@ -42,11 +42,20 @@ static int pose_violations(const PlatformEnvelope *e, const LegGeometry neutral[
     return broken;
 }
 
-static void neutral_legs(const PlatformEnvelope *e, LegGeometry neutral[PLATFORM_LEGS]) {
-    const double at_rest[6] = {0, 0, 0, 0, 0, 0};
-    double x[PLATFORM_STATES];
-    platform_state_from_pose(e->platform.neutral_pose, at_rest, x);
-    platform_legs(&e->platform, x, neutral);
+/* The legs' neutral directions, once per envelope (the joints' tilts are measured from them). */
+static const PlatformEnvelope *prepared(void *envelope) {
+    PlatformEnvelope *e = (PlatformEnvelope *)envelope;
+    if (!e->prepared) {
+        const double at_rest[6] = {0, 0, 0, 0, 0, 0};
+        double x[PLATFORM_STATES];
+        LegGeometry neutral[PLATFORM_LEGS];
+        platform_state_from_pose(e->platform.neutral_pose, at_rest, x);
+        platform_legs(&e->platform, x, neutral);
+        for (int i = 0; i < PLATFORM_LEGS; i++)
+            for (int k = 0; k < 3; k++) e->neutral_axis[i][k] = neutral[i].axis[k];
+        e->prepared = 1;
+    }
+    return e;
 }
 
 /* Steps of h the braking from `rate` takes, each channel at most its largest deceleration. */
@@ -57,15 +66,14 @@ static double braking_steps(const PlatformEnvelope *e, const double rate[6], dou
 }
 
 /* The limits broken by moving from (pose, rate) with `acceleration` over h, or by braking after. */
-static int motion_violations(const PlatformEnvelope *e, const LegGeometry neutral[PLATFORM_LEGS], double h,
-                             const double pose[6], const double rate[6], const double leg_velocity[PLATFORM_LEGS],
+static int motion_violations(const PlatformEnvelope *e, double h, const double pose[6], const double rate[6], const double leg_velocity[PLATFORM_LEGS],
                              const double acceleration[6]) {
     double end[6], end_rate[6], end_leg_velocity[PLATFORM_LEGS], scratch[PLATFORM_LEGS];
     for (int i = 0; i < 6; i++) {
         end[i] = pose[i] + rate[i] * h + 0.5 * acceleration[i] * h * h;
         end_rate[i] = rate[i] + acceleration[i] * h;
     }
-    int broken = pose_violations(e, neutral, end, end_rate, end_leg_velocity);
+    int broken = pose_violations(e, end, end_rate, end_leg_velocity);
     for (int i = 0; i < PLATFORM_LEGS; i++)
         if (!(fabs(end_leg_velocity[i] - leg_velocity[i]) <= e->leg_acceleration_max * h))
             broken |= ENVELOPE_LEG_ACCELERATION;
@@ -85,28 +93,24 @@ static int motion_violations(const PlatformEnvelope *e, const LegGeometry neutra
             at[i] = end[i] + end_rate[i] * reach * d;
             at_rate[i] = end_rate[i] * slower;
         }
-        broken |= pose_violations(e, neutral, at, at_rate, scratch) & (ENVELOPE_STROKE | ENVELOPE_JOINT);
+        broken |= pose_violations(e, at, at_rate, scratch) & (ENVELOPE_STROKE | ENVELOPE_JOINT);
     }
     return broken;
 }
 
 ENVELOPE_EXPORT int platform_envelope_contains(void *envelope, const double *pose) {
-    const PlatformEnvelope *e = (const PlatformEnvelope *)envelope;
+    const PlatformEnvelope *e = prepared(envelope);
     const double at_rest[6] = {0, 0, 0, 0, 0, 0};
     double leg_velocity[PLATFORM_LEGS];
-    LegGeometry neutral[PLATFORM_LEGS];
-    neutral_legs(e, neutral);
-    return (pose_violations(e, neutral, pose, at_rest, leg_velocity) & (ENVELOPE_STROKE | ENVELOPE_JOINT)) == 0;
+    return (pose_violations(e, pose, at_rest, leg_velocity) & (ENVELOPE_STROKE | ENVELOPE_JOINT)) == 0;
 }
 
 ENVELOPE_EXPORT int platform_envelope_guard(void *envelope, double h, const double *pose, const double *rate,
                                             double *acceleration) {
-    const PlatformEnvelope *e = (const PlatformEnvelope *)envelope;
-    LegGeometry neutral[PLATFORM_LEGS];
+    const PlatformEnvelope *e = prepared(envelope);
     double leg_velocity[PLATFORM_LEGS];
-    neutral_legs(e, neutral);
-    pose_violations(e, neutral, pose, rate, leg_velocity);
-    const int asked = motion_violations(e, neutral, h, pose, rate, leg_velocity, acceleration);
+    pose_violations(e, pose, rate, leg_velocity);
+    const int asked = motion_violations(e, h, pose, rate, leg_velocity, acceleration);
     if (!asked) return 0;
     /* braking: to rest at the end of a whole number of steps, the same deceleration each step */
     const double steps = braking_steps(e, rate, h);
@@ -119,7 +123,7 @@ ENVELOPE_EXPORT int platform_envelope_guard(void *envelope, double h, const doub
     for (int k = 0; k < BISECTIONS; k++) {
         const double s = 0.5 * (safe + unsafe);
         for (int i = 0; i < 6; i++) blend[i] = braking[i] + s * (wanted[i] - braking[i]);
-        if (motion_violations(e, neutral, h, pose, rate, leg_velocity, blend)) unsafe = s;
+        if (motion_violations(e, h, pose, rate, leg_velocity, blend)) unsafe = s;
         else safe = s;
     }
     for (int i = 0; i < 6; i++) acceleration[i] = braking[i] + safe * (wanted[i] - braking[i]);

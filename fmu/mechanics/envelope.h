@@ -15,6 +15,9 @@ typedef struct {
     double leg_acceleration_max;         /* [m/s^2] */
     double acceleration_max[6];          /* the reference's own largest acceleration per channel: its braking */
     double arm;                          /* [m] the farthest upper joint from the platform's origin */
+    /* derived on first use (prepared 0 until then): each leg's direction at the neutral pose */
+    double neutral_axis[PLATFORM_LEGS][3];
+    int prepared;
 } PlatformEnvelope;
 
 /* What a guard reports it held back (bits), and so what the kernel counts per step. */

@@ -95,7 +95,7 @@ static const StructLayout LAYOUT[] = {
     D(transmission_loss), D(friction_loss), D(load_power), D(singular),
 #define E(field) STRUCT_LAYOUT_FIELD(PlatformEnvelope, field)
     STRUCT_LAYOUT(PlatformEnvelope), E(platform), E(length_min), E(length_max), E(joint_angle_max),
-    E(leg_velocity_max), E(leg_acceleration_max), E(acceleration_max), E(arm),
+    E(leg_velocity_max), E(leg_acceleration_max), E(acceleration_max), E(arm), E(neutral_axis), E(prepared),
     STRUCT_LAYOUT_END};
 
 MECHANICS_EXPORT const StructLayout *platform_core_layout(void) { return LAYOUT; }

@@ -13,11 +13,12 @@ import math
 import socket
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
-from packet_fuzz import HEADER, fuzz, reference
-from test_live import H, free_port, scene
+from packet_fuzz import fuzz, reference
+from test_live import free_port, scene
 
 import cosim
 from cosim.engine.realtime import receive
@@ -69,11 +70,11 @@ def reference_of(run) -> np.ndarray:
     return np.column_stack([run[f"pose_ref.{a}"] for a in POSE])
 
 
-def assert_within_the_envelope(run, model=None, velocity_max=0.5, acceleration_max=5.0, h=H):
+def assert_within_the_envelope(run, model, velocity_max=0.5, acceleration_max=5.0):
     """The applied reference: every leg within the stroke less the margin and every joint within
     its tilt; the pose's rate and acceleration within [live], the legs' speed within
     limit.leg_velocity; the platform's own legs within the stroke."""
-    loaded = cosim.load(model, LIVE) if model else cosim.load(scene_path(), LIVE)
+    loaded = cosim.load(model, LIVE)
     values = scene_values(loaded)[0]
     envelope, core = Envelope.of(values), Core(values=values)
     low, high = envelope.usable
@@ -98,10 +99,9 @@ def assert_within_the_envelope(run, model=None, velocity_max=0.5, acceleration_m
     return legs, actual
 
 
-def scene_path():
-    import tempfile
-    from pathlib import Path
-    return scene(Path(tempfile.mkdtemp()), 1.0)
+def written_scene(tmp_path) -> Path:
+    """The test scene's file as drive() writes it (its values: the platform's envelope)."""
+    return tmp_path / "realtime.toml"
 
 
 def test_a_pose_past_the_stroke_is_held_at_the_envelope_and_the_tracking_margin_covers_the_drives(tmp_path):
@@ -121,7 +121,7 @@ def test_a_pose_past_the_stroke_is_held_at_the_envelope_and_the_tracking_margin_
                     break
 
     run = drive(tmp_path, send, 2.8)
-    legs, actual = assert_within_the_envelope(run)
+    legs, actual = assert_within_the_envelope(run, written_scene(tmp_path))
     assert legs.max() > STROKE[1] - MARGIN - 1e-4 and legs.min() < STROKE[0] + MARGIN + 1e-3  # it went to both ends
     tracking = np.abs(legs - actual).max()
     print(f"tracking error at 0.5 m/s and 5 m/s^2: {1e3 * tracking:.2f} mm of the {1e3 * MARGIN:g} mm margin")
@@ -145,7 +145,7 @@ def test_a_rate_that_extrapolates_past_the_stroke_is_held_at_the_envelope(tmp_pa
                 time.sleep(0.01)
 
     run = drive(tmp_path, send, 1.6)
-    assert_within_the_envelope(run)
+    assert_within_the_envelope(run, written_scene(tmp_path))
     assert run.report.pacing.live["outside"] > 0  # the pose is inside the stroke but not the envelope
 
 
@@ -160,7 +160,7 @@ def test_a_target_just_inside_the_envelope_is_reached_without_overshoot(tmp_path
             sock.sendto(reference(13, 0, math.nan, target), address)
 
     run = drive(tmp_path, send, 1.5)
-    legs, _ = assert_within_the_envelope(run)
+    legs, _ = assert_within_the_envelope(run, written_scene(tmp_path))
     assert abs(run["pose_ref.z"][-1] - target[2]) < 1e-9  # reached and held
 
 
@@ -226,7 +226,7 @@ def test_the_packet_fuzzer_cannot_drive_the_platform_out_of_its_envelope(tmp_pat
     test scene and two shipped scenes (Meng's platform with PMSM drives, Sumnu's with linear
     motors, each with its own finer start): the run counts every one by kind, keeps every limit
     and never stops."""
-    values = scene_values(cosim.load(model or scene_path(), LIVE))[0]
+    values = scene_values(cosim.load(model or scene(tmp_path, 2.0, 5.0), LIVE))[0]
     neutral = Core(values=values).neutral_pose
     sent = []
     run = drive(tmp_path, lambda target, now: sent.append(fuzz(target, neutral, now, seed=48, rate_max=0.5)), 2.0,
@@ -235,5 +235,5 @@ def test_the_packet_fuzzer_cannot_drive_the_platform_out_of_its_envelope(tmp_pat
     assert sum(v for k, v in live.items() if k != "watchdog") == sent[0]  # every datagram taken or counted once
     assert live["accepted"] + live["outside"] > 10 and live["malformed"] > 100
     assert all(live[k] > 0 for k in ("future", "late", "non_finite", "beyond_limits", "out_of_order"))
-    assert_within_the_envelope(run, model)
+    assert_within_the_envelope(run, model or written_scene(tmp_path))
     assert run["time"][-1] == pytest.approx(2.0, abs=1e-9)  # ran to its end
