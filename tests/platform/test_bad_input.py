@@ -309,3 +309,18 @@ def test_a_bad_vehicle_table_is_one_line_through_run_and_tune(tmp_path, capsys, 
     assert code == 2 and len(err.splitlines()) == 1, err
     assert f"{scene}:8: motion.vehicle: rejected by cueing: vehicle.file {tmp_path / 'drive.csv'}:" in err
     assert reason in err
+
+
+@pytest.mark.parametrize("command", ["run", "tune"])
+def test_a_vehicle_scene_too_long_to_record_is_one_line_through_run_and_tune(tmp_path, capsys, command):
+    """A cueing scene of 1e12 s at 1 ms would record 1e15 rows: `tune` screens the scene's own
+    cueing first and `run` records the system; both refuse at scene.step with the scene's file
+    and line, exit 2, before a step (CI's input fuzzer found tune's traceback)."""
+    (tmp_path / "drive.csv").write_text("\n".join([VEHICLE_HEADER, *VEHICLE_ROWS]) + "\n")
+    scene = tmp_path / "car.toml"
+    scene.write_text('[scene]\nduration = 1e12\nstep = 1e-3\n\n[drive]\nkind = "pmsm"\n\n'
+                     '[motion]\nvehicle = "drive.csv"\n')
+    code = main([command, str(scene), *(["--no-plots", "--out", str(tmp_path / "out")] if command == "run" else [])])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"error: {scene}:3: scene.step = 0.001 s, duration 1e+12 s: the run would record"), err

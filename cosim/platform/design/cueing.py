@@ -24,9 +24,8 @@ import numpy as np
 from ..core import Core, mechanics_value
 from ..perception import ChannelQuality, perceive, perceived_error, platform_motion, quality, vehicle_motion
 from ..ports import DRIVES, LEGS, POSE
-from ...engine import FmuError
 from ..run.compile import scene_cueing, scene_values
-from ..run.errors import scene_error
+from ..run.errors import BUILD_ERRORS, scene_error
 from ..run.runner import cueing_value, run_scene
 from ..scene import Scene
 from ..scene.signals import play_cueing
@@ -221,9 +220,9 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
     ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES)
     keys = tuple(ranges)
     start = time.perf_counter()
-    try:  # the scene's own cueing first: a vehicle file the cueing FMU refuses is one line, at the scene's key
-        own = screen(scene, {})
-    except FmuError as error:
+    try:  # the scene's own cueing first: a vehicle file the cueing FMU refuses, or a run too long to record,
+        own = screen(scene, {})  # is one line at the scene's key
+    except BUILD_ERRORS as error:
         mapped = scene_error(scene, error)
         if mapped is None:
             raise
