@@ -38,7 +38,7 @@ def main() -> None:
     tuned = scene.changed({"cueing.parameters": {**scene.cueing_parameters, **tuning.best}})
     with tempfile.TemporaryDirectory() as folder:
         for name, which in (("car_drive", scene), ("car_drive_tuned", tuned)):
-            run_scene(which, Path(folder), progress=False)
+            run_scene(which, Path(folder), plots=True)
             shutil.copy(Path(folder) / "car_drive_perception.png", FIGURES / f"{name}_perception.png")
     own, best = tuning.confirmed["scene"], tuning.confirmed["tuned"]
 

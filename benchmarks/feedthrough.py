@@ -21,7 +21,8 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "tests"))
 sys.path.insert(0, str(HERE.parent / "tests" / "engine"))
 from common import publish  # noqa: E402
-from cosim.engine import Algorithm, Execution, FixedStep  # noqa: E402
+from cosim.engine import Algorithm, FixedStep  # noqa: E402
+from cosim.engine.execution import Execution  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.ports import POSE, per_leg  # noqa: E402
 from cosim.engine.outcome import RunStopped  # noqa: E402
@@ -44,7 +45,7 @@ def meng(overrides: dict) -> np.ndarray | None:
     """The scene's first second (None if the coupling diverged)."""
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0, **overrides})
     try:
-        return run_scene(scene, plots=False, progress=False, advice=False)[0]
+        return run_scene(scene)[0]
     except RunStopped:
         return None
 

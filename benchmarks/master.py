@@ -143,8 +143,8 @@ def shipped_table() -> tuple[list[str], dict[str, float]]:
     for name in shipped_scenes():
         scene = load_scene(name)
         reference, _ = run_scene(load_scene(name, {"scene.step": scene.step / 64, "coupling.startup_time": 0.0,
-                                                   "coupling.edge_time": 0.0}), plots=False)
-        runs = [run_scene(scene, plots=False) for _ in range(3)]
+                                                   "coupling.edge_time": 0.0}))
+        runs = [run_scene(scene) for _ in range(3)]
         result, report = min(runs, key=lambda run: run[1].wall)
         late = result["time"] >= 0.01
         pose = max(float(np.abs(result[n] - np.interp(result["time"], reference["time"], reference[n]))[late].max())
@@ -184,8 +184,8 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=10.0)
     args = parser.parse_args()
     fine = {"scene.duration": args.duration, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}
-    reference, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 3.125e-5}), plots=False)
-    coarser, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 6.25e-5}), plots=False)
+    reference, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 3.125e-5}))
+    coarser, _ = run_scene(load_scene(SCENE, {**fine, "scene.step": 6.25e-5}))
     peak = max(np.abs(reference[n]).max() for n in TORQUES)
     lines = [f"Meng scene, {args.duration:g} s with the impact, 8 FMUs (trajectory, mechanics, six drives); errors "
              f"against the scene at 31.25 us throughout (converged to {difference(coarser, reference, POSES):.1e} in pose "
@@ -196,7 +196,7 @@ def main() -> None:
     best: dict[str, tuple] = {}
     for _ in range(ROUNDS):  # every configuration once per round, so a busy spell of the machine hits all
         for label, _, path, overrides in CONFIGURATIONS:
-            run = run_scene(load_scene(path, {"scene.duration": args.duration, **overrides}), plots=False)
+            run = run_scene(load_scene(path, {"scene.duration": args.duration, **overrides}))
             if label not in best or run[1].wall < best[label][1].wall:
                 best[label] = run
     reports, by_window = {}, []
@@ -229,7 +229,7 @@ def main() -> None:
             began = time.perf_counter()
             subprocess.run([sys.executable, "-c", "import cosim.cli, cosim.platform.run.runner"], check=True)
             imports.append(time.perf_counter() - began)
-        ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}), plots=False)[0]
+        ours = run_scene(load_scene(SCENE, {"scene.duration": args.duration}))[0]
         began = time.perf_counter()
         write_csv(ours, Path(out) / "timing.csv")
         write_mat(ours, Path(out) / "timing.mat")

@@ -112,9 +112,9 @@ def pareto(points: list[Point]) -> list[Point]:
 def study(scene: Scene, base: tuple, fidelities: dict[str, dict], effects: dict[str, dict]) -> tuple[list[Point], dict]:
     h = scene.step
     checkpoints = np.round(np.arange(0.05, scene.duration + 1e-9, 0.05), 9)
-    reference_result, _ = run_scene(scene.changed({"scene.step": h / 16}), progress=False)
+    reference_result, _ = run_scene(scene.changed({"scene.step": h / 16}))
     reference = _at(reference_result, checkpoints)
-    eighth, _ = run_scene(scene.changed({"scene.step": h / 8}), progress=False)
+    eighth, _ = run_scene(scene.changed({"scene.step": h / 8}))
     convergence = float(np.abs(_at(eighth, checkpoints) - reference).max())
     planned = []
     for algorithm in ("gauss-seidel", "jacobi"):

@@ -92,8 +92,8 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
 
 def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | None = None,
              overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
-             out: str | Path | None = None, plots: bool = False, progress: bool = False, twin: bool = False,
-             real_time: float | None = None, stream: str | None = None, listen: str | None = None,
+             out: str | Path | None = None, plots: bool = False, progress: bool = False, advice: bool = False,
+             twin: bool = False, real_time: float | None = None, stream: str | None = None, listen: str | None = None,
              listen_key: str | Path | bytes | None = None) -> Run:
     """Runs a scene or an SSP system and returns its named results.
 
@@ -109,6 +109,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
             interactive report with `plots`).
         plots: draw a scene's figures and its HTML report into `out`.
         progress: a progress bar on a terminal.
+        advice: a fixed-step run that diverges probes shorter steps on the same system, and its
+            failure names the one that held (the command line asks for it).
         twin: judge a scene's run against its converged twin (the scene at a 16th of its step
             throughout), window by window (start-up, each load pulse, steady tracking).
         real_time: pace the run at this factor of the wall clock (1.0: real time); its lateness
@@ -144,7 +146,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         paced = RealTime(real_time, stream) if real_time is not None or stream else None
         with nullcontext(model) if isinstance(model, SystemStructure) else opened(Path(model)) as structure:
             values, report = run_system(structure, dict(settings or {}), duration, target, source=source,
-                                        progress=progress, real_time=paced)
+                                        progress=progress, advice=advice, real_time=paced)
         return Run(values, report)
     if settings:
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "
@@ -163,8 +165,9 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         from functools import partial
 
         from .platform.realtime import real_time_plan
-        adapt = partial(real_time_plan, scene, factor=real_time, stream=stream, listen=listen, key=listen_key)
-    values, report = run_scene(scene, target, plots=plots, progress=progress, twin=twin, adapt=adapt)
+        adapt = partial(real_time_plan, factor=real_time, stream=stream, listen=listen, key=listen_key)
+    values, report = run_scene(scene, target, plots=plots, progress=progress, advice=advice, twin=twin,
+                               adapt=adapt)
     return Run(values, report)
 
 

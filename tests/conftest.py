@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from fmpy import extract
 
-from cosim.platform.scene.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.engine.fmi import FmuInstance
 from cosim.engine.artifacts import fmu_path
 
@@ -24,7 +24,7 @@ def pmsm_unzip_dir(pmsm_fmu, tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def meng_params() -> dict:
-    return load_parameter_set("meng2010")
+    return read_parameter_set("meng2010")
 
 
 @pytest.fixture
@@ -96,7 +96,7 @@ def platform_run(drive: str, stop_time: float, step: float, mechanics_values=Non
     the chosen outputs recorded; RunFailed where an FMU failed or the coupling diverged (watched
     by the divergence monitor unless divergence_ratio is None)."""
     from cosim.engine import DivergenceMonitor, FixedStep, RunFailed
-    from cosim.engine.outcome import execute
+    from cosim.engine.run import execute
     from cosim.platform.ports import platform_algorithm
     from cosim.platform.run.system import columns, platform_structure
     structure = platform_structure(drive, mechanics_values, drive_values, trajectory_values, leg_values=leg_values,

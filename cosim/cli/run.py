@@ -49,7 +49,7 @@ def settings(items: list[str]) -> dict[str, str]:
     return out
 
 
-def scene_values(items: list[str]) -> dict[str, object]:
+def set_values(items: list[str]) -> dict[str, object]:
     """--set NAME=VALUE for a scene: the scene keys they set (a run setting's name to its key), each
     value read as TOML writes it (text that is not a TOML value as text)."""
     import tomllib
@@ -87,8 +87,8 @@ def main(args: argparse.Namespace) -> int:
     if system:  # an SSP's run settings by name (cosim.engine.settings), checked by the engine
         given = {"settings": settings(args.set) or None}
     else:  # a scene's keys
-        given = {"overrides": {**scene_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
+        given = {"overrides": {**set_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
                  or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
-                                   twin=args.twin, progress=True, real_time=factor, stream=args.stream,
+                                   twin=args.twin, progress=True, advice=True, real_time=factor, stream=args.stream,
                                    listen=args.listen, listen_key=args.listen_key, **given).report, written, args.out)

@@ -22,7 +22,8 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..platform.report.view3d import write_view
+    from ..platform.report.view3d import view_samples, write_view
+    from ..platform.run.alone import reference_motion
     from ..platform.run.compile import scene_values
     from ..platform.run.errors import scene_error
     from ..platform.scene import load_scene
@@ -30,7 +31,8 @@ def main(args: argparse.Namespace) -> int:
     if args.live:
         return live(scene, args)
     try:
-        path, lines = write_view(scene, scene_values(scene)[0], args.out / f"{scene.path.stem}_view.html")
+        motion = reference_motion(scene, view_samples(scene.duration))
+        path, lines = write_view(scene, scene_values(scene)[0], motion, args.out / f"{scene.path.stem}_view.html")
     except ValueError as error:  # a platform the scene's values do not build
         mapped = scene_error(scene, error)
         if mapped is None:

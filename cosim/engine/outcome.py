@@ -1,26 +1,20 @@
-"""The one run path: `execute` runs a system once and returns its `Outcome` (the results, what the
-execution measured, what the FMUs logged, and the failure if the run stopped early); `Report` is
-the outcome's summary and its text. `python -m cosim run FILE.ssp`, a sweep's points and the
-platform's scenes all run through here, so a run is set up, freed, measured, advised and reported
-the same way whoever asks for it.
-"""
+"""What a run gives back (cosim.engine.run makes them): its `Outcome` (the results, what the
+execution measured, what the FMUs logged, and the failure if the run stopped early), the
+`Report` that sums it up as a command prints it, and `RunStopped`, raised with both for a run that
+stopped part way."""
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
-from .execution import Execution, RunFailed
+from .execution import RunFailed
 from .fmi import LogMessage
 from .observers import Diverged, Observer
-from .realtime import Pacing, RealTime
+from .realtime import Pacing
 from .results import message_kinds
-from .settings import Algorithm, FixedStep, StepControl, control_name
-from .structure import SystemStructure
 
 
 @dataclass
@@ -60,40 +54,6 @@ class Outcome:
     def observer(self, kind: type) -> Observer | None:
         """The first observer of this kind that watched the run."""
         return next((o for o in self.observers if isinstance(o, kind)), None)
-
-
-def execute(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
-            record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None, clock: str | None = None,
-            observers: Sequence[Observer] = (), advice: bool = False, real_time: RealTime | None = None) -> Outcome:
-    """Runs `structure` from its start to stop_time and returns the Outcome; a run that an FMU or
-    an observer stops is an Outcome with its failure and the results up to then, not an exception.
-    advice: a fixed-step run that diverged probes shorter steps on the same system and its failure
-    says which one held (cosim.engine.advice). Raises before a single step for what makes the run
-    impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path.
-    real_time: paced, streamed, driven from outside (cosim.engine.realtime); its figures in .pacing."""
-    with Execution(structure, algorithm, control, record, names, clock=clock, real_time=real_time) as execution:
-        setup_fmi = execution.fmi_seconds  # instantiation and parameters: not part of the stepping
-        setup_by_instance = {name: instance.fmi_seconds for name, instance in execution.instances.items()}
-        start = time.perf_counter()
-        failure = None
-        try:
-            result = execution.run(stop_time, observers)
-        except RunFailed as failed:
-            result, failure = failed.result, failed
-        wall = time.perf_counter() - start
-        outcome = Outcome(structure.name, result, execution.energy_residuals, execution.steps, execution.rejected,
-                          wall, execution.fmi_seconds - setup_fmi, control_name(control), execution.messages(),
-                          dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers),
-                          fmi_seconds_by_instance={name: instance.fmi_seconds - setup_by_instance[name]
-                                                   for name, instance in execution.instances.items()},
-                          pacing=execution.pacing)
-    if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
-        from .advice import advice_text
-        failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
-                                                                    failure.error.time, stop_time),
-                                     failure.error.time), result)
-    outcome.failure = failure
-    return outcome
 
 
 @dataclass

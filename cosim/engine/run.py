@@ -1,9 +1,10 @@
 """The one way a system is run: a `Plan` (the system, its coupling and step control, how long, what is
-recorded and how often) goes through `run`, which executes it (cosim.engine.outcome.execute: a
-divergence monitor watching it, a progress bar on a terminal), thins its results to the output
-interval, makes its report, writes its files (the results as CSV and .mat, the FMUs' log, and what
-the application adds: a scene's plots) on every path, and raises `RunStopped`, with the results up
-to then, for a run that stopped part way.
+recorded and how often) goes through `run`, which executes it (`execute`: the execution loop, a
+divergence monitor watching it, a progress bar on a terminal, a diverged run's advice probed),
+thins its results to the output interval, makes its report, writes its files (the results as CSV
+and .mat, the FMUs' log, and what the application adds: a scene's plots) on every path, and raises
+`RunStopped`, with the results up to then, for a run that stopped part way. `run` is the one entry
+the application uses; the execution (cosim.engine.execution) is this module's.
 
 `run_system` runs any SSP system by its own settings (the SSP annotation's, the command line's over
 them): `cosim run FILE.ssp`, `cosim.simulate(system)` and a sweep's points of a system; the
@@ -12,6 +13,7 @@ platform application makes a Plan of a scene the same way (cosim.platform.run.ru
 
 from __future__ import annotations
 
+import time
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -19,20 +21,21 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from .observers import DivergenceMonitor, Progress
+from .execution import Execution, RunFailed
+from .observers import DivergenceMonitor, Diverged, Observer, Progress
 from .realtime import RealTime
-from .outcome import Outcome, Report, RunStopped, execute
+from .outcome import Outcome, Report, RunStopped
 from .files import OutputError, folder_lock
 from .interrupts import deferred
 from .results import thin, write_csv, write_log, write_mat
-from .settings import Algorithm, StepControl, output_interval, recorded, system_settings
+from .settings import Algorithm, FixedStep, StepControl, control_name, output_interval, recorded, system_settings
 from .structure import SystemStructure
 
 
 @dataclass(frozen=True)
 class Plan:
     """One run of a system: its coupling and step control, its stop time, the recorded variables
-    (component, variable) and their column names, the interval results are kept at (None: every
+    (component, variable) and their column names (None: component.variable), the interval results are kept at (None: every
     macro step), whose time the results carry (None: the run's own), the divergence monitor's
     threshold (None: unwatched) and the run's real time (None: as fast as it goes, no stream, no
     live input: cosim.engine.realtime)."""
@@ -40,8 +43,8 @@ class Plan:
     algorithm: Algorithm
     control: StepControl
     stop_time: float
-    record: Sequence[tuple[str, str]]
-    names: Sequence[str]
+    record: Sequence[tuple[str, str]] = ()
+    names: Sequence[str] | None = None
     output_interval: float | None = None
     clock: str | None = None
     divergence: float | None = 0.05
@@ -49,7 +52,7 @@ class Plan:
 
 
 def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progress: bool = False,
-        advice: bool = True, report: Callable[[Outcome, np.ndarray], Report] = Report.of,
+        advice: bool = False, report: Callable[[Outcome, np.ndarray], Report] = Report.of,
         files: Callable[[np.ndarray, Report, Outcome, Path], None] | None = None) -> tuple[np.ndarray, Report]:
     """Runs the plan; returns its results and its report (`report(outcome, results)`). With `out`,
     writes <stem>.csv, .mat and .log there and then what `files` writes (results, report, outcome,
@@ -72,6 +75,70 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     if outcome.failure is not None:
         raise RunStopped(made, result, outcome.diverged)
     return result, made
+
+
+def execute(structure: SystemStructure, algorithm: Algorithm, control: StepControl, stop_time: float,
+            record: Sequence[tuple[str, str]] = (), names: Sequence[str] | None = None, clock: str | None = None,
+            observers: Sequence[Observer] = (), advice: bool = False, real_time: RealTime | None = None) -> Outcome:
+    """Runs `structure` from its start to stop_time and returns the Outcome; a run that an FMU or
+    an observer stops is an Outcome with its failure and the results up to then, not an exception.
+    advice: a fixed-step run that diverged probes shorter steps on the same system and its failure
+    says which one held (advice_text). Raises before a single step for what makes the run
+    impossible (ParameterError, NoStep, an FmuError at set-up); the FMUs are freed on every path.
+    real_time: paced, streamed, driven from outside (cosim.engine.realtime); its figures in .pacing."""
+    with Execution(structure, algorithm, control, record, names, clock=clock, real_time=real_time) as execution:
+        setup_fmi = execution.fmi_seconds  # instantiation and parameters: not part of the stepping
+        setup_by_instance = {name: instance.fmi_seconds for name, instance in execution.instances.items()}
+        start = time.perf_counter()
+        failure = None
+        try:
+            result = execution.run(stop_time, observers)
+        except RunFailed as failed:
+            result, failure = failed.result, failed
+        wall = time.perf_counter() - start
+        outcome = Outcome(structure.name, result, execution.energy_residuals, execution.steps, execution.rejected,
+                          wall, execution.fmi_seconds - setup_fmi, control_name(control), execution.messages(),
+                          dict(zip(execution.bond_names, execution.bond_residual_max.tolist())), list(observers),
+                          fmi_seconds_by_instance={name: instance.fmi_seconds - setup_by_instance[name]
+                                                   for name, instance in execution.instances.items()},
+                          pacing=execution.pacing)
+    if failure is not None and advice and isinstance(failure.error, Diverged) and isinstance(control, FixedStep):
+        failure = RunFailed(Diverged(f"{failure}; " + advice_text(structure, algorithm, control.step,
+                                                                    failure.error.time, stop_time),
+                                     failure.error.time), result)
+    outcome.failure = failure
+    return outcome
+
+
+
+FRACTIONS = (4, 16)  # probe a quarter, then a sixteenth of the step
+
+
+def stable_step(structure: SystemStructure, algorithm: Algorithm, step: float, diverged_at: float,
+                stop_time: float, ratio: float = 0.05, margin: float = 0.5) -> tuple[float | None, float, list[float]]:
+    """(the first probed step that ran without diverging or failing, or None; the time probed to;
+    the steps tried). Each probe runs from the start to diverged_at + margin (at most stop_time)."""
+    until = min(stop_time, diverged_at + margin)
+    tried = []
+    for fraction in FRACTIONS:
+        h = step / fraction
+        tried.append(h)
+        with Execution(structure, algorithm, FixedStep(h)) as execution:
+            try:
+                execution.run(until, [DivergenceMonitor(ratio=ratio)])
+                return h, until, tried
+            except RunFailed:  # diverged or an FMU failed: not a step to recommend
+                continue
+    return None, until, tried
+
+
+def advice_text(structure: SystemStructure, algorithm: Algorithm, step: float, diverged_at: float,
+                stop_time: float, ratio: float = 0.05) -> str:
+    h, until, tried = stable_step(structure, algorithm, step, diverged_at, stop_time, ratio)
+    if h is not None:
+        return f"a probe at {h * 1e3:g} ms ran stable to t = {until:g} s: try a step of {h * 1e3:g} ms"
+    return (f"probes at {', '.join(f'{t * 1e3:g}' for t in tried)} ms diverged too before t = {until:g} s: "
+            f"no stable fixed step found; step doubling is worth a try but was not probed")
 
 
 def refuse_overwriting_inputs(structure: SystemStructure, out: Path, stem: str) -> None:
@@ -132,7 +199,7 @@ def system_plan(structure: SystemStructure, overrides: Mapping[str, str] | None 
 
 def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
                stop_time: float | None = None, out: Path | None = None, *, source: str | None = None,
-               progress: bool = False, advice: bool = True, real_time: RealTime | None = None) -> tuple[np.ndarray, Report]:
+               progress: bool = False, advice: bool = False, real_time: RealTime | None = None) -> tuple[np.ndarray, Report]:
     """Runs a system by its own settings (system_plan) and writes its results to `out` as
     <name>.csv, .mat and .log; paced and streamed by `real_time` if given. What cannot start (a
     setting, a parameter value, a time that fits no step, an FMU that refuses its values) is an

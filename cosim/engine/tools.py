@@ -151,21 +151,24 @@ def check_system(structure: SystemStructure) -> tuple[float, list[ToolStep]]:
     output); for a system with FMI 3.0 FMUs, the tools that load them. Returns the probe's duration
     and the steps."""
     from .fmi import loaded
-    from .outcome import execute
-    from .run import recording
+    from .outcome import RunStopped
+    from .run import Plan, recording, run
     from .settings import system_settings
     record, names = recording(structure)
     duration = min(PROBE, structure.experiment.stop - structure.experiment.start)
     step = structure.experiment.step
     algorithm, _ = system_settings(structure.settings, step)
     clock = structure.components[0].name
-    converged = execute(structure, algorithm, FixedStep(step / CONVERGED), duration, record, names, clock=clock)
-    if converged.failure is not None:
-        raise converged.failure  # nothing to measure against
+    converged, _ = run(Plan(structure, algorithm, FixedStep(step / CONVERGED), duration, record, names, clock=clock,
+                            divergence=None))  # a run that stops raises: nothing to measure against
 
     def attempt(master: ToolMaster, at: float) -> ToolStep:
-        outcome = execute(structure, master.algorithm, FixedStep(at), duration, record, names, clock=clock)
-        return ToolStep(master, at, fit(outcome.result, converged.result, names), outcome.wall)
+        try:
+            result, report = run(Plan(structure, master.algorithm, FixedStep(at), duration, record, names, clock=clock,
+                                      divergence=None))
+        except RunStopped as stopped:
+            result, report = stopped.result, stopped.report
+        return ToolStep(master, at, fit(result, converged, names), report.wall)
 
     fmi3 = any(str(loaded(c.fmu)[0].fmiVersion).startswith("3") for c in structure.components)
     return duration, largest_steps(step, attempt, fmi3)

@@ -10,8 +10,9 @@ import pytest
 from scipy.linalg import expm
 
 import oracle
-from cosim.engine import (Algorithm, Bond, Component, Connection, Execution, Experiment, FixedStep, StepDoubling,
+from cosim.engine import (Algorithm, Bond, Component, Connection, Experiment, FixedStep, StepDoubling,
                           SystemStructure, fmu_path)
+from cosim.engine.execution import Execution
 from cosim.engine.coupling import Coupling
 from cosim.engine.fmi import FmuInstance
 

@@ -15,7 +15,8 @@ import pytest
 from lxml import etree
 
 from cosim.cli import main
-from cosim.engine import Execution, FixedStep
+from cosim.engine import FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.ssp import NS, read_ssp, validate, write_ssp
 from cosim.engine.run import recording
 from cosim.engine.settings import system_settings

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import oracle
-from cosim.engine import Algorithm, Component, Connection, EnergyControl, Execution, FixedStep, StepDoubling
+from cosim.engine import Algorithm, Component, Connection, EnergyControl, FixedStep, StepDoubling
+from cosim.engine.execution import Execution
 from cosim.engine.coupling import FeedthroughLoop
 from cosim.engine.structure import SystemStructure
 from cosim.engine.artifacts import ROOT, fmu_path

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import oracle
-from cosim.engine import (Algorithm, EnergyControl, Execution, FixedStep, FmuError, RecordFull, RunFailed,
+from cosim.engine import (Algorithm, EnergyControl, FixedStep, FmuError, RecordFull, RunFailed,
                           StepDoubling, SystemStructure)
+from cosim.engine.execution import Execution
 from cosim.engine.artifacts import ROOT
 from cosim.platform.run.compile import scene_record, scene_structure
 from cosim.platform.scene import load_scene

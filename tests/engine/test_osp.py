@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from cosim.engine import Algorithm, EnergyControl, Execution, FixedStep
+from cosim.engine import Algorithm, EnergyControl, FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.osp import write_osp
 from cosim.engine.settings import to_strings
 from test_coupling import exact_position_1, oscillator

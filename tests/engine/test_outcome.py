@@ -11,7 +11,8 @@ from cosim.engine import Algorithm, FixedStep, NoStep
 from cosim.engine.run import run_system
 from cosim.engine.ssp import read_ssp
 from cosim.engine.fmi import FmuInstance
-from cosim.engine.outcome import Report, execute
+from cosim.engine.outcome import Report
+from cosim.engine.run import execute
 from cosim.engine.ssp import write_ssp
 from cosim.engine.artifacts import ROOT
 from cosim.platform.run.compile import scene_structure
@@ -55,7 +56,7 @@ def test_a_scene_and_its_ssp_are_reported_alike(tmp_path):
     residual, warnings and step control in reports of one kind (the SSP's report had its own
     text and its own statistics before)."""
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 0.15})
-    _, scene_report = run_scene(scene, plots=False, progress=False)
+    _, scene_report = run_scene(scene)
     path = write_ssp(scene_structure(scene), tmp_path / "meng.ssp")
     _, ssp_report = run_system(read_ssp(path), source=str(path))
     assert isinstance(scene_report, Report) and type(ssp_report) is Report

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from cosim.engine import Algorithm, Execution, FixedStep
+from cosim.engine import Algorithm, FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.run import run_system
 from cosim.engine.settings import to_strings
 from cosim.engine.ssp import SspError, read_ssp, validate, write_ssp

@@ -174,8 +174,8 @@ def test_the_engine_runs_the_meng_scene_on_fmi3_fmus_as_on_fmi2_at_order_0():
     from cosim.platform.scene import load_scene
     for control in ({}, {"coupling.step_control": "doubling"}):
         scene = load_scene("meng_eq35", {"scene.duration": 0.3, "coupling.order": 0, **control})
-        two, _ = run_scene(scene, progress=False, plots=False)
-        three, report = run_scene(scene.changed({"scene.fmi": 3}), progress=False, plots=False)
+        two, _ = run_scene(scene)
+        three, report = run_scene(scene.changed({"scene.fmi": 3}))
         assert two.dtype.names == three.dtype.names and len(two) == len(three) > 100
         for name in two.dtype.names:
             assert np.array_equal(two[name], three[name]), (control, name)
@@ -232,7 +232,7 @@ def test_a_users_drive_fmu_may_be_fmi3(tmp_path):
                                            '[mechanics]\nparameter_set = "meng2010"\n[coupling]\norder = 0\n'
                                            '[trajectory.z]\noffset = "neutral"\n[trajectory.x]\n'
                                            'sines = [{amplitude = 0.05, frequency = 1.0}]\n')
-        result, report = run_scene(load_scene(folder / "scene.toml"), progress=False, plots=False)
+        result, report = run_scene(load_scene(folder / "scene.toml"))
         assert report.failure is None
         runs.append(result)
     assert runs[0].dtype.names == runs[1].dtype.names

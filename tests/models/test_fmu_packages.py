@@ -13,7 +13,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from cosim.platform.scene.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.engine.artifacts import MODELS, ROOT, fmu_path
 
 SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
@@ -63,7 +63,7 @@ def test_interface_contract(pmsm_fmu):
 
 
 def test_defaults_equal_the_parameter_set(pmsm_fmu):
-    params = load_parameter_set("meng2010")
+    params = read_parameter_set("meng2010")
     variables = {v.name: v for v in read_model_description(str(pmsm_fmu)).modelVariables}
     for name, (section, key) in DEFAULTS_FROM_PARAMS.items():
         assert float(variables[name].start) == pytest.approx(params[section][key], rel=1e-12), name
@@ -77,7 +77,7 @@ def test_defaults_equal_the_parameter_set(pmsm_fmu):
 def test_project_parameter_copies_equal_the_canonical_sets(name):
     with open(SHARED_PARAMS.parent / f"{name}.toml", "rb") as f:
         canonical = tomllib.load(f)
-    assert load_parameter_set(name) == canonical
+    assert read_parameter_set(name) == canonical
 
 
 FMUS = list(MODELS)

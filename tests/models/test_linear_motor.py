@@ -16,13 +16,13 @@ from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
 from drive_bench import RigidInertia
 from cosim.platform.scene.parameter_sets import mechanics_start_values
-from cosim.platform.scene.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.platform.scene import Signal, Sine
 from cosim.platform.scene.signals import trajectory_parameters
 from cosim.platform.ports import POSE
 from conftest import platform_run
 
-MOTOR = load_parameter_set("sumnu2015")["linear_motor"]
+MOTOR = read_parameter_set("sumnu2015")["linear_motor"]
 
 
 @pytest.fixture(scope="module")

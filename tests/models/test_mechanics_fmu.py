@@ -9,7 +9,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from cosim.platform.scene.parameter_sets import load as load_parameter_set
+from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
 from cosim.platform.scene.parameter_sets import mechanics_start_values
@@ -87,7 +87,7 @@ def test_sumnu_platform_loads_as_a_second_set(make_mechanics, dll):
     leg at the length an independent computation gives and motor angles zero; the forces of the
     inverse model hold it there for 1 s."""
     values = mechanics_start_values("sumnu2015")
-    geometry = load_parameter_set("sumnu2015")["geometry"]
+    geometry = read_parameter_set("sumnu2015")["geometry"]
     home = np.array(geometry["home_pose"])
     R = Rotation.from_euler("xyz", home[3:]).as_matrix()
     expected = np.linalg.norm(home[:3] + np.array(geometry["platform_joints"]) @ R.T - np.array(geometry["base_joints"]),

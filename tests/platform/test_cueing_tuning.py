@@ -107,7 +107,7 @@ def test_a_study_carries_a_vehicles_motion_through_the_cueing(tmp_path):
     neutral pose, as the scene with the same cueing plays it (to round-off), at the study's samples."""
     from cosim.platform.design import load_study
     from cosim.platform.run.compile import scene_cueing, scene_values
-    from cosim.platform.scene.signals import play_cueing
+    from cosim.platform.run.alone import play_cueing
     study = load_study(EXAMPLE.parent / "car_platform.toml")
     recorded = study.recorded
     assert len(recorded.times) == 2001 and recorded.times[-1] == pytest.approx(20.0)

@@ -17,7 +17,7 @@ from cosim.platform.design import Study, design_map, load_study, parallel_map, p
 from cosim.platform.design.map import limit_along
 from cosim.platform.design.motion import basic_motions, shortest_time
 from cosim.platform.design.study import stubs
-from cosim.platform.scene.parameter_sets import load
+from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.platform.core import Core
 
 STUDY = ROOT / "studies" / "halder_section5.toml"
@@ -35,7 +35,7 @@ def small(study: Study, rows=(1.0, 1.03, 1.1), columns=(0.9, 1.2, 1.4)) -> Study
 def halder_legs(r_b: float, z: float, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Eqs 1-9 written out again from the paper (independent of parameter_sets and the core):
     per leg the actuated length |T - B|, the top and bottom joint angles, and the leg Jacobian."""
-    g = load("halder2013")["geometry"]
+    g = read_parameter_set("halder2013")["geometry"]
     theta_s = math.radians(g["half_pair_angle_deg"])
     odd_b, even_b = theta_s - math.pi / 3, math.pi / 3 - theta_s
     theta_b = [odd_b, even_b, odd_b + 2 * math.pi / 3, even_b + 2 * math.pi / 3, odd_b + 4 * math.pi / 3,
@@ -317,7 +317,7 @@ def test_a_scenes_motion_as_the_specification():
     from cosim.platform.design.scene_fit import scene_fit
     from cosim.platform.run.compile import scene_values
     from cosim.platform.scene import load_scene
-    from cosim.platform.scene.signals import reference_motion
+    from cosim.platform.run.alone import reference_motion
     scene = load_scene("meng_eq35")
     fit = scene_fit(scene, "geometry.middle_leg_length", np.array([1.80, 1.86]), samples=501)
     _, poses, _ = reference_motion(scene, 501)

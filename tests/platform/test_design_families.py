@@ -16,7 +16,7 @@ from cosim.engine.artifacts import ROOT
 from cosim.platform.design import FAMILIES, design_map, load_study, platform_values
 from cosim.platform.design.motion import basic_motions, shortest_time
 from cosim.platform.design.report import map_rows
-from cosim.platform.scene.parameter_sets import load, sumnu_mechanics
+from cosim.platform.scene.parameter_sets import read_parameter_set, sumnu_mechanics
 from cosim.platform.core import Core
 from cosim.platform.scene import load_scene
 from cosim.platform.scene.signals import sine_motion
@@ -57,7 +57,7 @@ def test_sumnu_family_unscaled_is_the_thesis_platform(tmp_path):
                      '[[actuator]]\nname = "any"\nstroke = 1.0\nrunning_length_min = 0.5\ncontinuous_force = 1e4\n')
     loaded = load_study(study)
     values = platform_values(loaded, {"base_scale": 1.0, "home_height": 1.0})
-    own = sumnu_mechanics(load("sumnu2015"))
+    own = sumnu_mechanics(read_parameter_set("sumnu2015"))
     for key, value in own.items():
         if key.startswith("geometry."):
             assert values[key] == pytest.approx(value, abs=1e-12), key
@@ -204,7 +204,7 @@ def test_a_rotary_actuator_is_given_by_its_motor(meng, tmp_path, capsys):
     forces and speed they stand for. A family without a screw (Sumnu's linear motors) refuses them,
     and a limit given both ways is refused, each in one line naming the file and line."""
     from cosim.cli import main
-    transmission = load("meng2010")["transmission"]
+    transmission = read_parameter_set("meng2010")["transmission"]
     k_ft = transmission["force_torque_coefficient"]
     leg = meng.actuators[0]
     assert leg.continuous_force == pytest.approx(20.1 * k_ft, rel=1e-12)

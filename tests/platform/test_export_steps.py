@@ -18,7 +18,8 @@ from lxml import etree
 
 import cosim
 from cosim.cli import main
-from cosim.engine import Execution, FixedStep
+from cosim.engine import FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.artifacts import ROOT
 from cosim.engine.ssp import NS, PARAMETER_SET, read_ssp
 from cosim.engine.tools import TOOL_MASTERS

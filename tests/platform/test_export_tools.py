@@ -25,7 +25,8 @@ import pytest
 from lxml import etree
 
 import cosim
-from cosim.engine import Execution, FixedStep
+from cosim.engine import FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.artifacts import ROOT
 from cosim.engine.checks import variables
 from cosim.engine.ssp import NS, read_ssp

@@ -40,7 +40,7 @@ def test_a_tenth_of_the_inductance_on_the_l_stable_drive_solver_runs_at_the_macr
     it), the L-stable method does not, and tracking is the nominal scene's."""
     faster = {**BASE.drive_parameters, "motor.inductance_d": 6.9e-4, "motor.inductance_q": 6.9e-4}
     with pytest.raises(RunStopped, match="diverged"):
-        run_scene(BASE.changed({"drive.parameters": {**faster, "solver.step": 2e-4}}), advice=False)
+        run_scene(BASE.changed({"drive.parameters": {**faster, "solver.step": 2e-4}}))
     _, report = run_scene(BASE.changed({"drive.parameters": {**faster, "solver.method": 3, "solver.step": 1e-3}}))
     assert report.largest_error.max() < NOMINAL_ERROR
 
@@ -52,7 +52,7 @@ def test_ten_times_the_loop_gains_is_diagnosed_and_runs_at_the_suggested_step():
              "control.speed_ki": 5805.0}
     scene = BASE.changed({"drive.parameters": {**BASE.drive_parameters, **gains}, "scene.duration": 2.0})
     with pytest.raises(RunStopped) as failed:
-        run_scene(scene)
+        run_scene(scene, advice=True)
     assert "the coupling diverged" in failed.value.report.failure and "a probe at 0.25 ms ran stable" in failed.value.report.failure
     assert failed.value.result["time"][-1] < 1.0
     _, report = run_scene(scene.changed({"scene.step": 0.25e-3, "scene.duration": 1.0}))

@@ -24,7 +24,7 @@ def test_a_shipped_scene_on_fmi3_fmus_holds_its_tolerances_at_its_defaults(name)
     scene = cosim.load(name, {"scene.fmi": 3})
     assert scene.step == pytest.approx(cosim.load(name).step / FMI3_REFINE, rel=1e-12)
     duration = probe_duration(scene)
-    result, report = run_scene(scene.changed({"scene.duration": duration}), progress=False, plots=False, advice=False)
+    result, report = run_scene(scene.changed({"scene.duration": duration}))
     judgement = judge(scene, result, converged(scene, duration))
     assert judgement.within, judgement
     assert any(remark.startswith("FMI 3.0: the FMUs take no input derivatives") for remark in report.remarks)

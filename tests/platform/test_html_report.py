@@ -32,7 +32,7 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
 def page(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.0})
-    result, report = run_scene(scene, out)
+    result, report = run_scene(scene, out, plots=True)
     return out / "meng_eq35.html", report, result, out
 
 
@@ -88,7 +88,7 @@ def test_a_failed_run_says_where_and_why_it_stopped(tmp_path):
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 1.0,
                                                            'mechanics.parameters."limit.hard_stop"': True})
     with pytest.raises(RunStopped):
-        run_scene(scene, tmp_path / "out")
+        run_scene(scene, tmp_path / "out", plots=True)
     page = (tmp_path / "out" / "meng_eq35.html").read_text()
     assert '<div class="failure" data-name="failure"><h2>The run stopped</h2>' in page
     assert "mechanics: fmi2DoStep failed at t = 0.63" in page and "stroke" in page

@@ -97,9 +97,9 @@ def test_the_interface_jacobian_at_2ms_keeps_the_pose_within_1e_5_and_the_torque
     from cosim.platform.run.accuracy import difference
     torques, poses = [f"torque[{i}]" for i in range(1, 7)], [f"pose.{a}" for a in POSE]
     reference, _ = run_scene(paper_scene("meng_eq35", {
-        "scene.duration": 3.0, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
-    fast, report = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0, **INTERFACE_JACOBIAN_2MS}), plots=False)
-    _, shipped = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0}), plots=False)
+        "scene.duration": 3.0, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
+    fast, report = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0, **INTERFACE_JACOBIAN_2MS}))
+    _, shipped = run_scene(paper_scene("meng_eq35", {"scene.duration": 3.0}))
     peak = max(np.abs(reference[n]).max() for n in torques)
     assert difference(fast, reference, poses) < 1e-5
     assert difference(fast, reference, torques) / peak < 0.01
@@ -116,7 +116,7 @@ def test_with_the_interface_jacobian_the_recorded_torque_is_the_one_the_legs_fee
     from cosim.platform.ports import per_leg
     scene = paper_scene("meng_eq35", {
         **INTERFACE_JACOBIAN_2MS, "scene.duration": 0.3, "outputs.mechanics": ["power.drive", *(f"leg[{i}].speed" for i in range(1, 7))]})
-    result, _ = run_scene(scene, plots=False, progress=False)
+    result, _ = run_scene(scene)
     applied = np.column_stack([result[c] for c in per_leg("torque_applied")])
     speed = np.column_stack([result[f"leg[{i}].speed"] for i in range(1, 7)])
     np.testing.assert_allclose(result["power.drive"], np.sum(applied * speed, axis=1), rtol=1e-12, atol=1e-9)
@@ -125,7 +125,7 @@ def test_with_the_interface_jacobian_the_recorded_torque_is_the_one_the_legs_fee
     plain = paper_scene("meng_eq35", {
         **INTERFACE_JACOBIAN_2MS, "scene.duration": 0.3, "scene.step": 1e-3, "coupling.interface_jacobian": False,
         "outputs.mechanics": [f"leg[{i}].torque_applied" for i in range(1, 7)]})
-    plain_result, _ = run_scene(plain, plots=False, progress=False)
+    plain_result, _ = run_scene(plain)
     for i in range(1, 7):  # the drive's new sample, interpolated to its own time: equal to round-off
         np.testing.assert_allclose(plain_result[f"leg[{i}].torque_applied"], plain_result[f"torque[{i}]"], rtol=1e-12,
                                    atol=1e-12)

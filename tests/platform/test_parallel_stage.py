@@ -27,7 +27,7 @@ def test_two_threads_give_the_results_of_one_bit_for_bit():
     runs = {}
     for threads in (1, 2):
         scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.0, "coupling.threads": threads})
-        runs[threads] = run_scene(scene, plots=False)
+        runs[threads] = run_scene(scene)
     (one, report_one), (two, report_two) = runs[1], runs[2]
     assert one.dtype.names == two.dtype.names and len(one) == len(two) > 2000
     for name in one.dtype.names:  # through the start-up, the finer start and the impact at 2.5 s

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from cosim.cli import main
-from cosim.engine import Algorithm, Execution, FixedStep
+from cosim.engine import Algorithm, FixedStep
+from cosim.engine.execution import Execution
 from cosim.engine.artifacts import ROOT
 from cosim.engine.ssp import PARAMETER_SET, read_ssp
 from conftest import paper_scene

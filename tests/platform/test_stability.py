@@ -94,7 +94,7 @@ def test_a_diverging_run_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
     scene = paper_scene("meng_eq35", {"scene.duration": 1.0, "load.pulses": [],
                                       "mechanics.parameters": {"effects.motor_inertia": False}})
     with pytest.raises(RunStopped) as failed:
-        run_scene(scene, out=tmp_path, plots=False)
+        run_scene(scene, out=tmp_path, advice=True)
     message = failed.value.report.failure
     assert "the coupling diverged" in message and "-> mechanics.leg[" in message and "a probe at 0.25 ms ran stable" in message and "try a step of 0.25 ms" in message
     assert 0 < failed.value.result["time"][-1] < 0.5
@@ -125,7 +125,7 @@ def test_the_slopes_work_shows_in_the_energy_residual():
     runs = {}
     for interface_jacobian in (False, True):
         runs[interface_jacobian] = run_scene(paper_scene("meng_eq35", {
-            "scene.duration": 0.3, "coupling.interface_jacobian": interface_jacobian}), plots=False)
+            "scene.duration": 0.3, "coupling.interface_jacobian": interface_jacobian}))
     plain, slopes = runs[False][1].largest_energy_residual, runs[True][1].largest_energy_residual
     assert 5 * plain < slopes < 20 * plain, (plain, slopes)
     assert max(np.abs(runs[True][0][f"pose.{a}"] - runs[False][0][f"pose.{a}"]).max()
@@ -144,8 +144,8 @@ def test_under_the_interface_jacobian_the_mechanics_needs_rk4_at_2ms():
     heun = load_scene("meng_eq35", numerics)
     assert heun.mechanics_parameters["solver.method"] == 5
     with pytest.raises(RunStopped, match="diverged"):
-        run_scene(heun, plots=False)
-    _, report = run_scene(load_scene("meng_eq35", {**numerics, 'mechanics.parameters."solver.method"': 1}), plots=False)
+        run_scene(heun)
+    _, report = run_scene(load_scene("meng_eq35", {**numerics, 'mechanics.parameters."solver.method"': 1}))
     assert report.macro_steps > 0
     point = _point(load_scene("meng_eq35"), 2.0, (), "averaged inverter", True, False)
     assert point['mechanics.parameters."solver.method"'] == 1

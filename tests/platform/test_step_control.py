@@ -13,7 +13,7 @@ from conftest import INTERFACE_JACOBIAN_2MS, paper_scene
 from cosim.platform.scene import SceneError, load_scene
 from cosim.platform.ports import POSE
 from cosim.engine import DivergenceMonitor
-from cosim.engine.outcome import execute
+from cosim.engine.run import execute
 
 
 def pose_difference(result, reference) -> float:
@@ -103,7 +103,7 @@ def start_reference():
     peak. Its difference to the run at an eighth, 0.48 % of the peak torque and 1e-6 in pose,
     bounds its own error (Gauss-Seidel order 1 converges at first order)."""
     reference, _ = run_scene(paper_scene("meng_eq35",
-                                        {**START, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
+                                        {**START, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
     return reference, max(np.abs(reference[n]).max() for n in TORQUES)
 
 
@@ -114,12 +114,11 @@ def test_a_finer_start_resolves_the_drives_start_up_shock(start_reference):
     of their peak and the pose within 2e-6, for 7 % more macro steps over the 10 s scene."""
     from cosim.platform.run.accuracy import difference
     reference, peak = start_reference
-    plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}),
-                         plots=False)
+    plain, _ = run_scene(paper_scene("meng_eq35", {**START, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
     error, when = difference(plain, reference, TORQUES, with_time=True)
     assert error / peak > 0.15 and when < 5e-3
     assert difference(plain, reference, POSES) > 1e-5
-    fine, report = run_scene(paper_scene("meng_eq35", START), plots=False)
+    fine, report = run_scene(paper_scene("meng_eq35", START))
     assert report.macro_steps == 100 * 8 + 400  # 0.1 s at 0.125 ms, then 0.4 s at 1 ms
     assert difference(fine, reference, TORQUES) / peak < 0.01
     assert difference(fine, reference, POSES) < 2e-6
@@ -134,10 +133,10 @@ def test_drives_on_the_l_stable_solver_at_the_macro_step_need_a_sixteenth_at_the
     from cosim.platform.run.accuracy import difference
     reference, peak = start_reference
     rosenbrock = {**START, 'drive.parameters."solver.method"': 3, 'drive.parameters."solver.step"': 1e-3}
-    eighth, _ = run_scene(paper_scene("meng_eq35", rosenbrock), plots=False)
+    eighth, _ = run_scene(paper_scene("meng_eq35", rosenbrock))
     assert difference(eighth, reference, TORQUES) / peak > 0.01
     sixteenth, _ = run_scene(paper_scene("meng_eq35",
-                                        {**rosenbrock, "coupling.startup_step": 6.25e-5}), plots=False)
+                                        {**rosenbrock, "coupling.startup_step": 6.25e-5}))
     assert difference(sixteenth, reference, TORQUES) / peak < 0.01
     assert difference(sixteenth, reference, POSES) < 2e-6
 
@@ -177,7 +176,7 @@ def impact_reference():
     """The Meng scene's first 0.45 s with Eq 36's impact moved to 0.3 s, at a sixteenth of the
     step throughout, and its torque peak after the start (the start is another test's)."""
     reference, _ = run_scene(paper_scene("meng_eq35",
-                                        {**IMPACT, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
+                                        {**IMPACT, "scene.step": 6.25e-5, "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
     late = reference["time"] > 0.1
     return reference, max(np.abs(reference[n][late]).max() for n in TORQUES)
 
@@ -194,7 +193,7 @@ def test_finer_steps_after_the_loads_edges_resolve_the_drives_answer_to_an_impac
     errors, steps = {}, {}
     for edge_time in (0.0, 0.02):
         result, report = run_scene(paper_scene("meng_eq35",
-                                              {**settings, "coupling.edge_time": edge_time}), plots=False)
+                                              {**settings, "coupling.edge_time": edge_time}))
         errors[edge_time] = difference(result[result["time"] > 0.1], reference, TORQUES) / peak
         steps[edge_time] = report.macro_steps
     assert errors[0.0] > 0.02 and errors[0.02] < 0.01, errors
@@ -222,8 +221,7 @@ def test_a_return_from_the_finer_step_leaves_no_kick():
     quiet = {"scene.duration": 1.7, "load.pulses": [{"component": "force.x", "value": 0.0, "start": 1.5, "end": 1.52,
                                                      "frame": "base"}]}
     runs = {edge_time: run_scene(paper_scene("meng_eq35",
-                                            {**INTERFACE_JACOBIAN_2MS, **quiet, "coupling.edge_time": edge_time}),
-                                 plots=False)[0]
+                                            {**INTERFACE_JACOBIAN_2MS, **quiet, "coupling.edge_time": edge_time}))[0]
             for edge_time in (0.0, 0.02)}
     plain, window = runs[0.0], runs[0.02]
     after = window["time"] > 1.54

@@ -29,7 +29,7 @@ def quoted(errors: np.ndarray) -> str:
 
 @pytest.fixture(scope="module")
 def runs():
-    return {name: run_scene(load_scene(ROOT / "scenes" / f"{name}.toml"), plots=False) for name in SWAPPED}
+    return {name: run_scene(load_scene(ROOT / "scenes" / f"{name}.toml")) for name in SWAPPED}
 
 
 @pytest.mark.parametrize("name", SWAPPED)
@@ -84,8 +84,8 @@ def test_sumnu_parameters_stand_alone_without_mengs_motor_systems():
     scene = load_scene(ROOT / "scenes" / "sumnu_case_1.toml", {"scene.duration": 0.3})
     on = load_scene(ROOT / "scenes" / "sumnu_case_1.toml",
                     {"scene.duration": 0.3, 'mechanics.parameters."effects.motor_inertia"': True})
-    a, _ = run_scene(scene, plots=False)
-    b, _ = run_scene(on, plots=False)
+    a, _ = run_scene(scene)
+    b, _ = run_scene(on)
     assert np.abs(a["pose.z"] - b["pose.z"]).max() < 1e-12  # the switch adds nothing: no motor on these legs
 
 
@@ -101,14 +101,14 @@ def test_the_fast_numerics_on_linear_motors_need_a_longer_finer_start():
     path, forces = ROOT / "scenes" / "meng_eq35_linear.toml", [f"force[{i}]" for i in range(1, 7)]
     poses = [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 3.0, "scene.step": 6.25e-5,
-                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
+                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
     peak = max(np.abs(reference[n]).max() for n in forces)
-    shipped, _ = run_scene(load_scene(path, {"scene.duration": 3.0}), plots=False)
+    shipped, _ = run_scene(load_scene(path, {"scene.duration": 3.0}))
     fast = {"scene.duration": 3.0, "scene.step": 2e-3, "coupling.interface_jacobian": True, "coupling.edge_time": 0.02,
             'drive.parameters."solver.step"': 2e-4, 'mechanics.parameters."solver.step"': 2e-3,
             'mechanics.parameters."solver.method"': 1}  # RK4, as measured
-    short, _ = run_scene(load_scene(path, fast), plots=False)
-    longer, _ = run_scene(load_scene(path, {**fast, "coupling.startup_time": 0.2}), plots=False)
+    short, _ = run_scene(load_scene(path, fast))
+    longer, _ = run_scene(load_scene(path, {**fast, "coupling.startup_time": 0.2}))
     assert difference(short, reference, poses) > 2 * difference(shipped, reference, poses)
     assert difference(short, reference, forces) / peak > 0.05 > 2 * difference(shipped, reference, forces) / peak
     assert difference(longer, reference, poses) < 1e-5 and difference(longer, reference, forces) / peak < 0.01
@@ -124,9 +124,9 @@ def test_meng_on_linear_motors_converges_at_second_order():
     from cosim.platform.run.accuracy import difference
     path, poses = ROOT / "scenes" / "meng_eq35_linear.toml", [f"pose.{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
     reference, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": 6.25e-5,
-                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}), plots=False)
+                                               "coupling.startup_time": 0.0, "coupling.edge_time": 0.0}))
     errors = {}
     for step in (1e-3, 5e-4):
-        result, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": step}), plots=False)
+        result, _ = run_scene(load_scene(path, {"scene.duration": 2.0, "scene.step": step}))
         errors[step] = difference(result[result["time"] >= 0.5], reference, poses)
     assert errors[1e-3] > 3 * errors[5e-4] and errors[1e-3] < 1e-6, errors

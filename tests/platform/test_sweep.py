@@ -83,8 +83,7 @@ def test_a_sweep_on_a_local_cluster_gives_the_rows_of_the_same_points_run_in_one
     from cosim.platform.run.runner import run_scene
     from cosim.platform.scene import load_scene
     result, report = run_scene(load_scene(SCENE, {**FIXED, "scene.duration": 0.2, "scene.step": 1e-3,
-                                                  "coupling.order": 1}),
-                               plots=False)
+                                                  "coupling.order": 1}))
     point = next(r for r in rows if r["scene.step"] == 1e-3 and r["coupling.order"] == 1)
     assert point["tracking_error.z"] == report.largest_error[2]
     assert point["peak_effort[3]"] == np.abs(result["torque[3]"]).max()

@@ -99,7 +99,7 @@ def test_a_users_servo_holds_each_leg_with_its_own_stiffness(kind, fmus, tmp_pat
     pd = {} if linear else {"ki": 0.0}  # the rotary servo's integral off: a pure stiffness at rest
     scene = load_scene(scene_file(tmp_path, drive_section(fmu, tmp_path, "linear" if linear else "pmsm", **pd)))
     assert scene.drive == ("linear" if linear else "pmsm") and scene.drive_fmu == (tmp_path / fmu.name).resolve()
-    result, report = run_scene(scene, plots=False)
+    result, report = run_scene(scene)
     assert report.failure is None
     stiffness = gains("linear" if linear else "pmsm")["kp"]
     plants = plant("linear" if linear else "pmsm")
@@ -134,14 +134,13 @@ def test_a_users_servo_tracks_eq35_and_mixes_with_ours(fmus, tmp_path):
     assert fmus_of["pmsm3"] == "rotary_servo.fmu" and fmus_of["pmsm2"] == "pmsm_drive.fmu"
     assert "initial.current_q" in next(c for c in structure.components if c.name == "pmsm2").parameters
     assert next(c for c in structure.components if c.name == "pmsm3").parameters == values
-    result, report = run_scene(scene, plots=False)
+    result, report = run_scene(scene)
     assert report.failure is None
     compliance = plant("pmsm")[2].static_force / plant("pmsm")[2].force_torque / values["kp"] / \
         plant("pmsm")[2].screw_ratio  # [m] of leg 3
     late = result["time"] >= 0.3
     assert np.abs(result["leg[3].length_ref"] - result["leg[3].length"])[late].max() < compliance
-    ours = run_scene(load_scene(scene_file(tmp_path, '[drive]\nkind = "pmsm"', motion=True, duration=3.0)),
-                     plots=False)[0]
+    ours = run_scene(load_scene(scene_file(tmp_path, '[drive]\nkind = "pmsm"', motion=True, duration=3.0)))[0]
     def leg_errors(run):
         return [np.abs(run[f"leg[{i}].length_ref"] - run[f"leg[{i}].length"])[late].max() for i in LEGS]
     assert max(leg_errors(result)) < max(leg_errors(ours)) + compliance, (leg_errors(result), leg_errors(ours))
@@ -152,7 +151,7 @@ def test_a_users_servo_tracks_eq35_and_mixes_with_ours(fmus, tmp_path):
 def test_the_ssp_export_carries_the_users_fmu_and_runs_bit_for_bit(fmus, tmp_path, capsys):
     scene = load_scene(scene_file(tmp_path, drive_section(fmus["rotary_servo"], tmp_path, "pmsm"), motion=True,
                                   duration=0.5))
-    result, _ = run_scene(scene, plots=False)
+    result, _ = run_scene(scene)
     path = write_ssp(scene_structure(scene), tmp_path / "user.ssp")
     with zipfile.ZipFile(path) as archive:
         assert "resources/rotary_servo.fmu" in archive.namelist()
@@ -190,7 +189,7 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     # the linear servo keeps its state (pythonfmu --handle-state): step doubling rolls it back
     linear = drive_section(fmus["linear_servo"], tmp_path, "linear")
     scene = load_scene(scene_file(tmp_path, linear, duration=0.3, extra='[coupling]\nstep_control = "doubling"'))
-    result, report = run_scene(scene, plots=False)
+    result, report = run_scene(scene)
     assert report.failure is None and result["time"][-1] == pytest.approx(0.3)
     # one step size only: a finer start is refused, the plain fixed step runs
     edited(fmus["linear_servo"], tmp_path, "fixed_step", lambda t: t.replace(
@@ -199,9 +198,9 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     with pytest.raises(SceneError, match=r"'coupling.startup_time' is refused: fixed_step.fmu \(drive.fmu\) takes one "
                                          r"communication step size only"):
         load_scene(scene_file(tmp_path, one_step, extra="[coupling]\nstartup_time = 0.1\nstartup_step = 1e-4"))
-    assert run_scene(load_scene(scene_file(tmp_path, one_step, duration=0.1)), plots=False)[1].failure is None
+    assert run_scene(load_scene(scene_file(tmp_path, one_step, duration=0.1)))[1].failure is None
     # no input derivatives to a drive that cannot interpolate its inputs (pythonfmu's): the coupling holds them
-    from cosim.engine import Execution
+    from cosim.engine.execution import Execution
     scene = load_scene(scene_file(tmp_path, linear, duration=0.1))
     with Execution(scene_structure(scene), scene.algorithm, scene.control) as execution:
         assert execution.coupling.interpolating["linear1"] is False
@@ -211,7 +210,7 @@ def test_what_the_fmu_cannot_do_the_master_does_not(fmus, tmp_path):
     structure = scene_structure(scene)
     assert all(b.slope is None for b in structure.bonds)
     assert any(c.target == ("linear1", "velocity_ref") for c in structure.connections)  # its optional input, wired
-    assert "no interface Jacobian (no output 'force_velocity_slope')" in run_scene(scene, plots=False)[1].text()
+    assert "no interface Jacobian (no output 'force_velocity_slope')" in run_scene(scene)[1].text()
 
 
 def test_the_sizing_check_holds_a_users_drive_to_the_limit_it_names(fmus, tmp_path):

@@ -43,7 +43,7 @@ def test_every_layout_draws_the_platform_the_fmu_simulates(parameter_set):
 def meng_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("view")
     scene = load_scene(ROOT / "scenes" / "meng_eq35.toml", {"scene.duration": 3.0})
-    result, report = run_scene(scene, out, progress=False)
+    result, report = run_scene(scene, out, plots=True)
     return scene, result, report, out
 
 

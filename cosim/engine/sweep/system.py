@@ -79,7 +79,7 @@ class SystemPoint:
         with self.structure() as read:
             try:
                 result, report = run_system(self._with(read, values), self._settings(values), self.stop_time,
-                                            source=self.path, advice=False)
+                                            source=self.path)
                 status, message = "ok", ""
             except RunStopped as failed:
                 result, report = failed.result, failed.report

@@ -151,8 +151,7 @@ def _closed_loop(kind: str, ours: bool, values: dict, drive_values: dict, neutra
     structure = platform_structure(kind, values, drive_values, trajectory, leg_values=legs, interface_jacobian=ours)
     control = FixedStep(step, 0.1, step / 16, ((HOLD - step, HOLD + 0.02),)) if ours else FixedStep(step)
     record = columns(kind, drive_outputs=EFFORT_CURRENT[kind], applied=ours)
-    result, _ = run(Plan(structure, platform_algorithm(kind), control, duration, *record, clock="mechanics"),
-                    advice=False)
+    result, _ = run(Plan(structure, platform_algorithm(kind), control, duration, *record, clock="mechanics"))
     return result
 
 

@@ -28,7 +28,7 @@ from ..run.compile import scene_cueing, scene_values
 from ..run.errors import BUILD_ERRORS, scene_error
 from ..run.runner import cueing_value, run_scene
 from ..scene import Scene
-from ..scene.signals import play_cueing
+from ..run.alone import play_cueing
 from .optimise import evolve
 
 # searched where the scene's [cueing.tune] names no ranges: the horizontal channels and the tilt,
@@ -164,7 +164,7 @@ def confirm(scene: Scene, parameters: dict[str, float]) -> Judged:
     platform's simulated motion felt at the head; the legs' lengths and joint angles at its
     simulated poses (the dynamics core), the drives' currents as they ran."""
     tuned = scene.changed({"cueing.parameters": {**scene.cueing_parameters, **parameters}})
-    result, report = run_scene(tuned, plots=False, progress=False, advice=False)
+    result, report = run_scene(tuned)
     core = _core(scene)
     keep = np.r_[True, np.diff(result["time"]) > 0]
     kinematics = core.pose_kinematics(np.column_stack([result[f"pose.{a}"] for a in POSE])[keep])

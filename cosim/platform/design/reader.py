@@ -327,7 +327,8 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int, cuei
     from ..core import neutral_pose
     from ..run.compile import scene_values
     from ..scene import SceneError, Signal, load_scene, shipped
-    from ..scene.signals import play, scene_trajectory, trajectory_parameters
+    from ..run.alone import play
+    from ..scene.signals import scene_trajectory, trajectory_parameters
     given = study_path.parent / source
     if kind == "scene":
         found = given if given.is_file() else shipped(source, "scenes")
@@ -370,7 +371,7 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int, cuei
 def _through_cueing(vehicle: Path, cueing: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray]:
     """A vehicle's motion through the cueing FMU (its neutral pose at zero: the pose reference is
     the displacement), played at 1 ms (or `step`, if finer) and taken at every `step`."""
-    from ..scene.signals import play_cueing
+    from ..run.alone import play_cueing
     values = {**cueing, "vehicle.file": vehicle.resolve(), **{f"neutral.{a}": 0.0 for a in POSE}}
     fine = min(step, 1e-3)
     times, poses, _, _ = play_cueing(values, duration, fine)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core import Core, mechanics_value
 from ..scene import Scene
-from ..scene.signals import reference_motion
+from ..run.alone import reference_motion
 
 
 @dataclass

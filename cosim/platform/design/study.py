@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..scene.parameter_sets import halder_mechanics, load, meng_mechanics, sumnu_mechanics
+from ..scene.parameter_sets import halder_mechanics, read_parameter_set, meng_mechanics, sumnu_mechanics
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 ROTATIONS = ("roll", "pitch", "yaw")
@@ -333,9 +333,9 @@ _SETS: dict[str, dict] = {}
 
 
 def parameter_set(name: str) -> dict:
-    """The parameter set, read once per process (a map reads it at every grid point)."""
+    """The parameter set, shared unchanged (a map reads it at every grid point)."""
     if name not in _SETS:
-        _SETS[name] = copy.deepcopy(load(name))
+        _SETS[name] = read_parameter_set(name)
     return _SETS[name]
 
 

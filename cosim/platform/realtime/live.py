@@ -20,7 +20,7 @@ from ...engine.realtime import LiveInput, RealTime
 from ...engine.run import Plan
 from ..core import Core
 from ..ports import DRIVES, LEGS, POSE, per_leg
-from ..run.compile import drive_fmus, scene_cueing, scene_record, scene_values
+from ..run.compile import CompiledScene, drive_fmus, scene_cueing, scene_record
 from ..run.system import pose_source
 from ..scene import Scene
 from .envelope import GUARD_KINDS, Envelope, check_reference
@@ -37,14 +37,14 @@ def stream_names(scene: Scene, recorded: list[str]) -> list[str]:
             *(f"leg[{i}].{o}" for o in LEG_OUTPUTS for i in LEGS), *drive]
 
 
-def real_time_plan(scene: Scene, plan: Plan, factor: float | None = 1.0, stream: str | None = None,
+def real_time_plan(compiled: CompiledScene, factor: float | None = 1.0, stream: str | None = None,
                    listen: str | None = None, key: bytes | None = None) -> tuple[Plan, str | None]:
-    """The scene's plan paced at `factor` (None: unpaced), streamed to `stream` and driven through
+    """The compiled scene's plan paced at `factor` (None: unpaced), streamed to `stream` and driven through
     `listen` (addresses udp://HOST:PORT; its datagrams tagged with `key` if given): the legs'
     lengths and rates recorded as well when it streams. Paced or listening, the scene's own
     reference is checked against the platform's envelope: returned beside the plan, what the run
     says before it starts of one that leaves it (None if it stays inside)."""
-    mechanics_values = scene_values(scene)[0]
+    scene, mechanics_values, plan = compiled.scene, compiled.mechanics, compiled.plan
     record, names = list(plan.record), list(plan.names)
     if stream:
         for output in LEG_OUTPUTS:
@@ -61,7 +61,8 @@ def real_time_plan(scene: Scene, plan: Plan, factor: float | None = 1.0, stream:
 def check_scene_reference(scene: Scene, mechanics_values: dict) -> str | None:
     """The scene's own reference (its trajectory or its cueing, run alone at the scene's step)
     against the platform's envelope (envelope.check_reference)."""
-    from ..scene.signals import play, play_cueing, scene_trajectory
+    from ..run.alone import play, play_cueing
+    from ..scene.signals import scene_trajectory
     if scene.vehicle is not None:
         times, poses = play_cueing(scene_cueing(scene, mechanics_values), scene.duration, scene.step)[:2]
     else:

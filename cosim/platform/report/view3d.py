@@ -24,7 +24,6 @@ from scipy.spatial.transform import Rotation
 from ...engine.files import write_text
 from ..core import Core, mechanics_value
 from ..ports import POSE
-from ..scene.signals import reference_motion
 
 MAX_FRAMES = 200
 CAMERAS = {"iso": dict(x=1.6, y=-1.6, z=1.1), "front": dict(x=0.0, y=-2.4, z=0.4),
@@ -254,16 +253,21 @@ def extremes(geometry: Geometry, f: Frames) -> list[str]:
     return lines
 
 
-def write_view(scene, values: Mapping[str, object], path) -> tuple[object, list[str]]:
+def view_samples(duration: float) -> int:
+    """How many frames a view of a motion this long shows: one per 20 ms, at most MAX_FRAMES."""
+    return max(2, min(MAX_FRAMES, int(duration / 0.02) + 1))
+
+
+def write_view(scene, values: Mapping[str, object], motion: tuple[np.ndarray, np.ndarray, np.ndarray],
+               path) -> tuple[object, list[str]]:
     """`python -m cosim view SCENE`: the platform following the scene's reference motion (no
-    co-simulation: the pose is the reference), as a self-contained page; returns its path and the
-    extremes per leg."""
+    co-simulation: the pose is the reference; `motion`: times, poses and base-frame load forces at
+    view_samples), as a self-contained page; returns its path and the extremes per leg."""
     import html
     from pathlib import Path
     from plotly.offline import get_plotlyjs
     geometry = Geometry.of(values)
-    frames_most = max(2, min(MAX_FRAMES, int(scene.duration / 0.02) + 1))
-    time, pose, force = reference_motion(scene, frames_most)
+    time, pose, force = motion
     f = frames(geometry, time, pose, None, force + pulse_forces([p for p in scene.pulses if p.frame == "platform"],
                                                                  time, pose))
     lines = extremes(geometry, f)

@@ -1,14 +1,15 @@
-"""A scene compiled into the platform's system: per leg the drive FMU (ours or the user's) and its
-parameters (designed for the leg's plant where the scene asks, checked against its static load),
-the mechanics' values, the wiring (cosim.platform.run.system), what is recorded, and the engine's
-plan of the run."""
+"""A scene compiled into the platform's system, once per run (`compile_scene`): per leg the drive
+FMU (ours or the user's) and its parameters (designed for the leg's plant where the scene asks,
+checked against its static load), the mechanics' values, the wiring (cosim.platform.run.system),
+what is recorded, and the engine's plan of the run. Everything downstream of a run (its report,
+plots, real-time plan) reads the one `CompiledScene`."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ...engine import Experiment, SystemStructure
+from ...engine import Algorithm, Experiment, SystemStructure
 from ...engine.artifacts import fmu_path
 from ...engine.checks import variables
 from ...engine.run import Plan
@@ -21,18 +22,46 @@ from .system import columns, platform_structure
 from .tuning import SizingError, check_limit, check_sizing, design, hold_currents, leg_plants, summary
 
 
+@dataclass(frozen=True)
+class CompiledScene:
+    """A scene made into its run: the mechanics FMU's values, per leg the drive FMU and its values
+    as run (designed where the scene asks), the designed gains' summary, the notes on the user's
+    drives, the system and the engine's plan."""
+    scene: Scene
+    mechanics: dict
+    fmus: list[Path]
+    legs: list[dict]
+    tuning: str | None
+    notes: list[str]
+    structure: SystemStructure
+    plan: Plan
+
+
+def compile_scene(scene: Scene) -> CompiledScene:
+    """The scene compiled: its values read and its drives designed once, its system and plan made
+    from them. Raises what scene_design and the wiring raise (a SceneError, an engine error that
+    cosim.platform.run.errors maps to the scene's line)."""
+    mechanics, drives = scene_values(scene)
+    fmus = drive_fmus(scene)
+    legs, tuning, notes = scene_design(scene, (mechanics, drives), fmus)
+    record, algorithm = scene_record(scene, fmus), scene_algorithm(scene)
+    structure = _wire(scene, legs, mechanics, fmus, record, algorithm)
+    plan = Plan(structure, algorithm, scene.control, scene.duration, *record, scene.output_interval, clock="mechanics")
+    return CompiledScene(scene, mechanics, fmus, legs, tuning, notes, structure, plan)
+
+
 def drive_fmus(scene: Scene) -> list[Path]:
     """Per leg, the drive FMU: the user's where the scene names one, ours for its kind otherwise."""
     return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu, fmi=scene.fmi) for leg in LEGS]
 
 
-def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
+def scene_record(scene: Scene, fmus: list[Path] | None = None) -> tuple[list[tuple[str, str]], list[str]]:
     """What the scene records: its [outputs], or by default the drive kind's effort, flow and
-    current (the current where every leg's drive FMU has it)."""
+    current (the current where every leg's drive FMU has it; fmus: the legs' drive FMUs, if known)."""
     if scene.outputs_drive is not None:
         drive_outputs = scene.outputs_drive
     else:
-        has = [variables(fmu) for fmu in set(drive_fmus(scene))]
+        has = [variables(fmu) for fmu in set(fmus or drive_fmus(scene))]
         drive_outputs = [n for n in DRIVES[scene.drive].outputs if all(n in found for found in has)]
     return columns(scene.drive, scene.outputs_mechanics, drive_outputs, applied=scene.interface_jacobian,
                    cueing=scene.vehicle is not None)
@@ -41,23 +70,26 @@ def scene_record(scene: Scene) -> tuple[list[tuple[str, str]], list[str]]:
 def scene_values(scene: Scene) -> tuple[dict, dict]:
     """The mechanics' and our drives' parameter values: the platform's set, the drive set (a
     drive sized for this platform), then the scene's own, which win."""
-    drive_values = drive_set(scene.drive_set)[0] if scene.drive_set else {}
-    mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, scene.drive_set, scene.mechanics_parameters)
+    drive_values, drive_mechanics = drive_set(scene.drive_set) if scene.drive_set else ({}, {})
+    mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, drive_mechanics, scene.mechanics_parameters)
     return mechanics_values, {**drive_values, **(scene.drive_parameters if scene.drive_fmu is None else {})}
 
 
-def scene_design(scene: Scene) -> tuple[list[dict], str | None, list[str]]:
+def scene_design(scene: Scene, values: tuple[dict, dict] | None = None,
+                 fmus: list[Path] | None = None) -> tuple[list[dict], str | None, list[str]]:
     """Per leg, the drive parameters, with a summary of the designed gains and notes on the
     drives of the user's own. Our drives: designed for the platform (tuning = "auto"), or the
     defaults with the PMSM starting to hold its leg (initial.current_q from the static load,
     unless the scene gives it). A drive FMU of the user's own keeps its own parameters (the
     scene's [drive.parameters] where it is the [drive] FMU, and its leg's). Raises SceneError when
-    a drive cannot hold its leg (sizing: ours always, a user's by its continuous_limit)."""
-    mechanics_values, ours = scene_values(scene)
+    a drive cannot hold its leg (sizing: ours always, a user's by its continuous_limit). values
+    and fmus: scene_values and drive_fmus, where already read."""
+    mechanics_values, ours = values or scene_values(scene)
+    fmus = fmus or drive_fmus(scene)
     plants = leg_plants(mechanics_values)
     legs = [{**({} if leg in scene.leg_fmus else scene.drive_parameters if scene.drive_fmu else ours),
              **scene.leg_parameters.get(leg, {})} for leg in LEGS]
-    own = [k for k, leg in enumerate(LEGS) if scene.leg_fmu(leg) is None]
+    own = [k for k, leg in enumerate(LEGS) if scene.leg_fmu(leg) is None]  # our drives
     try:
         for k in own:
             check_sizing(scene.drive, [plants[k]], legs[k], leg=k + 1)
@@ -109,23 +141,24 @@ def user_drive_notes(scene: Scene) -> list[str]:
     return notes
 
 
-def scene_structure(scene: Scene, designed: list[dict] | None = None) -> SystemStructure:
-    """The scene as a system: FMUs, parameter values, connections, power bonds, experiment, and
-    the settings (algorithm, step control, recorded outputs) as the SSP annotation carries them.
-    designed: the drives' parameters per leg if scene_design was already called."""
-    mechanics_values, _ = scene_values(scene)
-    if designed is None:
-        designed = scene_design(scene)[0]
-    structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=designed,
+def scene_structure(scene: Scene) -> SystemStructure:
+    """The scene's system (compile_scene's), for what needs the system alone (an export, a check)."""
+    return compile_scene(scene).structure
+
+
+def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Path],
+          record: tuple[list[tuple[str, str]], list[str]], algorithm: Algorithm) -> SystemStructure:
+    """The scene as a system: FMUs, parameter values (the drives' per leg as designed),
+    connections, power bonds, experiment, and the settings (algorithm, step control, recorded
+    outputs) as the SSP annotation carries them."""
+    structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=legs,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
-                                   interface_jacobian=scene.interface_jacobian, drive_fmus=drive_fmus(scene),
+                                   interface_jacobian=scene.interface_jacobian, drive_fmus=fmus,
                                    cueing_values=scene_cueing(scene, mechanics_values), fmi=scene.fmi)
-    structure.settings = {**to_strings(scene_algorithm(scene), scene.control),
-                          **output_settings(*scene_record(scene), scene.output_interval)}
+    structure.settings = {**to_strings(algorithm, scene.control), **output_settings(*record, scene.output_interval)}
     if scene.fmi == 3 and scene.algorithm.order > 0:
         # FMI 3.0 FMUs take no input derivatives: the coupling's extrapolation reaches them through their
         # own, from their inputs at the communication points (the reference with its exact rate)
-        from ...engine.checks import variables
         for component in structure.components:
             if "fmi.extrapolate_inputs" in variables(component.fmu):
                 component.parameters.setdefault("fmi.extrapolate_inputs", True)
@@ -142,16 +175,9 @@ def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
     return {"vehicle.file": scene.vehicle, **neutral, **scene.cueing_parameters}
 
 
-def scene_algorithm(scene: Scene):
+def scene_algorithm(scene: Scene) -> Algorithm:
     """The scene's coupling, with the cueing FMU first in a Gauss-Seidel sequence where it has one."""
     algorithm = scene.algorithm
     if scene.vehicle is not None and algorithm.sequence:
         algorithm = replace(algorithm, sequence=("cueing", *algorithm.sequence))
     return algorithm
-
-
-def scene_plan(scene: Scene, structure: SystemStructure) -> Plan:
-    """The engine's plan of the scene's run: its coupling, step control, duration and recording,
-    the results carrying the mechanics' time."""
-    return Plan(structure, scene_algorithm(scene), scene.control, scene.duration, *scene_record(scene),
-                scene.output_interval, clock="mechanics")

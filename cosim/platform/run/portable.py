@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...engine.outcome import execute
+from ...engine.outcome import RunStopped
+from ...engine.run import Plan, run
 from ...engine.settings import Algorithm, FixedStep
 from ...engine.structure import SystemStructure
 from ...engine.tools import FLOOR, ToolMaster, ToolStep, fmi3_lines, largest_steps
@@ -44,17 +45,16 @@ def converged(scene: Scene, duration: float) -> np.ndarray:
     """The scene's converged run over `duration`: its converged twin's (converged_twin)."""
     from .runner import run_scene
     twin = converged_twin(scene).changed({"scene.duration": duration})
-    return run_scene(twin, progress=False, advice=False, plots=False)[0]
+    return run_scene(twin)[0]
 
 
 def start_inputs(structure: SystemStructure, step: float) -> dict[tuple[str, str], float]:
     """Every connected input's value at the start once the outputs are consistent with the inputs
     (the engine's fixed-point sweeps, before a step): (component, input) -> its source's output."""
     sources = sorted({c.source for c in structure.connections})
-    outcome = execute(structure, Algorithm("jacobi", 0), FixedStep(step), step, sources, clock="mechanics")
-    if outcome.failure is not None:
-        raise outcome.failure
-    first = outcome.result[0]
+    result, _ = run(Plan(structure, Algorithm("jacobi", 0), FixedStep(step), step, sources, clock="mechanics",
+                         divergence=None))
+    first = result[0]
     return {c.target: float(first[f"{c.source[0]}.{c.source[1]}"]) for c in structure.connections}
 
 
@@ -99,10 +99,13 @@ def _run(scene: Scene, master: ToolMaster, step: float, duration: float, structu
     """The exported system (`structure`; portable_structure of the scene where not given) under the
     tool's master at `step` for `duration`: its results (the scene's columns; empty where it fails)
     and the stepping's wall time."""
-    record, names = scene_record(scene)
-    outcome = execute(structure or portable_structure(scene)[0], master.algorithm, FixedStep(step), duration,
-                      record, names, clock="mechanics")
-    return outcome.result, outcome.wall
+    plan = Plan(structure or portable_structure(scene)[0], master.algorithm, FixedStep(step), duration,
+                *scene_record(scene), clock="mechanics", divergence=None)
+    try:
+        result, report = run(plan)
+    except RunStopped as stopped:
+        result, report = stopped.result, stopped.report
+    return result, report.wall
 
 
 _MEASURED: dict[tuple, list[ToolStep]] = {}

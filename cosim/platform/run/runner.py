@@ -22,7 +22,7 @@ from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, 
 from ..ports import DRIVES, POSE, per_leg
 from ..report.plots import units
 from ..scene import Scene
-from .compile import scene_design, scene_plan, scene_structure, scene_values
+from .compile import CompiledScene, compile_scene
 from .errors import BUILD_ERRORS, scene_error
 
 # the paper's figures that a scene's plots correspond to, per parameter set
@@ -62,29 +62,30 @@ class RunReport(Report):
         return [*self.remarks, *([self.tuning] if self.tuning else [])]
 
 
-def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progress: bool = True,
-              advice: bool = True, twin: bool = False,
-              adapt: Callable[[Plan], tuple[Plan, str | None]] | None = None) -> tuple[np.ndarray, RunReport]:
+def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progress: bool = False,
+              advice: bool = False, twin: bool = False,
+              adapt: Callable[[CompiledScene], tuple[Plan, str | None]] | None = None) -> tuple[np.ndarray, RunReport]:
     """Runs `scene`; returns the results (fmpy convention) and the report. Writes CSV, .mat, the
     log and (plots) the figures and the interactive report to `out` if given. Raises SceneError
     for a mistake found when the system is built or started, RunStopped (with the partial
     results, also written) when an FMU fails or the coupling diverges. progress: a bar on a
-    terminal; advice: a diverged run probes for a step that holds (both off for a sweep's
-    points); twin: the report judges the run against its converged twin, window by window.
-    adapt: the plan made over (a run in real time: cosim.platform.realtime.real_time_plan), with
-    what the run says of it before it starts (None: nothing)."""
+    terminal; advice: a diverged run probes for a step that holds (all three off unless asked:
+    the command line asks); twin: the report judges the run against its converged twin, window by
+    window. adapt: the compiled scene's plan made over (a run in real time:
+    cosim.platform.realtime.real_time_plan), with what the run says of it before it starts (None:
+    nothing). The scene is compiled once (compile_scene); the report and plots read that."""
     try:
-        designed, tuning, notes = scene_design(scene)
-        plan = scene_plan(scene, scene_structure(scene, designed))
+        compiled = compile_scene(scene)
+        plan, notes = compiled.plan, compiled.notes
         if adapt is not None:
-            plan, remark = adapt(plan)
+            plan, remark = adapt(compiled)
             if remark:
                 notes = [*notes, remark]
                 if progress:  # the command line: before the run starts
                     print(f"note: {remark}", flush=True)
 
         def report(outcome: Outcome, result: np.ndarray) -> RunReport:
-            made = scene_report(scene, result, outcome, tuning)
+            made = scene_report(compiled, result, outcome)
             made.remarks += notes
             if twin and outcome.failure is None and len(result) > 1:
                 made.windows = twin_windows(scene, result)
@@ -92,7 +93,7 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
 
         def figures(result: np.ndarray, made: RunReport, outcome: Outcome, folder: Path) -> None:
             if plots and len(result) > 1:
-                made.html = write_figures(scene, result, made, outcome, folder)
+                made.html = write_figures(compiled, result, made, outcome, folder)
         return run(plan, out, scene.path.stem, progress=progress, advice=advice, report=report, files=figures)
     except BUILD_ERRORS as error:  # before a step: the scene's values, step or outputs
         mapped = scene_error(scene, error)
@@ -101,13 +102,14 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = True, progres
         raise mapped from None
 
 
-def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str | None = None) -> RunReport:
+def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) -> RunReport:
     """The run's report, its tracking error taken over the (thinned) results after the first tenth."""
+    scene = compiled.scene
     late = result["time"] >= 0.1 * scene.duration
     errors = np.array([np.abs(result[f"pose.{a}"] - result[f"pose_ref.{a}"])[late].max() if late.any() else np.nan
                        for a in POSE])
     report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
-                          tuning=tuning, diverged=outcome.diverged)
+                          tuning=compiled.tuning, diverged=outcome.diverged)
     report.name = scene.name
     if scene.fmi == 3 and scene.algorithm.order > 0:
         from ..scene.reader import FMI3_REFINE
@@ -119,15 +121,15 @@ def scene_report(scene: Scene, result: np.ndarray, outcome: Outcome, tuning: str
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
         if len(result) > 3:
-            report.perceived = perceived_motion(scene, result)
+            report.perceived = perceived_motion(scene, compiled.mechanics, result)
             report.remarks += quality_lines(quality(report.perceived))
     return report
 
 
-def perceived_motion(scene: Scene, result: np.ndarray) -> Perceived:
+def perceived_motion(scene: Scene, mechanics_values: dict, result: np.ndarray) -> Perceived:
     """A cueing scene's vehicle and platform motion at the occupant's head ([cueing] head) and
-    what the occupant perceives of each (cosim.platform.perception)."""
-    mechanics_values, _ = scene_values(scene)
+    what the occupant perceives of each (cosim.platform.perception), on the platform of these
+    mechanics values."""
     gravity = np.array([float(mechanics_value(mechanics_values, f"environment.gravity_{a}")) for a in "xyz"])
     times = result["time"]
     keep = np.r_[True, np.diff(times) > 0]
@@ -156,9 +158,11 @@ def tilt_line(scene: Scene, result: np.ndarray) -> str:
             f"in pitch, turning at most {np.degrees(max(rates)):.2f} deg/s (its limit {np.degrees(limit):.2f} deg/s)")
 
 
-def write_figures(scene: Scene, result: np.ndarray, report: RunReport, outcome: Outcome, folder: Path) -> Path:
+def write_figures(compiled: CompiledScene, result: np.ndarray, report: RunReport, outcome: Outcome,
+                  folder: Path) -> Path:
     """The tracking and drive plots (like the paper's figures) and the interactive report, which
     this returns."""
+    scene = compiled.scene
     from ..report.html import write_report
     from ..report.plots import plot_drives, plot_perception, plot_tracking
     effort, speed = DRIVES[scene.drive].outputs[:2]
@@ -174,7 +178,7 @@ def write_figures(scene: Scene, result: np.ndarray, report: RunReport, outcome: 
         plot_drives(result, folder / f"{scene.path.stem}_drives.png", scene.name, effort, speed, units(scene.drive),
                     drives, impacts)
     return write_report(folder / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
-                        outcome.bond_residuals, scene_values(scene)[0])
+                        outcome.bond_residuals, compiled.mechanics)
 
 
 def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, float, float]]:
@@ -184,7 +188,7 @@ def twin_windows(scene: Scene, result: np.ndarray) -> list[tuple[str, float, flo
     own change there."""
     from .accuracy import converged_twin, efforts, window_errors, windows
     twin = converged_twin(scene)
-    reference, _ = run_scene(twin, progress=False, advice=False)
+    reference, _ = run_scene(twin)
     effort = DRIVES[scene.drive].effort[0]
     spans = windows(float(min(result["time"][-1], reference["time"][-1])), scene.pulses)
     poses = {e.window: e.error for e in window_errors(result, reference, [f"pose.{a}" for a in POSE], spans)}

@@ -120,7 +120,7 @@ class ScenePoint:
         from .runner import run_scene
         scene = self.scene(values)
         try:
-            result, report = run_scene(scene, plots=False, progress=False, advice=False)
+            result, report = run_scene(scene)
             status, message = "ok", ""
         except RunStopped as failed:
             result, report = failed.result, failed.report

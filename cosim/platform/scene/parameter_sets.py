@@ -13,6 +13,7 @@ names. A scene that swaps the drive uses the matching set unless it names anothe
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
 
@@ -22,13 +23,21 @@ from ..ports import LEGS, POSE
 PARAMS = ROOT / "params"
 
 
-def load(name: str) -> dict:
+_READ: dict[str, tuple[int, dict]] = {}  # per parameter set, its file's modification time and contents
+
+
+def read_parameter_set(name: str) -> dict:
+    """A parameter set's contents (params/<name>.toml; a copy the caller may change), the file
+    opened once per process while it stays unchanged."""
     path = data_dir("params") / f"{name}.toml"
     if not path.exists():
         known = ", ".join(p.stem for p in sorted(PARAMS.glob("*.toml")))
         raise FileNotFoundError(f"no parameter set '{name}' in {PARAMS} (known: {known})")
-    with open(path, "rb") as f:
-        return tomllib.load(f)
+    modified = path.stat().st_mtime_ns
+    if name not in _READ or _READ[name][0] != modified:
+        with open(path, "rb") as f:
+            _READ[name] = (modified, tomllib.load(f))
+    return copy.deepcopy(_READ[name][1])
 
 
 def meng_mechanics(c: dict) -> dict[str, float]:
@@ -188,21 +197,21 @@ def drive_set_name(platform: str, drive: str) -> str | None:
 
 def drive_set(name: str) -> tuple[dict, dict]:
     """A drive set's (drive FMU values, mechanics FMU values)."""
-    values = load(name)
+    values = read_parameter_set(name)
     unknown = set(values) - {"drive", "mechanics"}
     if unknown:
         raise ValueError(f"params/{name}.toml: a drive set holds [drive] and [mechanics] only, not {sorted(unknown)}")
     return dict(values.get("drive", {})), dict(values.get("mechanics", {}))
 
 
-def scene_mechanics(parameter_set: str, mass_set: str = "heavy", drive_set_name: str | None = None,
+def scene_mechanics(parameter_set: str, mass_set: str = "heavy", drive_mechanics: dict | None = None,
                     parameters: dict | None = None) -> dict[str, object]:
-    """The mechanics FMU's values of a scene: the platform's set, the drive set's [mechanics] (what
-    the drive changes on the legs), then the scene's own, which win. The platform starts at its
+    """The mechanics FMU's values of a scene: the platform's set, the drive set's [mechanics]
+    (`drive_mechanics`: what the drive changes on the legs), then the scene's own, which win. The platform starts at its
     neutral pose wherever none of them gives the start pose: the FMU's default start pose is the
     default layout's neutral, which a changed geometry moves."""
     from ..core import neutral_pose
-    values = {**mechanics_start_values(parameter_set, mass_set), **(drive_set(drive_set_name)[1] if drive_set_name else {}),
+    values = {**mechanics_start_values(parameter_set, mass_set), **(drive_mechanics or {}),
               **(parameters or {})}
     missing = [dof for dof in POSE if f"initial.pose.{dof}" not in values]
     if missing:
@@ -213,7 +222,7 @@ def scene_mechanics(parameter_set: str, mass_set: str = "heavy", drive_set_name:
 
 def mechanics_start_values(name: str, mass_set: str = "heavy") -> dict[str, float]:
     """Start values of the mechanics FMU for parameter set `name` (meng2010, sumnu2015, halder2013)."""
-    c = load(name)
+    c = read_parameter_set(name)
     if name == "meng2010":
         return meng_mechanics(c)
     if name == "sumnu2015":

@@ -183,10 +183,10 @@ def _limits(doc: Document, top: DriveFmu | None, leg_fmus: dict[int, DriveFmu]) 
 
 def _platform(doc: Document, drives: Mapping[str, Any]) -> dict[str, Any]:
     """The platform's parameter set, mass set and the mechanics FMU's values the scene gives."""
-    from .parameter_sets import load as load_parameter_set
+    from .parameter_sets import read_parameter_set
     platform = doc.value("mechanics", "parameter_set")
     mass_set = doc.value("mechanics", "mass_set")
-    known = tuple(load_parameter_set(platform).get("mass_sets", {"heavy": None}))
+    known = tuple(read_parameter_set(platform).get("mass_sets", {"heavy": None}))
     if mass_set not in known:
         raise doc.fail("mechanics.mass_set", f"is not a mass set of {platform} ({', '.join(map(repr, known))})",
                        mass_set)
@@ -346,9 +346,10 @@ def _check_capabilities(doc: Document, scene: Mapping[str, Any]) -> None:
 def _at_neutral(doc: Document, scene: Mapping[str, Any]) -> dict[str, Signal]:
     """The signals with the offsets given as "neutral" at the platform's neutral pose."""
     from ..core import neutral_pose
-    from .parameter_sets import scene_mechanics
+    from .parameter_sets import drive_set, scene_mechanics
     try:
-        pose = neutral_pose(scene_mechanics(scene["parameter_set"], scene["mass_set"], scene["drive_set"],
+        pose = neutral_pose(scene_mechanics(scene["parameter_set"], scene["mass_set"],
+                                            drive_set(scene["drive_set"])[1] if scene["drive_set"] else None,
                                             scene["mechanics_parameters"]))
     except (KeyError, ValueError) as error:
         raise doc.fail(f"trajectory.{scene['neutral'][0]}.offset", f"no neutral pose ({error})", "neutral") from None

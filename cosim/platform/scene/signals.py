@@ -1,6 +1,6 @@
 """The scene's reference pose and external wrench as parameters of the trajectory FMU
-(fmu/trajectory/), which the platform system steps with the other FMUs; and the trajectory FMU
-played alone (`play`), the one evaluation of a scene's signals outside a run."""
+(fmu/trajectory/), which the platform system steps with the other FMUs (played alone:
+cosim.platform.run.alone), and the smooth part of a reference in closed form."""
 
 from __future__ import annotations
 
@@ -9,8 +9,6 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
-from ...engine.outcome import execute
 from .model import Pulse, Scene, Signal
 from .schema import CAPACITY, FRAMES, WRENCH_COMPONENTS
 from ..ports import POSE
@@ -70,46 +68,3 @@ def sine_motion(trajectory: Mapping[str, Signal], t: np.ndarray) -> tuple[np.nda
             rate[:, k] += s.amplitude * w * np.cos(w * t + s.phase)
             acc[:, k] -= s.amplitude * w * w * np.sin(w * t + s.phase)
     return pose, rate, acc
-
-
-def reference_motion(scene: Scene, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The scene's reference pose and base-frame load force at `samples` evenly spaced times over
-    its duration, from its trajectory FMU run alone (the one evaluation of the scene's signals,
-    tables included): times, poses (n x 6), forces (n x 3)."""
-    return play(scene_trajectory(scene), scene.duration, scene.duration / (samples - 1))
-
-
-def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The trajectory FMU with these start values run alone for `duration` at `step`: times,
-    reference poses (n x 6), base-frame load forces (n x 3). Raises what the FMU refuses (a bad
-    table: its file and line) as the engine's error."""
-    alone = SystemStructure("reference", [Component("trajectory", fmu_path("trajectory"), trajectory_values)], [],
-                            experiment=Experiment(0.0, duration, step))
-    names = [*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz")]
-    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("trajectory", n) for n in names])
-    if outcome.failure is not None:
-        raise outcome.failure
-    result = outcome.result
-    return result["time"], np.column_stack([result[f"trajectory.{n}"] for n in names[:6]]), \
-        np.column_stack([result[f"trajectory.{n}"] for n in names[6:]])
-
-
-CUEING_OUTPUTS = (*(f"pose_ref.{a}" for a in POSE), "tilt.roll", "tilt.pitch",
-                  *(f"vehicle.{q}.{a}" for q in ("specific_force", "angular_rate") for a in "xyz"))
-
-
-def play_cueing(cueing_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                                             np.ndarray]:
-    """The cueing FMU with these start values run alone for `duration` at `step` (a vehicle's
-    motion through the classical washout, the platform's response left out): times, the pose
-    reference (n x 6), the tilt (n x 2: roll, pitch) and the vehicle's motion it took (n x 6).
-    Raises what the FMU refuses (a bad vehicle table: its file and line) as the engine's error."""
-    alone = SystemStructure("cueing", [Component("cueing", fmu_path("cueing"), cueing_values)], [],
-                            experiment=Experiment(0.0, duration, step))
-    outcome = execute(alone, Algorithm("jacobi", 0), FixedStep(step), duration, [("cueing", n) for n in CUEING_OUTPUTS])
-    if outcome.failure is not None:
-        raise outcome.failure
-    result = outcome.result
-    columns = [np.column_stack([result[f"cueing.{n}"] for n in names])
-               for names in (CUEING_OUTPUTS[:6], CUEING_OUTPUTS[6:8], CUEING_OUTPUTS[8:])]
-    return (result["time"], *columns)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..report import plots
-from ..scene.parameter_sets import load, mechanics_start_values
+from ..scene.parameter_sets import read_parameter_set, mechanics_start_values
 from ..core import Core
 from ..scene import Pulse, Ramp, Signal, Step
 from ..scene.signals import trajectory_parameters
@@ -92,7 +92,7 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
              angle: float | None = None, step: float = STEP) -> np.ndarray:
     """Results (time, pose_ref.*, pose.*) for one demand and strategy (angle: another basic angle,
     for the stability search). Raises RunStopped if the platform leaves its workspace."""
-    c = load("halder2013")
+    c = read_parameter_set("halder2013")
     values = mechanics_start_values("halder2013")
     neutral = np.array([values[f"geometry.neutral.{a}"] for a in POSE])
     trajectory = _trajectory(demand, case, neutral, angle)
@@ -107,7 +107,7 @@ def run_case(demand: Demand, case: int, duration: float = DURATION, gain_scale: 
     signals = trajectory_parameters(trajectory, [Pulse("force.z", weight, 0.0, 1e9)])
     structure = platform_structure("linear", values, drive, signals, leg_values=legs)
     return run(Plan(structure, platform_algorithm("linear"), FixedStep(step), duration, *columns("linear"),
-                    clock="mechanics"), advice=False)[0]
+                    clock="mechanics"))[0]
 
 
 def stability_threshold(gain_scales=(1.0, 2.0, 4.0, 6.0, 8.0)) -> float:
@@ -144,7 +144,7 @@ def stiffness_balance(delta: float = 1e-5) -> dict:
         for b in range(6):
             H[:, a, b] = (lengths(q0 + e[a] + e[b]) - lengths(q0 + e[a] - e[b]) - lengths(q0 - e[a] + e[b])
                           + lengths(q0 - e[a] - e[b])) / (4 * delta * delta)
-    pd = load("halder2013")["control"]["kp"] * J.T @ J
+    pd = read_parameter_set("halder2013")["control"]["kp"] * J.T @ J
     struts = -np.einsum("i,iab->ab", forces, H)
     return {"leg_force": float(np.mean(forces)), "leg_length": float(np.mean(lengths(q0))),
             "pd": np.diag(pd), "struts": np.diag(struts), "per_dof": -np.diag(struts) / np.diag(pd),
@@ -174,7 +174,7 @@ def coupled_errors(rows: np.ndarray, demand: Demand, neutral_z: float) -> tuple[
 def study(figures: Path | None = None) -> tuple[list[Row], dict]:
     neutral_z = mechanics_start_values("halder2013")["geometry.neutral.z"]
     threshold = stability_threshold()
-    kp = load("halder2013")["control"]["kp"]
+    kp = read_parameter_set("halder2013")["control"]["kp"]
     balance = stiffness_balance()
     rows = [Row("smallest PD gain holding a 1 deg roll step", f"k_p = {kp:g} N/m works", threshold * kp, "N/m",
                 "tried 1, 2, 4, 6, 8 x the paper's gains; below it the payload tips over (see text)"),

@@ -1,0 +1,56 @@
+"""A scene's signal FMUs run alone, through the engine's one run path: the trajectory FMU (`play`,
+the one evaluation of a scene's signals outside a run: its reference pose and load) and the
+cueing FMU (`play_cueing`: a vehicle's motion through the washout, the platform left out)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
+from ...engine.run import Plan, run
+from ..ports import POSE
+from ..scene import Scene
+from ..scene.signals import scene_trajectory
+
+TRAJECTORY_OUTPUTS = (*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz"))
+CUEING_OUTPUTS = (*(f"pose_ref.{a}" for a in POSE), "tilt.roll", "tilt.pitch",
+                  *(f"vehicle.{q}.{a}" for q in ("specific_force", "angular_rate") for a in "xyz"))
+
+
+def alone(name: str, values: dict, duration: float, step: float, outputs: tuple[str, ...]) -> np.ndarray:
+    """One of our FMUs with these start values run alone for `duration` at `step`: its results.
+    Raises what the FMU refuses (a bad table: its file and line) as the engine's error, a run
+    that stops part way as RunStopped."""
+    system = SystemStructure(name, [Component(name, fmu_path(name), values)], [],
+                             experiment=Experiment(0.0, duration, step))
+    return run(Plan(system, Algorithm("jacobi", 0), FixedStep(step), duration, [(name, n) for n in outputs],
+                    divergence=None))[0]
+
+
+def _columns(result: np.ndarray, name: str, outputs: tuple[str, ...]) -> np.ndarray:
+    return np.column_stack([result[f"{name}.{n}"] for n in outputs])
+
+
+def play(trajectory_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The trajectory FMU with these start values run alone for `duration` at `step`: times,
+    reference poses (n x 6), base-frame load forces (n x 3)."""
+    result = alone("trajectory", trajectory_values, duration, step, TRAJECTORY_OUTPUTS)
+    return (result["time"], _columns(result, "trajectory", TRAJECTORY_OUTPUTS[:6]),
+            _columns(result, "trajectory", TRAJECTORY_OUTPUTS[6:]))
+
+
+def reference_motion(scene: Scene, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The scene's reference pose and base-frame load force at `samples` evenly spaced times over
+    its duration, from its trajectory FMU run alone (tables included): times, poses (n x 6),
+    forces (n x 3)."""
+    return play(scene_trajectory(scene), scene.duration, scene.duration / (samples - 1))
+
+
+def play_cueing(cueing_values: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                             np.ndarray]:
+    """The cueing FMU with these start values run alone for `duration` at `step` (a vehicle's
+    motion through the classical washout, the platform's response left out): times, the pose
+    reference (n x 6), the tilt (n x 2: roll, pitch) and the vehicle's motion it took (n x 6)."""
+    result = alone("cueing", cueing_values, duration, step, CUEING_OUTPUTS)
+    return (result["time"], *(_columns(result, "cueing", names)
+                              for names in (CUEING_OUTPUTS[:6], CUEING_OUTPUTS[6:8], CUEING_OUTPUTS[8:])))
