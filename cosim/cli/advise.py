@@ -25,11 +25,11 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..platform.advise import advise, text, write_csv
+    from ..platform.advise import advise, text, write_candidates
     from ..platform.scene import load_scene
     scene = load_scene(args.scene)
     candidates, info = advise(scene, args.tolerance, args.probe, args.effort_tolerance,
                               workers(args), redesign=not args.keep_gains)
     print(text(scene, args.tolerance, candidates, info))
-    print(f"every candidate: {write_csv(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
+    print(f"every candidate: {write_candidates(candidates, args.out / f'{scene.path.stem}_advice.csv')}")
     return 0

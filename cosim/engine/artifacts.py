@@ -80,10 +80,6 @@ def data_dir(name: str) -> Path:
     return path
 
 
-# The FMUs this package builds and ships (build/fmus/, the wheel's data); CMakeLists.txt builds each.
-MODELS = ("pmsm_drive", "mechanics", "linear_motor", "trajectory", "cueing")
-
-
 def fmu_path(name: str, test: bool = False, fmi: int = 2) -> Path:
     """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test-only FMU; build/fmus3/ for the
     FMI 3.0 one, fmi=3)."""

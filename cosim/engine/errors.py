@@ -15,3 +15,7 @@ class InputError(ValueError):
 
 class UsageError(InputError):
     """A command-line argument or API argument that does not apply or has a wrong value."""
+
+
+class SspError(InputError):
+    """An SSP file that cannot be read or run: the message names the file, and the line where known."""

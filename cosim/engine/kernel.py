@@ -7,7 +7,6 @@ in these buffers, so the kernel is the only code that advances a system.
 from __future__ import annotations
 
 import ctypes
-import os
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -87,21 +86,12 @@ class _Controller(ctypes.Structure):
 _library = None
 
 
-def write_csv(path: str, header: str, table: np.ndarray) -> None:
-    """A 2-D float table as CSV through the native library (cosim/engine/kernel/csv.c)."""
-    table = np.ascontiguousarray(table, dtype=np.float64)
-    flat = table.reshape(-1) if table.size else np.zeros(1)
-    if _load().table_write_csv(str(path).encode(), header.encode(), _ptr(flat, _DOUBLES), table.shape[0],
-                               table.shape[1]) != 0:
-        code = ctypes.get_errno()
-        raise OSError(code, os.strerror(code) if code else "cannot write", str(path))
-
-
-def _load() -> ctypes.CDLL:
+def library() -> ctypes.CDLL:
+    """The step kernel's native library (cosim/engine/kernel/), loaded and its layouts checked once."""
     global _library
     if _library is None:
         path = library_path("libcosim_kernel.so")
-        lib = ctypes.CDLL(str(path), use_errno=True)  # a write's errno (a full disk) reaches write_csv
+        lib = ctypes.CDLL(str(path), use_errno=True)  # a write's errno (a full disk) reaches cosim.engine.results
         from .realtime import _RealTime
         check_layout(lib, "kernel_layout", path, [(_Port, "KernelPort"), (_Bond, "KernelBond"),
                                                   (_Instance, "KernelInstance"), (_Kernel, "Kernel"), (_Feed, "KernelFeed"),
@@ -175,12 +165,28 @@ class Kernel:
 
     def __init__(self, coupling: Coupling, algorithm: Algorithm, columns: Sequence[tuple[str, str]], clock: str):
         self.coupling, self.algorithm = coupling, algorithm
-        self.library = _load()
+        self.library = library()
         names = coupling.names
         self.index = {n: k for k, n in enumerate(names)}
         self.clock = self.index[clock]
-        keep = []  # arrays the C side points into
-        instances = (_Instance * len(names))()
+        self._keep: list = []  # arrays the C side points into
+        self._instances = (_Instance * len(names))()
+        record_offset = self._bind_instances(columns)
+        self.n_bonds = len(coupling.bonds)
+        sequence = algorithm.sequence if algorithm.kind == "gauss-seidel" and algorithm.sequence else names
+        self.sequence = _ints([self.index[n] for n in sequence])
+        self.stage_end = _ints(stages(list(sequence), coupling.feeds))
+        self._bind_bonds()
+        self._allocate(record_offset)
+        self._fill_setup(len(columns))
+        self._set_feedthrough(coupling.feedthrough() if algorithm.feedthrough else [])
+        self._controller: _Controller | None = None
+
+    def _bind_instances(self, columns: Sequence[tuple[str, str]]) -> int:
+        """Per instance its FMI functions (FMI 3.0 through the kernel's adapters), its outputs,
+        inputs with their sources, and what it records, each at its offset in the kernel's arrays;
+        the recorded columns' places. Returns the number of recorded values."""
+        coupling, names, instances = self.coupling, self.coupling.names, self._instances
         self.output_offset: dict[str, int] = {}
         offset = input_offset = record_offset = 0
         record_names: dict[str, list[str]] = {n: [] for n in names}
@@ -192,23 +198,7 @@ class Kernel:
         for k, n in enumerate(names):
             fmu = coupling.instances[n]
             c = instances[k]
-            if fmu.fmi3:  # through the kernel's adapters (kernel/fmi3.c), the instance and its functions behind them
-                adapted = _Fmi3Component(fmu.fmu.component, *(ctypes.cast(getattr(fmu.fmu.dll, f), _P).value for f in (
-                    "fmi3SetFloat64", "fmi3GetFloat64", "fmi3GetOutputDerivatives", "fmi3DoStep", "fmi3GetFMUState",
-                    "fmi3SetFMUState", "fmi3FreeFMUState")))
-                keep.append(adapted)
-                c.component = ctypes.addressof(adapted)
-                for field in ("set_real", "get_real", "set_input_derivatives", "get_output_derivatives", "do_step",
-                              "get_state", "set_state", "free_state"):
-                    setattr(c, field, ctypes.cast(getattr(self.library, f"fmi3_{field}"), _P).value)
-            else:
-                c.component = fmu.fmu.component
-                for field, function in (("set_real", "fmi2SetReal"), ("get_real", "fmi2GetReal"),
-                                        ("set_input_derivatives", "fmi2SetRealInputDerivatives"),
-                                        ("get_output_derivatives", "fmi2GetRealOutputDerivatives"),
-                                        ("do_step", "fmi2DoStep"), ("get_state", "fmi2GetFMUstate"),
-                                        ("set_state", "fmi2SetFMUstate"), ("free_state", "fmi2FreeFMUstate")):
-                    setattr(c, field, ctypes.cast(getattr(fmu.fmu.dll, function), _P).value)
+            self._bind_functions(fmu, c)
             outputs = coupling.sources[n]
             vrs = _ints([fmu.vr(v) for v in outputs]).astype(np.uintc)
             c.n_outputs, c.output_offset, c.output_vrs = len(outputs), offset, _ptr(vrs, _UINTS)
@@ -228,51 +218,78 @@ class Kernel:
             c.n_record, c.record_offset, c.record_vrs = len(rec), record_offset, _ptr(rec, _UINTS)
             record_start[n] = record_offset
             record_offset += len(rec)
-            keep += [vrs, in_vrs, sources, indices, rec]
+            self._keep += [vrs, in_vrs, sources, indices, rec]
         self.column_of = _ints([record_start[n] + record_names[n].index(v) for n, v in columns])
         self.n_values, self.n_inputs, self.n_columns = offset, input_offset, len(columns)
-        self.n_bonds = len(coupling.bonds)
-        sequence = algorithm.sequence if algorithm.kind == "gauss-seidel" and algorithm.sequence else names
-        self.sequence = _ints([self.index[n] for n in sequence])
-        self.stage_end = _ints(stages(list(sequence), coupling.feeds))
+        return record_offset
+
+    def _bind_functions(self, fmu, c: _Instance) -> None:
+        """The instance's component and FMI functions as the kernel calls them (an FMI 3.0 one's
+        through the kernel's adapters, kernel/fmi3.c, with the instance and its functions behind)."""
+        if fmu.fmi3:
+            adapted = _Fmi3Component(fmu.fmu.component, *(ctypes.cast(getattr(fmu.fmu.dll, f), _P).value for f in (
+                "fmi3SetFloat64", "fmi3GetFloat64", "fmi3GetOutputDerivatives", "fmi3DoStep", "fmi3GetFMUState",
+                "fmi3SetFMUState", "fmi3FreeFMUState")))
+            self._keep.append(adapted)
+            c.component = ctypes.addressof(adapted)
+            for field in ("set_real", "get_real", "set_input_derivatives", "get_output_derivatives", "do_step",
+                          "get_state", "set_state", "free_state"):
+                setattr(c, field, ctypes.cast(getattr(self.library, f"fmi3_{field}"), _P).value)
+            return
+        c.component = fmu.fmu.component
+        for field, function in (("set_real", "fmi2SetReal"), ("get_real", "fmi2GetReal"),
+                                ("set_input_derivatives", "fmi2SetRealInputDerivatives"),
+                                ("get_output_derivatives", "fmi2GetRealOutputDerivatives"),
+                                ("do_step", "fmi2DoStep"), ("get_state", "fmi2GetFMUstate"),
+                                ("set_state", "fmi2SetFMUstate"), ("free_state", "fmi2FreeFMUstate")):
+            setattr(c, field, ctypes.cast(getattr(fmu.fmu.dll, function), _P).value)
+
+    def _bind_bonds(self) -> None:
+        """Each power bond's four ports (and its slope, where the interface Jacobian has one)."""
         self.bonds = (_Bond * max(self.n_bonds, 1))()
-        for bond, ((eo, ei), (fo, fi)), slope in zip(self.bonds, coupling.bonds, coupling.bond_slopes):
+        for bond, ((eo, ei), (fo, fi)), slope in zip(self.bonds, self.coupling.bonds, self.coupling.bond_slopes):
             for port, (name, index) in (("effort_out", eo), ("effort_in", ei), ("flow_out", fo), ("flow_in", fi)):
                 setattr(bond, port, _Port(self.index[name], index))
             bond.slope_in = _Port(self.index[slope[0]], slope[1]) if slope else _Port(-1, -1)
-        n, m = max(offset, 1), max(input_offset, 1)
+
+    def _allocate(self, record_offset: int) -> None:
+        """The arrays the C side works in: samples and rates of the outputs, inputs, the record
+        row, per instance its time, FMI seconds and saved states."""
+        names, n, m = self.coupling.names, max(self.n_values, 1), max(self.n_inputs, 1)
         self.sample_time, self.samples = np.zeros(3), np.zeros((3, n))
         self.exact_rates, self.new_values, self.guess = np.zeros((2, n)), np.zeros(n), np.zeros(n)
         self.stepped = _ints(np.zeros(len(names)))
         self.inputs = np.zeros((3, m))
         self.record_scratch = np.zeros(max(record_offset, 1))
-        self.instance_time = np.array([coupling.instances[n].time for n in names])
+        self.instance_time = np.array([self.coupling.instances[n].time for n in names])
         for k, name in enumerate(names):  # what an FMU logs inside a kernel call carries its time then
-            coupling.instances[name].clock = (lambda k=k: float(self.instance_time[k]))
+            self.coupling.instances[name].clock = (lambda k=k: float(self.instance_time[k]))
         self.fmi_seconds, self.saved_time = np.zeros(len(names)), np.zeros(len(names))
         self.order_one, self.order_two = _ints(np.ones(max(n, m))), _ints(np.full(max(n, m), 2))
         self.states = (ctypes.c_void_p * len(names))()
         self.startup_states = (ctypes.c_void_p * len(names))()
-        self._keep, self._instances = keep, instances
+
+    def _fill_setup(self, n_columns: int) -> None:
+        """The C kernel's own struct, pointing into the arrays above."""
+        algorithm = self.algorithm
         s = self.setup = _Kernel()
-        s.n_instances, s.instances, s.sequence = len(names), instances, _ptr(self.sequence, _INTS)
+        s.n_instances, s.instances, s.sequence = len(self.coupling.names), self._instances, _ptr(self.sequence, _INTS)
         s.gauss_seidel, s.order = int(algorithm.kind == "gauss-seidel"), algorithm.order
         s.threads, s.stage_end = algorithm.threads, _ptr(self.stage_end, _INTS)
         s.keep = max(algorithm.order + 1, 2)
-        s.sample_time, s.samples, s.n_sample_values = _ptr(self.sample_time, _DOUBLES), _ptr(self.samples, _DOUBLES), offset
+        s.sample_time, s.samples = _ptr(self.sample_time, _DOUBLES), _ptr(self.samples, _DOUBLES)
+        s.n_sample_values = self.n_values
         s.exact_rates, s.new_values = _ptr(self.exact_rates, _DOUBLES), _ptr(self.new_values, _DOUBLES)
         s.stepped = _ptr(self.stepped, _INTS)
-        s.n_inputs_total = input_offset
+        s.n_inputs_total = self.n_inputs
         s.input_values, s.input_rates, s.input_curvatures = (_ptr(self.inputs[i], _DOUBLES) for i in range(3))
         s.n_bonds, s.bonds = self.n_bonds, self.bonds
-        s.n_columns, s.column_of = len(columns), _ptr(self.column_of, _INTS)
+        s.n_columns, s.column_of = n_columns, _ptr(self.column_of, _INTS)
         s.record_scratch = _ptr(self.record_scratch, _DOUBLES)
         s.instance_time, s.fmi_seconds = _ptr(self.instance_time, _DOUBLES), _ptr(self.fmi_seconds, _DOUBLES)
         s.order_one, s.order_two = _ptr(self.order_one, _INTS), _ptr(self.order_two, _INTS)
         s.states, s.startup_states = self.states, self.startup_states
         s.guess, s.saved_time = _ptr(self.guess, _DOUBLES), _ptr(self.saved_time, _DOUBLES)
-        self._set_feedthrough(coupling.feedthrough() if algorithm.feedthrough else [])
-        self._controller: _Controller | None = None
 
     def _set_feedthrough(self, plan: list[tuple[str, list[int], list[int]]]) -> None:
         """The feed-through resolution's steps (cosim.engine.coupling.Coupling.feedthrough)."""

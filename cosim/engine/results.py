@@ -3,6 +3,8 @@ written as CSV and as MATLAB .mat (one variable per column)."""
 
 from __future__ import annotations
 
+import ctypes
+import os
 from pathlib import Path
 
 import numpy as np
@@ -23,12 +25,17 @@ def thin(result: np.ndarray, interval: float | None) -> np.ndarray:
 def write_csv(result: np.ndarray, path: Path) -> Path:
     """Every value with 17 significant digits (a float's round trip), one header line of names
     (formatted in C: cosim/engine/kernel/csv.c), written whole or not at all (cosim.engine.files)."""
-    from .kernel import write_csv as native
+    from .kernel import library
     names = result.dtype.names
     columns = np.column_stack([result[n] for n in names]) if len(result) else np.zeros((0, len(names)))
     needed = 25 * columns.size + sum(len(n) + 1 for n in names)  # at most 24 characters a value, and its comma
+    table = np.ascontiguousarray(columns, dtype=np.float64)
+    flat = table.reshape(-1) if table.size else np.zeros(1)
     with replacing(path, "the results", needed) as temporary:
-        native(str(temporary), ",".join(names), columns)
+        if library().table_write_csv(str(temporary).encode(), ",".join(names).encode(),
+                                     flat.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), *table.shape) != 0:
+            code = ctypes.get_errno()
+            raise OSError(code, os.strerror(code) if code else "cannot write", str(temporary))
     return Path(path)
 
 

@@ -17,21 +17,17 @@ from __future__ import annotations
 
 import errno
 import math
-import os
-import shutil
-import stat
 import tempfile
 import zipfile
-import zlib
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
 from fmpy import read_model_description
 from lxml import etree
 
-from .errors import InputError
+from .archive import unpack
+from .errors import SspError
 from .fmi import loaded
 from .files import replacing
 from .structure import Bond, Component, Connection, Experiment, SystemStructure, Value
@@ -51,9 +47,6 @@ _SCHEMAS = Path(read_model_description.__code__.co_filename).parent / "ssp" / "s
 
 ToolStepped = tuple[str, float, bool]  # a tool, the step measured for it, whether it holds the tolerances there
 
-
-class SspError(InputError):
-    """An SSP file that cannot be read or run: the message names the file, and the line where known."""
 
 
 def not_portable(settings: dict) -> list[str]:
@@ -428,101 +421,6 @@ def _check_against_fmus(system: etree._Element, connection_elements: list, folde
     return found
 
 
-@dataclass(frozen=True)
-class ArchiveLimits:
-    """What an SSP archive may unpack to, checked from its directory before anything is written and
-    again, byte by byte, while it unpacks: the bytes in all, the entries, and an entry's unpacked
-    size against its packed size (a zip bomb's ratio is in the thousands; FMUs and SSVs pack by
-    2-20). Set by COSIM_SSP_MAX_BYTES, COSIM_SSP_MAX_ENTRIES and COSIM_SSP_MAX_RATIO."""
-    total_bytes: int = 1 << 30   # 1 GiB
-    entries: int = 10_000
-    ratio: float = 200.0         # for entries larger than RATIO_FROM bytes unpacked
-    RATIO_FROM = 1 << 20
-
-    @classmethod
-    def from_environment(cls) -> "ArchiveLimits":
-        given = {}
-        for name, field_name, kind in (("COSIM_SSP_MAX_BYTES", "total_bytes", int),
-                                       ("COSIM_SSP_MAX_ENTRIES", "entries", int),
-                                       ("COSIM_SSP_MAX_RATIO", "ratio", float)):
-            if os.environ.get(name):
-                try:
-                    given[field_name] = kind(float(os.environ[name]))
-                except ValueError:
-                    raise SspError(f"{name}={os.environ[name]!r}: must be a number") from None
-        return cls(**given)
-
-
-def unpack(path: Path, folder: Path, limits: ArchiveLimits | None = None) -> None:
-    """Unpacks the archive into `folder` within the limits; an entry whose name climbs out of the
-    folder (an absolute name, '..') or is a link is refused, naming it; a full disk is named as one.
-    Raises SspError (one line)."""
-    limits = limits or ArchiveLimits.from_environment()
-    try:
-        with zipfile.ZipFile(path) as archive:
-            entries = archive.infolist()
-            _check_directory(path, entries, limits)
-            needed = sum(e.file_size for e in entries)
-            free = shutil.disk_usage(folder).free
-            if needed > free:
-                raise SspError(f"{path}: unpacking needs {needed / 1e6:.1f} MB in {folder}, only {free / 1e6:.1f} MB "
-                               "are free: the disk is full")
-            written = 0
-            for entry in entries:
-                written += _unpack_entry(path, archive, entry, folder, limits.total_bytes - written)
-    except SspError:
-        raise
-    except zipfile.BadZipFile:
-        raise SspError(f"{path}: not an SSP archive (not a zip file)") from None
-    except OSError as error:
-        if error.errno in (errno.ENOSPC, errno.EDQUOT):
-            raise SspError(f"{path}: the disk is full: no space left in {folder} to unpack the archive") from None
-        raise SspError(f"{path}: a damaged SSP archive, its files cannot be unpacked ({error})") from None
-    except (EOFError, ValueError, zlib.error, NotImplementedError) as error:  # damaged, or a method zipfile lacks
-        raise SspError(f"{path}: a damaged SSP archive, its files cannot be unpacked ({error})") from None
-
-
-def _check_directory(path: Path, entries: list[zipfile.ZipInfo], limits: ArchiveLimits) -> None:
-    """The archive's directory against the limits, before anything is written."""
-    if len(entries) > limits.entries:
-        raise SspError(f"{path}: {len(entries)} entries; an SSP archive may hold {limits.entries} "
-                       "(COSIM_SSP_MAX_ENTRIES)")
-    for entry in entries:
-        parts = entry.filename.replace("\\", "/").split("/")
-        if entry.filename.startswith(("/", "\\")) or ":" in parts[0] or ".." in parts:
-            raise SspError(f"{path}: entry {entry.filename!r} climbs out of the archive's folder (an absolute name "
-                           "or '..'): refused")
-        if stat.S_ISLNK(entry.external_attr >> 16):
-            raise SspError(f"{path}: entry {entry.filename!r} is a link: refused")
-        if entry.file_size > limits.RATIO_FROM and entry.file_size > limits.ratio * max(entry.compress_size, 1):
-            raise SspError(f"{path}: entry {entry.filename!r} unpacks to {entry.file_size / 1e6:.1f} MB, "
-                           f"{entry.file_size / max(entry.compress_size, 1):.0f} times its packed size; at most "
-                           f"{limits.ratio:g} times (COSIM_SSP_MAX_RATIO)")
-    total = sum(e.file_size for e in entries)
-    if total > limits.total_bytes:
-        raise SspError(f"{path}: unpacks to {total / 1e6:.1f} MB; an SSP archive may unpack to "
-                       f"{limits.total_bytes / 1e6:.1f} MB (COSIM_SSP_MAX_BYTES)")
-
-
-def _unpack_entry(path: Path, archive: zipfile.ZipFile, entry: zipfile.ZipInfo, folder: Path, allowed: int) -> int:
-    """One entry streamed out with a running count (its declared size is not trusted); returns the
-    bytes written."""
-    target = folder / entry.filename
-    if entry.is_dir():
-        target.mkdir(parents=True, exist_ok=True)
-        return 0
-    target.parent.mkdir(parents=True, exist_ok=True)
-    written = 0
-    with archive.open(entry) as source, open(target, "wb") as out:
-        while chunk := source.read(1 << 20):
-            written += len(chunk)
-            if written > entry.file_size or written > allowed:
-                raise SspError(f"{path}: entry {entry.filename!r} unpacks to more than its directory says "
-                               f"({entry.file_size} bytes) or than the archive may: refused")
-            out.write(chunk)
-    return written
-
-
 @contextmanager
 def opened(path: str | Path) -> Iterator[SystemStructure]:
     """The system of an SSP archive or SSD for the length of the block: an archive's unpacked copy
@@ -537,7 +435,7 @@ def opened(path: str | Path) -> Iterator[SystemStructure]:
 
 def read_ssp(path: str | Path, extract_to: Path | None = None) -> SystemStructure:
     """The system of an SSP archive (.ssp) or of an SSD file in an unpacked one. An archive is
-    unpacked within its limits (ArchiveLimits) to `extract_to`, or to a temporary folder that the
+    unpacked within its limits (cosim.engine.archive) to `extract_to`, or to a temporary folder that the
     returned system holds and that is removed with it (or at exit), and at once when the archive is
     refused. Raises SspError naming the file and line of what is wrong."""
     path = Path(path)

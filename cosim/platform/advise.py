@@ -161,7 +161,7 @@ def recommend(candidates: list[Candidate], tolerance: float, effort_tolerance: f
     return min(good, key=lambda c: c.wall) if good else None
 
 
-def write_csv(candidates: list[Candidate], path: Path) -> Path:
+def write_candidates(candidates: list[Candidate], path: Path) -> Path:
     """Every candidate: step, effects off, fidelity, pose error, wall time, macro steps, divergence."""
     import csv
     import io

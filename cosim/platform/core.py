@@ -59,7 +59,7 @@ class Diagnostics(ctypes.Structure):
 
 
 @lru_cache(maxsize=None)
-def load() -> ctypes.CDLL:
+def core_library() -> ctypes.CDLL:
     """The core's library (its structs checked against the classes above)."""
     path = library_path("libplatform_core.so")
     dll = ctypes.CDLL(str(path))
@@ -127,7 +127,7 @@ class SingularPose(ValueError):
 def build(values: Mapping[str, object] | None = None, dll: ctypes.CDLL | None = None) -> Platform:
     """The Platform the mechanics FMU builds from its start values with `values` (by variable
     name) over them: the FMU's own mapping (fmu/mechanics/parameters.c)."""
-    dll = dll or load()
+    dll = dll or core_library()
     references, starts = _start_values()
     full = list(starts)
     for name, value in (values or {}).items():
@@ -160,7 +160,7 @@ class Core:
 
     def __init__(self, dll: ctypes.CDLL | None = None, actuators: bool = True, motors: bool = True,
                  friction: bool = True, values: Mapping[str, object] | None = None):
-        self.dll = dll or load()
+        self.dll = dll or core_library()
         self.values: dict[str, object] = {"effects.actuator_inertia": bool(actuators),
                                           "effects.motor_inertia": bool(motors), "effects.friction": bool(friction)}
         self.use_start_values(values or {})

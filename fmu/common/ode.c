@@ -341,6 +341,28 @@ static OdeResult handle_events_now(OdeSolver *s, const OdeProblem *p, void *ctx,
     return ODE_EVENT_LOOP;
 }
 
+/* Are the solver's settings and the problem's sizes ones ode_integrate can take? */
+static int settings_valid(const OdeSolver *s, const OdeProblem *p) {
+    const int n = p->n_states, m = p->n_events;
+    return n >= 1 && n <= ODE_MAX_STATES && m >= 0 && m <= ODE_MAX_EVENTS && s->step > 0.0 && p->n_stiff >= 0 &&
+           p->n_stiff <= n && s->method >= ODE_RK4 && s->method <= ODE_HEUN &&
+           (s->method == ODE_RK4 || s->method == ODE_HEUN || (s->rtol > 0.0 && s->atol > 0.0));
+}
+
+/* The next step with `remaining` to go: fixed-step methods split it into equal steps of at most
+ * s->step; adaptive ones take their planned step (a first one of 1 % of the span), cut to the end.
+ * reaches_end: the step ends the span. */
+static double next_step(const OdeSolver *s, int adaptive, double remaining, int *reaches_end) {
+    if (!adaptive) {
+        double steps = ceil(remaining / s->step - 1e-9);
+        *reaches_end = steps <= 1.0;
+        return remaining / (steps < 1.0 ? 1.0 : steps);
+    }
+    double planned = s->h_next > 0.0 ? fmin(s->h_next, s->step) : fmin(s->step, 1e-2 * remaining + 1e-9);
+    *reaches_end = planned >= remaining;
+    return *reaches_end ? remaining : planned;
+}
+
 OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x, double t0,
                         double t1, double *t_reached) {
     const int n = p->n_states, m = p->n_events;
@@ -350,11 +372,7 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
     OdeResult result = ODE_OK;
 
     if (t_reached) *t_reached = t0;
-    if (n < 1 || n > ODE_MAX_STATES || m < 0 || m > ODE_MAX_EVENTS || !(s->step > 0.0) ||
-        p->n_stiff < 0 || p->n_stiff > n ||
-        s->method < ODE_RK4 || s->method > ODE_HEUN ||
-        (s->method != ODE_RK4 && s->method != ODE_HEUN && !(s->rtol > 0.0 && s->atol > 0.0)))
-        return ODE_BAD_SETTINGS;
+    if (!settings_valid(s, p)) return ODE_BAD_SETTINGS;
     const int rosenbrock = s->method == ODE_ROSENBROCK || s->method == ODE_ROSENBROCK_ADAPTIVE;
     const int adaptive = s->method == ODE_DOPRI5 || s->method == ODE_ROSENBROCK_ADAPTIVE;
     /* The error estimates are of order 5 (Dormand-Prince) and 3 (ROS34PW2) in h. */
@@ -369,17 +387,8 @@ OdeResult ode_integrate(OdeSolver *s, const OdeProblem *p, void *ctx, double *x,
     long work = 0;
     while (t1 - t > t_eps) {
         if (++work > ODE_MAX_STEPS) { result = ODE_TOO_MUCH_WORK; break; }
-        double remaining = t1 - t, h;
         int reaches_end;
-        if (!adaptive) {
-            double steps = ceil(remaining / s->step - 1e-9);
-            h = remaining / (steps < 1.0 ? 1.0 : steps);
-            reaches_end = steps <= 1.0;
-        } else {
-            double planned = s->h_next > 0.0 ? fmin(s->h_next, s->step) : fmin(s->step, 1e-2 * remaining + 1e-9);
-            reaches_end = planned >= remaining;
-            h = reaches_end ? remaining : planned;
-        }
+        const double h = next_step(s, adaptive, t1 - t, &reaches_end);
 
         if (rosenbrock && !lin.taken) linearize(s, p, ctx, t, x, &lin);
         double error = one_step(s, p, ctx, &lin, t, x, h, x_new);

@@ -41,8 +41,9 @@ static int is_blank_or_comment(const char *line) {
 #define TABLE_MAX_BYTES (64L * 1024 * 1024) /* a table larger than this is refused, not read */
 #define TABLE_MAX_LINES 1000000L
 
-FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const char *const *names, int n_names) {
-    const char *path = strncmp(given_path, "file://", 7) == 0 ? given_path + 7 : given_path;
+/* The file a table parameter names, opened if it is a regular file of at most TABLE_MAX_BYTES;
+ * NULL after logging why not. */
+static FILE *open_table(FmuInstance *fmu, int vr, const char *path) {
     struct stat info;
     if (stat(path, &info) != 0) {
         fmu_reject(fmu, vr, "cannot be opened for reading");
@@ -57,104 +58,95 @@ FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const
         return NULL;
     }
     FILE *file = fopen(path, "r");
-    if (!file) {
-        fmu_reject(fmu, vr, "cannot be opened for reading");
-        return NULL;
-    }
+    if (!file) fmu_reject(fmu, vr, "cannot be opened for reading");
+    return file;
+}
+
+/* The rows after the header (blank and comment lines not counted), or -1 after logging a file of
+ * more than TABLE_MAX_LINES lines. */
+static long count_rows(FmuInstance *fmu, int vr, FILE *file) {
     char line[TABLE_LINE_MAX];
     long data_lines = 0, lines = 0;
     int header_seen = 0;
     while (fgets(line, sizeof line, file)) {
         if (++lines > TABLE_MAX_LINES) {
-            fclose(file);
             fmu_reject(fmu, vr, "has more than 1000000 lines");
-            return NULL;
+            return -1;
         }
         if (is_blank_or_comment(line)) continue;
         if (header_seen) data_lines++;
         header_seen = 1;
     }
-    FmuTable *table = (FmuTable *)fmu_calloc(fmu, 1, sizeof(FmuTable));
-    if (!table) { fclose(file); return NULL; }
-    strcpy(table->path, given_path);
-    for (int d = 0; d < FMU_TABLE_MAX_COLUMNS; d++) table->column_of[d] = -1;
-    const char *what = fmu_variables[vr].name;
-    char known[512] = ""; /* the names it may hold, for the message on one it may not */
-    for (int d = 0; d < n_names && d < FMU_TABLE_MAX_COLUMNS; d++) {
-        if (d) strncat(known, ", ", sizeof known - strlen(known) - 1);
-        strncat(known, names[d], sizeof known - strlen(known) - 1);
+    return data_lines;
+}
+
+/* One table being read: where from (for the messages) and the column names it may hold. */
+typedef struct {
+    FmuInstance *fmu;
+    const char *what, *path;        /* the parameter's name, the file */
+    const char *const *names;
+    int n_names;
+    char known[512];                /* the names, listed for the message on one it may not hold */
+    int number;                     /* the line being read */
+} Reading;
+
+#define TABLE_ERROR(r, format, ...)                                                                               \
+    fmu_log((r)->fmu, fmi2Error, "logStatusError", "%s %s:%d: " format, (r)->what, (r)->path, (r)->number,     \
+            __VA_ARGS__)
+
+/* The header line: 'time', then each of the names at most once; the arrays for `rows` rows. */
+static int read_header(Reading *r, FmuTable *table, char *line, long rows) {
+    char *cursor = line, *field = next_field(&cursor);
+    if (!field || strcmp(trim(field), "time") != 0) {
+        TABLE_ERROR(r, "%s", "the first column must be 'time'");
+        return 0;
     }
-    rewind(file);
-    int number = 0, ok = 1, row = 0;
-    while (ok && fgets(line, sizeof line, file)) {
-        number++;
-        if (is_blank_or_comment(line)) continue;
-        if (!strchr(line, '\n') && !feof(file)) {
-            fmu_log(fmu, fmi2Error, "logStatusError", "%s %s:%d: line longer than %d bytes", what, path, number,
-                    TABLE_LINE_MAX - 1);
-            ok = 0;
-            break;
+    while ((field = next_field(&cursor)) != NULL) {
+        const char *name = trim(field);
+        int d = 0;
+        while (d < r->n_names && strcmp(name, r->names[d]) != 0) d++;
+        if (d == r->n_names || table->column_of[d] >= 0) {
+            TABLE_ERROR(r, "column '%s' is %s (use %s, each once)", name, d == r->n_names ? "unknown" : "repeated",
+                        r->known);
+            return 0;
         }
-        if (!table->time) { /* the header */
-            char *cursor = line, *field = next_field(&cursor);
-            if (!field || strcmp(trim(field), "time") != 0) {
-                fmu_log(fmu, fmi2Error, "logStatusError", "%s %s:%d: the first column must be 'time'", what, path, number);
-                ok = 0;
-                break;
-            }
-            while (ok && (field = next_field(&cursor)) != NULL) {
-                const char *name = trim(field);
-                int d = 0;
-                while (d < n_names && strcmp(name, names[d]) != 0) d++;
-                if (d == n_names || table->column_of[d] >= 0) {
-                    fmu_log(fmu, fmi2Error, "logStatusError", "%s %s:%d: column '%s' is %s (use %s, each once)", what,
-                            path, number, name, d == n_names ? "unknown" : "repeated", known);
-                    ok = 0;
-                }
-                else table->column_of[d] = table->columns++;
-            }
-            if (!ok) break;
-            if (data_lines == 0) {
-                fmu_log(fmu, fmi2Error, "logStatusError", "%s %s: no rows after the header", what, path);
-                ok = 0;
-                break;
-            }
-            table->time = (double *)fmu_calloc(fmu, (size_t)data_lines, sizeof(double));
-            table->values = (double *)fmu_calloc(fmu, (size_t)data_lines * (size_t)(table->columns + 1), sizeof(double));
-            table->slopes = (double *)fmu_calloc(fmu, (size_t)data_lines * (size_t)(table->columns + 1), sizeof(double));
-            if (!table->time || !table->values || !table->slopes) ok = 0;
-            continue;
-        }
-        char *cursor = line, *end;
-        for (int c = -1; c < table->columns && ok; c++) {
-            double value = strtod(cursor, &end);
-            while (*end == ' ' || *end == '\t') end++;
-            const int separator_ok = (c + 1 < table->columns) ? (*end == ',') : (*end == '\0' || *end == '\n' || *end == '\r');
-            if (end == cursor || !isfinite(value) || !separator_ok) {
-                fmu_log(fmu, fmi2Error, "logStatusError", "%s %s:%d: expected %d finite numbers separated "
-                        "by commas", what, path, number, table->columns + 1);
-                ok = 0;
-                break;
-            }
-            if (c < 0) table->time[row] = value;
-            else table->values[row * table->columns + c] = value;
-            cursor = end + 1;
-        }
-        if (ok && row > 0 && !(table->time[row] > table->time[row - 1])) {
-            fmu_log(fmu, fmi2Error, "logStatusError", "%s %s:%d: time %g does not increase", what, path, number,
-                    table->time[row]);
-            ok = 0;
-        }
-        row++;
+        table->column_of[d] = table->columns++;
     }
-    fclose(file);
-    if (!ok || !table->time) {
-        if (ok) fmu_log(fmu, fmi2Error, "logStatusError", "%s %s: no header line", what, path);
-        fmu_table_free(fmu, table);
-        return NULL;
+    if (rows == 0) {
+        fmu_log(r->fmu, fmi2Error, "logStatusError", "%s %s: no rows after the header", r->what, r->path);
+        return 0;
     }
-    table->rows = row;
-    /* Cubic Hermite slopes: the weighted three-point difference inside, one-sided at the ends. */
+    table->time = (double *)fmu_calloc(r->fmu, (size_t)rows, sizeof(double));
+    table->values = (double *)fmu_calloc(r->fmu, (size_t)rows * (size_t)(table->columns + 1), sizeof(double));
+    table->slopes = (double *)fmu_calloc(r->fmu, (size_t)rows * (size_t)(table->columns + 1), sizeof(double));
+    return table->time && table->values && table->slopes;
+}
+
+/* Row `row`: the time and every column, finite numbers separated by commas, time increasing. */
+static int read_row(Reading *r, FmuTable *table, const char *line, int row) {
+    const char *cursor = line;
+    char *end;
+    for (int c = -1; c < table->columns; c++) {
+        double value = strtod(cursor, &end);
+        while (*end == ' ' || *end == '\t') end++;
+        const int separator_ok = (c + 1 < table->columns) ? (*end == ',') : (*end == '\0' || *end == '\n' || *end == '\r');
+        if (end == cursor || !isfinite(value) || !separator_ok) {
+            TABLE_ERROR(r, "expected %d finite numbers separated by commas", table->columns + 1);
+            return 0;
+        }
+        if (c < 0) table->time[row] = value;
+        else table->values[row * table->columns + c] = value;
+        cursor = end + 1;
+    }
+    if (row > 0 && !(table->time[row] > table->time[row - 1])) {
+        TABLE_ERROR(r, "time %g does not increase", table->time[row]);
+        return 0;
+    }
+    return 1;
+}
+
+/* Cubic Hermite slopes: the weighted three-point difference inside, one-sided at the ends. */
+static void hermite_slopes(FmuTable *table) {
     for (int c = 0; c < table->columns; c++) {
         const double *y = table->values + c;
         const int n = table->rows, stride = table->columns;
@@ -173,6 +165,45 @@ FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const
             table->slopes[i * stride + c] = slope;
         }
     }
+}
+
+FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const char *const *names, int n_names) {
+    const char *path = strncmp(given_path, "file://", 7) == 0 ? given_path + 7 : given_path;
+    FILE *file = open_table(fmu, vr, path);
+    if (!file) return NULL;
+    const long rows = count_rows(fmu, vr, file);
+    FmuTable *table = rows < 0 ? NULL : (FmuTable *)fmu_calloc(fmu, 1, sizeof(FmuTable));
+    if (!table) { fclose(file); return NULL; }
+    strcpy(table->path, given_path);
+    for (int d = 0; d < FMU_TABLE_MAX_COLUMNS; d++) table->column_of[d] = -1;
+    Reading r = {fmu, fmu_variables[vr].name, path, names, n_names, "", 0};
+    for (int d = 0; d < n_names && d < FMU_TABLE_MAX_COLUMNS; d++) {
+        if (d) strncat(r.known, ", ", sizeof r.known - strlen(r.known) - 1);
+        strncat(r.known, names[d], sizeof r.known - strlen(r.known) - 1);
+    }
+    rewind(file);
+    char line[TABLE_LINE_MAX];
+    int ok = 1, row = 0;
+    while (ok && fgets(line, sizeof line, file)) {
+        r.number++;
+        if (is_blank_or_comment(line)) continue;
+        if (!strchr(line, '\n') && !feof(file)) {
+            TABLE_ERROR(&r, "line longer than %d bytes", TABLE_LINE_MAX - 1);
+            ok = 0;
+        } else if (!table->time) {
+            ok = read_header(&r, table, line, rows);
+        } else {
+            ok = read_row(&r, table, line, row++);
+        }
+    }
+    fclose(file);
+    if (!ok || !table->time) {
+        if (ok) fmu_log(fmu, fmi2Error, "logStatusError", "%s %s: no header line", r.what, path);
+        fmu_table_free(fmu, table);
+        return NULL;
+    }
+    table->rows = row;
+    hermite_slopes(table);
     return table;
 }
 

@@ -231,6 +231,162 @@ double platform_jacobian_conditioning(const LegGeometry legs[PLATFORM_LEGS]) {
 
 /* ---- dynamics ---------------------------------------------------------------------------- */
 
+/* What the legs' inertia and friction are made of, with the platform's switches applied (see
+ * platform.h): the moving, rotating and motor masses, their centres, the transverse inertia about
+ * the lower joint, the rotor's spin reflected through the screw, the leg's spin inertia and the
+ * joints' friction. */
+typedef struct {
+    double m_a, m_b, m_s, i_ab, spin, r_ac, r_bc, r_sc, I_s, C_S, C_U;
+} LegConstants;
+
+static LegConstants leg_constants(const Platform *p) {
+    const int act = p->actuator_inertia_on, mot = p->motor_inertia_on;
+    LegConstants c;
+    c.m_a = act ? p->moving_mass : 0.0;
+    c.m_b = act ? p->rotating_mass : 0.0;
+    c.m_s = mot ? p->motor_mass : 0.0;
+    c.i_ab = (act ? p->moving_inertia + p->rotating_inertia : 0.0) + (mot ? p->motor_inertia : 0.0);
+    c.spin = mot ? p->rotor_inertia * p->screw_ratio * p->screw_ratio : 0.0;
+    c.r_ac = p->moving_com;
+    c.r_bc = p->rotating_com;
+    c.r_sc = p->motor_com;
+    c.I_s = act ? p->leg_spin_inertia : 0.0;
+    c.C_S = p->friction_on ? p->joint_friction_lower : 0.0;
+    c.C_U = p->friction_on ? p->joint_friction_upper : 0.0;
+    return c;
+}
+
+/* The energies and loss power assemble sums over the bodies. */
+typedef struct {
+    double kinetic, potential, friction_loss;
+} Energies;
+
+/* Leg spin with the platform and joint friction (see platform.h). For y a torque-like vector at
+ * the leg, (d w_b / du)' y = E_w' n (n.y) + (1/L) J_a' (y x n): a torque on the platform plus a
+ * force (y x n) / L at the upper joint. n: the leg's axis, L its length, r its arm, v_a the upper
+ * joint's velocity and P_v its part across the leg. */
+static void add_leg_spin(const LegConstants *c, const double n[3], double L, const double r[3], const double w[3],
+                         const double v_a[3], const double P_v[3], double M[36], double rhs0[6], Energies *e) {
+    const double I_s = c->I_s, C_S = c->C_S, C_U = c->C_U;
+    const double s = dot(n, w);
+    double n_dot[3], n_x_v[3], w_b[3], rho[3];
+    for (int k = 0; k < 3; k++) n_dot[k] = P_v[k] / L;
+    cross(n, v_a, n_x_v);
+    for (int k = 0; k < 3; k++) {
+        w_b[k] = s * n[k] + n_x_v[k] / L;
+        rho[k] = w_b[k] - w[k]; /* rate across the upper joint; rho . n = 0 */
+    }
+    /* dH/dt of the spin, I_s (s_dot n + s n_dot): its s_dot part, with s_dot = n_dot.w + n.w_dot,
+     * goes to M and the rest here; C_S w_b on the leg; C_U rho on the leg and -C_U rho on the
+     * platform. */
+    double n_x_ndot[3], friction_y[3], y_x_n[3], f_joint[3], r_x_f_joint[3];
+    cross(n, n_dot, n_x_ndot);
+    for (int k = 0; k < 3; k++) friction_y[k] = C_S * w_b[k] + C_U * rho[k];
+    cross(friction_y, n, y_x_n);
+    const double n_dot_w = dot(n_dot, w);
+    for (int k = 0; k < 3; k++) f_joint[k] = I_s * s / L * n_x_ndot[k] - y_x_n[k] / L;
+    cross(r, f_joint, r_x_f_joint);
+    for (int k = 0; k < 3; k++) {
+        rhs0[k] += f_joint[k];
+        rhs0[3 + k] += r_x_f_joint[k] - I_s * n_dot_w * n[k] - C_S * s * n[k] + C_U * rho[k];
+    }
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) M[6 * (3 + a) + 3 + b] += I_s * n[a] * n[b];
+    e->kinetic += 0.5 * I_s * s * s;
+    e->friction_loss += C_S * dot(w_b, w_b) + C_U * dot(rho, rho);
+}
+
+/* M += J_a' S J_a for a leg of inertia S at arm r, with J_a = [I, -[r]x]:
+ * [[S, -S [r]x], [[r]x S, -[r]x S [r]x]]. */
+static void add_leg_mass(const double S[9], const double r[3], double M[36]) {
+    double S_rx[9];
+    for (int a = 0; a < 3; a++) { /* row a of S [r]x is (row a of S) x r */
+        const double *row = S + 3 * a;
+        S_rx[3 * a + 0] = row[1] * r[2] - row[2] * r[1];
+        S_rx[3 * a + 1] = row[2] * r[0] - row[0] * r[2];
+        S_rx[3 * a + 2] = row[0] * r[1] - row[1] * r[0];
+    }
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) {
+            /* ([r]x S [r]x)_ab = sum_c [r]x_ac (S [r]x)_cb, with [r]x = [[0,-r2,r1],[r2,0,-r0],[-r1,r0,0]] */
+            const double rx_S_rx = (a == 0)   ? -r[2] * S_rx[3 + b] + r[1] * S_rx[6 + b]
+                                   : (a == 1) ? r[2] * S_rx[b] - r[0] * S_rx[6 + b]
+                                              : -r[1] * S_rx[b] + r[0] * S_rx[3 + b];
+            M[6 * a + b] += S[3 * a + b];
+            M[6 * a + 3 + b] -= S_rx[3 * a + b];
+            M[6 * (3 + b) + a] -= S_rx[3 * a + b]; /* symmetric block: ([r]x S)' = -S [r]x */
+            M[6 * (3 + a) + 3 + b] -= rx_S_rx;
+        }
+}
+
+/* Leg i of the platform at position t, rotation R, velocity v and angular velocity w: its
+ * geometry (leg), its inertia added to M and its forces other than the actuator's to rhs0, its
+ * energies and losses to e. */
+static void add_leg(const Platform *p, const LegConstants *c, int i, const double R[9], const double *t,
+                    const double *v, const double *w, double M[36], double rhs0[6], LegGeometry *leg, Energies *e) {
+    const double *g = p->gravity;
+    double l[3], v_a[3], w_x_r[3], bias[3], n[3], r[3];
+    mat_vec(R, p->upper_joint[i], r);
+    memcpy(leg->arm, r, sizeof r);
+    for (int k = 0; k < 3; k++) l[k] = t[k] + r[k] - p->lower_joint[i][k];
+    const double L = sqrt(dot(l, l));
+    for (int k = 0; k < 3; k++) n[k] = l[k] / L;
+    memcpy(leg->axis, n, sizeof n);
+    leg->length = L;
+    cross(w, r, w_x_r);
+    for (int k = 0; k < 3; k++) v_a[k] = v[k] + w_x_r[k]; /* Eq 3 */
+    cross(w, w_x_r, bias);                               /* Eq 8: w x (w x r) */
+    const double L_dot = dot(n, v_a);
+    leg->velocity = L_dot;
+
+    /* Leg inertia at the upper joint: mu_axial n n' + mu_perp P, and d mu_perp / dL. */
+    const double m_a = c->m_a, m_b = c->m_b, m_s = c->m_s, r_ac = c->r_ac, r_bc = c->r_bc, r_sc = c->r_sc;
+    const double ua = 1.0 - r_ac / L, ub = r_bc / L, us = r_sc / L;
+    const double mu_axial = m_a + c->spin;
+    const double mu_perp = m_a * ua * ua + m_b * ub * ub + m_s * us * us + c->i_ab / (L * L);
+    const double mu_perp_dL = (2.0 * m_a * ua * r_ac - 2.0 * m_b * ub * r_bc - 2.0 * m_s * us * r_sc) / (L * L) -
+                              2.0 * c->i_ab / (L * L * L);
+    double P_v[3], P_g[3], P_bias[3];
+    for (int k = 0; k < 3; k++) {
+        P_v[k] = v_a[k] - n[k] * L_dot;
+        P_g[k] = g[k] - n[k] * dot(n, g);
+        P_bias[k] = bias[k] - n[k] * dot(n, bias);
+    }
+    const double vPv = dot(v_a, P_v);
+
+    /* Leg force at the upper joint from everything but the actuator (acting on the platform):
+     * -(M_leg bias + velocity terms + gravity gradient + friction), Lagrange in p_a. */
+    const double c_axial = ((mu_axial - mu_perp) / L - 0.5 * mu_perp_dL) * vPv;
+    const double friction = p->friction_on ? p->viscous_friction * p->screw_ratio * p->screw_ratio * L_dot : 0.0;
+    double f[3];
+    for (int k = 0; k < 3; k++) {
+        double inertial = mu_axial * n[k] * dot(n, bias) + mu_perp * P_bias[k];
+        double velocity_terms = c_axial * n[k] + mu_perp_dL * L_dot * P_v[k];
+        double gravity = m_a * (n[k] * dot(n, g) + ua * P_g[k]) + (m_b * ub + m_s * us) * P_g[k];
+        f[k] = -inertial - velocity_terms + gravity - friction * n[k];
+    }
+    double r_x_f[3];
+    cross(r, f, r_x_f);
+    for (int k = 0; k < 3; k++) {
+        rhs0[k] += f[k];
+        rhs0[3 + k] += r_x_f[k];
+    }
+    double S[9];
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) S[3 * a + b] = mu_axial * n[a] * n[b] + mu_perp * ((a == b) - n[a] * n[b]);
+    add_leg_mass(S, r, M);
+    if (c->I_s != 0.0 || c->C_S != 0.0 || c->C_U != 0.0) add_leg_spin(c, n, L, r, w, v_a, P_v, M, rhs0, e);
+
+    e->kinetic += 0.5 * (mu_axial * L_dot * L_dot + mu_perp * vPv);
+    /* centres of mass: p_a - r_ac n (moving), b + r_bc n (rotating), b + r_sc n (motor) */
+    e->potential -= m_a * (dot(g, t) + dot(g, r) - r_ac * dot(g, n)) +
+                    (m_b + m_s) * dot(g, p->lower_joint[i]) + (m_b * r_bc + m_s * r_sc) * dot(g, n);
+    if (p->friction_on) {
+        double speed = p->screw_ratio * L_dot;
+        e->friction_loss += p->viscous_friction * speed * speed;
+    }
+}
+
 /* Assembles the mass matrix M (Eq 23) and the generalized force of everything but the actuators
  * (gravity, velocity terms, friction, external wrench): M u_dot = rhs0 + sum_i [n_i; r_i x n_i] F_i.
  * Fills the energies and the loss powers of diag (if not NULL). */
@@ -260,137 +416,14 @@ static void assemble(const Platform *p, const double *x, const double wrench[6],
         rhs0[k] = p->platform_mass * g[k] + wrench[k];
         rhs0[3 + k] = -gyro[k] + wrench[3 + k];
     }
-    double kinetic = 0.5 * p->platform_mass * dot(v, v) + 0.5 * dot(w, Ip_w);
-    double potential = -p->platform_mass * dot(g, t);
-    double friction_loss = 0.0;
-
-    const int act = p->actuator_inertia_on, mot = p->motor_inertia_on;
-    const double m_a = act ? p->moving_mass : 0.0, m_b = act ? p->rotating_mass : 0.0;
-    const double m_s = mot ? p->motor_mass : 0.0;
-    const double i_ab = (act ? p->moving_inertia + p->rotating_inertia : 0.0) + (mot ? p->motor_inertia : 0.0);
-    const double spin = mot ? p->rotor_inertia * p->screw_ratio * p->screw_ratio : 0.0;
-    const double r_ac = p->moving_com, r_bc = p->rotating_com, r_sc = p->motor_com;
-
-    for (int i = 0; i < PLATFORM_LEGS; i++) {
-        LegGeometry *leg = &legs[i];
-        double l[3], v_a[3], w_x_r[3], bias[3], n[3], r[3];
-        mat_vec(R, p->upper_joint[i], r);
-        memcpy(leg->arm, r, sizeof r);
-        for (int k = 0; k < 3; k++) l[k] = t[k] + r[k] - p->lower_joint[i][k];
-        const double L = sqrt(dot(l, l));
-        for (int k = 0; k < 3; k++) n[k] = l[k] / L;
-        memcpy(leg->axis, n, sizeof n);
-        leg->length = L;
-        cross(w, r, w_x_r);
-        for (int k = 0; k < 3; k++) v_a[k] = v[k] + w_x_r[k]; /* Eq 3 */
-        cross(w, w_x_r, bias);                               /* Eq 8: w x (w x r) */
-        const double L_dot = dot(n, v_a);
-        leg->velocity = L_dot;
-
-        /* Leg inertia at the upper joint: mu_axial n n' + mu_perp P, and d mu_perp / dL. */
-        const double ua = 1.0 - r_ac / L, ub = r_bc / L, us = r_sc / L;
-        const double mu_axial = m_a + spin;
-        const double mu_perp = m_a * ua * ua + m_b * ub * ub + m_s * us * us + i_ab / (L * L);
-        const double mu_perp_dL = (2.0 * m_a * ua * r_ac - 2.0 * m_b * ub * r_bc - 2.0 * m_s * us * r_sc) / (L * L) -
-                                  2.0 * i_ab / (L * L * L);
-        double P_v[3], P_g[3], P_bias[3];
-        for (int k = 0; k < 3; k++) {
-            P_v[k] = v_a[k] - n[k] * L_dot;
-            P_g[k] = g[k] - n[k] * dot(n, g);
-            P_bias[k] = bias[k] - n[k] * dot(n, bias);
-        }
-        const double vPv = dot(v_a, P_v);
-
-        /* Leg force at the upper joint from everything but the actuator (acting on the platform):
-         * -(M_leg bias + velocity terms + gravity gradient + friction), Lagrange in p_a. */
-        const double c_axial = ((mu_axial - mu_perp) / L - 0.5 * mu_perp_dL) * vPv;
-        const double friction = p->friction_on ? p->viscous_friction * p->screw_ratio * p->screw_ratio * L_dot : 0.0;
-        double f[3];
-        for (int k = 0; k < 3; k++) {
-            double inertial = mu_axial * n[k] * dot(n, bias) + mu_perp * P_bias[k];
-            double velocity_terms = c_axial * n[k] + mu_perp_dL * L_dot * P_v[k];
-            double gravity = m_a * (n[k] * dot(n, g) + ua * P_g[k]) + (m_b * ub + m_s * us) * P_g[k];
-            f[k] = -inertial - velocity_terms + gravity - friction * n[k];
-        }
-        double r_x_f[3];
-        cross(r, f, r_x_f);
-        for (int k = 0; k < 3; k++) {
-            rhs0[k] += f[k];
-            rhs0[3 + k] += r_x_f[k];
-        }
-
-        /* M += J_a' S J_a with J_a = [I, -[r]x] and S = M_leg:
-         * [[S, -S [r]x], [[r]x S, -[r]x S [r]x]]. */
-        double S[9], S_rx[9];
-        for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) S[3 * a + b] = mu_axial * n[a] * n[b] + mu_perp * ((a == b) - n[a] * n[b]);
-        for (int a = 0; a < 3; a++) { /* row a of S [r]x is (row a of S) x r */
-            const double *row = S + 3 * a;
-            S_rx[3 * a + 0] = row[1] * r[2] - row[2] * r[1];
-            S_rx[3 * a + 1] = row[2] * r[0] - row[0] * r[2];
-            S_rx[3 * a + 2] = row[0] * r[1] - row[1] * r[0];
-        }
-        for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) {
-                /* ([r]x S [r]x)_ab = sum_c [r]x_ac (S [r]x)_cb, with [r]x = [[0,-r2,r1],[r2,0,-r0],[-r1,r0,0]] */
-                const double rx_S_rx = (a == 0)   ? -r[2] * S_rx[3 + b] + r[1] * S_rx[6 + b]
-                                       : (a == 1) ? r[2] * S_rx[b] - r[0] * S_rx[6 + b]
-                                                  : -r[1] * S_rx[b] + r[0] * S_rx[3 + b];
-                M[6 * a + b] += S[3 * a + b];
-                M[6 * a + 3 + b] -= S_rx[3 * a + b];
-                M[6 * (3 + b) + a] -= S_rx[3 * a + b]; /* symmetric block: ([r]x S)' = -S [r]x */
-                M[6 * (3 + a) + 3 + b] -= rx_S_rx;
-            }
-
-        /* Leg spin with the platform and joint friction (see platform.h). For y a torque-like
-         * vector at the leg, (d w_b / du)' y = E_w' n (n.y) + (1/L) J_a' (y x n): a torque on the
-         * platform plus a force (y x n) / L at the upper joint. */
-        const double I_s = act ? p->leg_spin_inertia : 0.0;
-        const double C_S = p->friction_on ? p->joint_friction_lower : 0.0;
-        const double C_U = p->friction_on ? p->joint_friction_upper : 0.0;
-        if (I_s != 0.0 || C_S != 0.0 || C_U != 0.0) {
-            const double s = dot(n, w);
-            double n_dot[3], n_x_v[3], w_b[3], rho[3];
-            for (int k = 0; k < 3; k++) n_dot[k] = P_v[k] / L;
-            cross(n, v_a, n_x_v);
-            for (int k = 0; k < 3; k++) {
-                w_b[k] = s * n[k] + n_x_v[k] / L;
-                rho[k] = w_b[k] - w[k]; /* rate across the upper joint; rho . n = 0 */
-            }
-            /* dH/dt of the spin, I_s (s_dot n + s n_dot): its s_dot part, with s_dot = n_dot.w + n.w_dot,
-             * goes to M and the rest here; C_S w_b on the leg; C_U rho on the leg and -C_U rho on the
-             * platform. */
-            double n_x_ndot[3], friction_y[3], y_x_n[3], f_joint[3], r_x_f_joint[3];
-            cross(n, n_dot, n_x_ndot);
-            for (int k = 0; k < 3; k++) friction_y[k] = C_S * w_b[k] + C_U * rho[k];
-            cross(friction_y, n, y_x_n);
-            const double n_dot_w = dot(n_dot, w);
-            for (int k = 0; k < 3; k++) f_joint[k] = I_s * s / L * n_x_ndot[k] - y_x_n[k] / L;
-            cross(r, f_joint, r_x_f_joint);
-            for (int k = 0; k < 3; k++) {
-                rhs0[k] += f_joint[k];
-                rhs0[3 + k] += r_x_f_joint[k] - I_s * n_dot_w * n[k] - C_S * s * n[k] + C_U * rho[k];
-            }
-            for (int a = 0; a < 3; a++)
-                for (int b = 0; b < 3; b++) M[6 * (3 + a) + 3 + b] += I_s * n[a] * n[b];
-            kinetic += 0.5 * I_s * s * s;
-            friction_loss += C_S * dot(w_b, w_b) + C_U * dot(rho, rho);
-        }
-
-        kinetic += 0.5 * (mu_axial * L_dot * L_dot + mu_perp * vPv);
-        /* centres of mass: p_a - r_ac n (moving), b + r_bc n (rotating), b + r_sc n (motor) */
-        potential -= m_a * (dot(g, t) + dot(g, r) - r_ac * dot(g, n)) +
-                     (m_b + m_s) * dot(g, p->lower_joint[i]) + (m_b * r_bc + m_s * r_sc) * dot(g, n);
-        if (p->friction_on) {
-            double speed = p->screw_ratio * L_dot;
-            friction_loss += p->viscous_friction * speed * speed;
-        }
-    }
+    Energies e = {0.5 * p->platform_mass * dot(v, v) + 0.5 * dot(w, Ip_w), -p->platform_mass * dot(g, t), 0.0};
+    const LegConstants c = leg_constants(p);
+    for (int i = 0; i < PLATFORM_LEGS; i++) add_leg(p, &c, i, R, t, v, w, M, rhs0, &legs[i], &e);
     if (diag) {
         memcpy(diag->mass_matrix, M, sizeof(double) * 36);
-        diag->kinetic = kinetic;
-        diag->potential = potential;
-        diag->friction_loss = friction_loss;
+        diag->kinetic = e.kinetic;
+        diag->potential = e.potential;
+        diag->friction_loss = e.friction_loss;
         diag->load_power = dot(wrench, v) + dot(wrench + 3, w);
     }
 }

@@ -1,4 +1,4 @@
-"""SSP archives are read within limits (cosim.engine.ssp.unpack): their size in all, their entries
+"""SSP archives are read within limits (cosim.engine.archive.unpack): their size in all, their entries
 and each entry's unpacked size against its packed size are checked from the archive's directory
 before anything is written and again while it unpacks; names that climb out of the folder and
 links are refused, naming the entry; nothing unpacked stays behind, refused or run; a full disk is
@@ -15,7 +15,8 @@ import zipfile
 import pytest
 
 from cosim.engine.artifacts import ROOT
-from cosim.engine.ssp import ArchiveLimits, SspError, read_ssp, unpack, write_ssp
+from cosim.engine.archive import ArchiveLimits, unpack
+from cosim.engine.ssp import SspError, read_ssp, write_ssp
 from test_coupling import oscillator
 
 

@@ -16,7 +16,7 @@ from cosim.platform import core as platform_core
 
 def test_the_bindings_match_the_builds():
     """Both libraries load (their check passes) and publish every field of their structs."""
-    lib, core = kernel._load(), platform_core.load()
+    lib, core = kernel.library(), platform_core.core_library()
     published = published_layout(lib, "kernel_layout")
     for structure, name in [(kernel._Bond, "KernelBond"), (kernel._Instance, "KernelInstance"),
                             (kernel._Kernel, "Kernel"), (kernel._Controller, "Controller")]:
@@ -39,7 +39,7 @@ def drifted(structure: type[ctypes.Structure], change) -> type[ctypes.Structure]
 ])
 def test_a_drifted_copy_is_refused_with_one_line(change, what):
     """What the old hand-copied "10 ints" per bond could not notice: a copy whose fields differ."""
-    lib = kernel._load()
+    lib = kernel.library()
     with pytest.raises(LayoutError) as error:
         check_layout(lib, "kernel_layout", library_path("libcosim_kernel.so"), [(drifted(kernel._Kernel, change), "Kernel")])
     message = str(error.value)

@@ -18,7 +18,8 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import FMU_EXPERIMENT_STEPS, FMU_EXPERIMENTS
-from cosim.engine.artifacts import MODELS, fmu_path
+from cosim.engine.artifacts import fmu_path
+from shipped import MODELS
 
 STEPS = 2000
 FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}

@@ -14,7 +14,8 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from cosim.platform.scene.parameter_sets import read_parameter_set
-from cosim.engine.artifacts import MODELS, ROOT, fmu_path
+from cosim.engine.artifacts import ROOT, fmu_path
+from shipped import MODELS
 
 SHARED_PARAMS = ROOT.parent / "shared" / "params" / "meng2010.toml"
 

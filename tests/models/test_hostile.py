@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from cosim.engine.artifacts import MODELS, fmu_path
+from cosim.engine.artifacts import fmu_path
+from shipped import MODELS
 from cosim.engine.fmi import FmuError, FmuInstance
 
 FMUS = list(MODELS)

@@ -10,7 +10,7 @@ import pytest
 
 from cosim.engine.artifacts import fmu_path
 from cosim.engine.fmi import FmuInstance
-from cosim.platform.core import Core, load
+from cosim.platform.core import Core, core_library
 from test_mechanics_fmu import dll, energy_error, hold_torques, make_mechanics, mechanics_fmu  # noqa: F401 (fixtures)
 
 

@@ -8,12 +8,12 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from cosim.platform.core import Core, load
+from cosim.platform.core import Core, core_library
 
 
 @pytest.fixture(scope="module")
 def dll():
-    return load()
+    return core_library()
 
 
 @pytest.fixture

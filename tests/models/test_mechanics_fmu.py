@@ -13,7 +13,7 @@ from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.engine.fmi import FmuError, FmuInstance
 from cosim.engine.artifacts import fmu_path
 from cosim.platform.scene.parameter_sets import mechanics_start_values
-from cosim.platform.core import Core, load
+from cosim.platform.core import Core, core_library
 from scipy.spatial.transform import Rotation
 
 POSE = ["x", "y", "z", "roll", "pitch", "yaw"]
@@ -26,7 +26,7 @@ def mechanics_fmu():
 
 @pytest.fixture(scope="module")
 def dll():
-    return load()
+    return core_library()
 
 
 @pytest.fixture

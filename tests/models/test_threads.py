@@ -11,7 +11,8 @@ import threading
 import numpy as np
 import pytest
 
-from cosim.engine.artifacts import MODELS, fmu_path
+from cosim.engine.artifacts import fmu_path
+from shipped import MODELS
 from cosim.engine.fmi import FmuInstance
 
 INPUTS = {"pmsm_drive": ["angle_ref"], "linear_motor": ["position_ref"], "mechanics": ["leg[1].torque"],

@@ -11,7 +11,8 @@ import pytest
 from fmpy import read_model_description
 
 from cosim.cli import main
-from cosim.engine.artifacts import MODELS, ROOT, fmu_path
+from cosim.engine.artifacts import ROOT, fmu_path
+from shipped import MODELS
 from cosim.engine.fmi import FmuInstance
 from cosim.platform.ports import POSE
 

@@ -30,7 +30,8 @@ import numpy as np
 import pytest
 
 from conftest import FMU_EXPERIMENT_STEPS, FMU_EXPERIMENTS
-from cosim.engine.artifacts import MODELS, ROOT, fmu_path
+from cosim.engine.artifacts import ROOT, fmu_path
+from shipped import MODELS
 from cosim.engine.checks import variables
 
 WINE = shutil.which("wine64") or next((str(p) for p in (Path("/usr/lib/wine/wine64"),) if p.exists()), None)
