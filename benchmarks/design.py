@@ -23,8 +23,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.design import design_map, load_study, parallel_map, platform_values  # noqa: E402
-from cosim.platform.design.confirm import confirm  # noqa: E402
-from cosim.platform.design.motion import basic_motions  # noqa: E402
+from cosim.platform.design.search.confirm import confirm  # noqa: E402
+from cosim.platform.design.spec.motion import basic_motions  # noqa: E402
 from cosim.platform.core import Core  # noqa: E402
 
 

@@ -1,4 +1,4 @@
-"""The Pareto front over geometry and actuators (cosim.platform.design.pareto): how long, and what.
+"""The Pareto front over geometry and actuators (cosim.platform.design.search.pareto): how long, and what.
 
 The shipped study studies/halder_pareto.toml (Halder's Section V motions; r_b, z_p0, an actuator of
 a three-entry catalogue and a motor's screw lead; five objectives; NSGA-II, 40 x 25 evaluations)
@@ -22,8 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import publish  # noqa: E402
 from cosim.engine.artifacts import ROOT  # noqa: E402
 from cosim.platform.design import load_study  # noqa: E402
-from cosim.platform.design.figures import plot_front  # noqa: E402
-from cosim.platform.design.pareto import confirm_front, describe, pareto_front  # noqa: E402
+from cosim.platform.design.answer.figures import plot_front  # noqa: E402
+from cosim.platform.design.search.pareto import confirm_front, describe, pareto_front  # noqa: E402
 
 
 def main() -> None:

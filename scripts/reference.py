@@ -22,7 +22,7 @@ def pages() -> dict[str, str]:
     from cosim.engine.settings import SCHEMA as SETTINGS
     from cosim.engine.sweep.file import schema as sweep_schema
     from cosim.platform.run.sweep import TARGETS
-    from cosim.platform.design.schema import SCHEMA as STUDY
+    from cosim.platform.design.spec.schema import SCHEMA as STUDY
     from cosim.platform.scene.schema import SCHEMA as SCENE
     reports = ["## What a point reports", "", "`[report] values` names these, per target (the row also has "
                "the point's axes, `status` and `message`):", ""]

@@ -6,6 +6,7 @@ of every module counts, those inside functions too."""
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -53,3 +54,86 @@ def test_the_rooms_are_every_part_of_the_platform():
     parts = {p.name.removesuffix(".py") for p in (PACKAGE / "platform").iterdir()
              if p.name != "__init__.py" and not p.name.startswith("__")}
     assert parts == set(ROOMS)
+
+
+# ---- sizes a newcomer reads in one sitting (docs/guide/layout.md) ------------------------------
+
+ROOT = PACKAGE.parent
+C_SOURCES = sorted([*(ROOT / "fmu").rglob("*.c"), *(PACKAGE / "engine" / "kernel").rglob("*.c")])
+MODULE_LINES, C_LINES, FUNCTION_LINES, FOLDER_MODULES = 600, 800, 80, 12
+
+
+def lines(path: Path) -> int:
+    return len(path.read_text().splitlines())
+
+
+def test_every_module_is_under_600_lines():
+    assert not [f"{p.relative_to(ROOT)}: {lines(p)}" for p in MODULES if lines(p) >= MODULE_LINES]
+
+
+def test_every_c_source_is_under_800_lines():
+    assert C_SOURCES
+    assert not [f"{p.relative_to(ROOT)}: {lines(p)}" for p in C_SOURCES if lines(p) >= C_LINES]
+
+
+def c_functions(path: Path) -> list[tuple[str, int]]:
+    """Each function definition of a C source (its signature starts at column 0, its body ends
+    with a '}' alone at column 0) and its length in lines, signature included."""
+    found, start = [], None
+    for number, line in enumerate(path.read_text().splitlines()):
+        if start is None and re.match(r"[A-Za-z_].*\(", line) and not line.rstrip().endswith(";") \
+                and not line.startswith(("typedef", "#")):
+            start = number
+        elif start is not None and line == "}":
+            found.append((path.read_text().splitlines()[start].split("(")[0], number - start + 1))
+            start = None
+    return found
+
+
+def test_no_function_is_over_80_lines():
+    long = [f"{p.relative_to(ROOT)}: {n.name} {n.end_lineno - n.lineno + 1}" for p in MODULES
+            for n in ast.walk(ast.parse(p.read_text())) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and n.end_lineno - n.lineno + 1 > FUNCTION_LINES]
+    long += [f"{p.relative_to(ROOT)}: {name} {n}" for p in C_SOURCES for name, n in c_functions(p) if n > FUNCTION_LINES]
+    assert not long
+
+
+def test_the_c_function_scan_finds_what_it_measures():
+    """The scan above finds the FMI entry points (a check that cannot pass by finding nothing)."""
+    found = dict(c_functions(ROOT / "fmu" / "common" / "fmi2_layer.c"))
+    assert {"fmi2Status fmi2DoStep", "fmi2Component fmi2Instantiate"} <= set(found)
+
+
+@pytest.mark.parametrize("folder", sorted({p.parent for p in MODULES if p.parent != PACKAGE / "engine"
+                                           and "engine" not in p.relative_to(PACKAGE).parts}),
+                         ids=lambda p: str(p.relative_to(PACKAGE)) or ".")
+def test_no_folder_of_the_application_holds_over_12_modules(folder):
+    modules = [p.name for p in folder.glob("*.py") if p.name != "__init__.py"]
+    assert len(modules) <= FOLDER_MODULES, modules
+
+
+# ---- one run entry, one model list ----------------------------------------------------------------
+
+APPLICATION = [p for p in MODULES if p.relative_to(PACKAGE).parts[0] != "engine"]
+
+
+@pytest.mark.parametrize("path", APPLICATION, ids=[str(p.relative_to(PACKAGE)) for p in APPLICATION])
+def test_the_application_runs_systems_through_the_one_entry(path):
+    """Above the engine, a system runs through cosim.engine.run's Plan and run (or run_system):
+    never its execution loop or the execute beneath run."""
+    assert "cosim.engine.execution" not in imports(path)
+    taken = {alias.name for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, ast.ImportFrom)
+             for alias in node.names}
+    assert not taken & {"execute", "Execution"}, taken & {"execute", "Execution"}
+
+
+def test_the_engine_names_no_platform_model():
+    """The engine knows no model of the platform: no string in its code is a shipped model's name
+    (fmu/models.txt, which CMake, the fuzz script and the tests read)."""
+    models = {line.strip() for line in (ROOT / "fmu" / "models.txt").read_text().splitlines()
+              if line.strip() and not line.startswith("#")}
+    assert {"mechanics", "pmsm_drive"} <= models
+    named = [f"{p.relative_to(ROOT)}:{n.lineno}: {n.value!r}" for p in MODULES
+             if p.relative_to(PACKAGE).parts[0] == "engine"
+             for n in ast.walk(ast.parse(p.read_text())) if isinstance(n, ast.Constant) and n.value in models]
+    assert not named

@@ -20,7 +20,7 @@ def add(commands) -> argparse.ArgumentParser:
 
 def main(args: argparse.Namespace) -> int:
     from ..platform.design import load_study, parallel_map, report_rows, summary, write
-    from ..platform.design.pareto import study_front
+    from ..platform.design.search.pareto import study_front
     from ..platform.scene import shipped
     count = workers(args)
     study = load_study(shipped(args.study, "studies") or args.study if not Path(args.study).exists() else args.study)

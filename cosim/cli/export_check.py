@@ -22,7 +22,7 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..engine.execution import RunFailed
+    from ..engine.outcome import RunStopped
     from ..engine.ssp import read_ssp, write_tool_steps
     from ..engine.tools import FIT_TOLERANCE, FLOOR, SYSTEM_HEADER, TOOL_MASTERS, check_system, fmi3_lines, system_row
     from .common import unwritable
@@ -33,7 +33,7 @@ def main(args: argparse.Namespace) -> int:
     structure = read_ssp(args.system)
     try:
         duration, steps = check_system(structure)
-    except RunFailed as failure:
+    except RunStopped as failure:
         print(f"error: {args.system}: the system's own coupling at a 16th of its step did not run through the "
               f"probe, so nothing can be measured against it: {failure}")
         return 1

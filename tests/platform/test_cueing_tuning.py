@@ -128,7 +128,7 @@ def test_a_study_carries_a_vehicles_motion_through_the_cueing(tmp_path):
 ])
 def test_a_wrong_vehicle_motion_in_a_study_is_one_line(tmp_path, motion, message):
     from cosim.platform.design import load_study
-    from cosim.platform.design.schema import StudyError
+    from cosim.platform.design.spec.schema import StudyError
     (tmp_path / "drive.csv").write_text((EXAMPLE.parent / "drive.csv").read_text())
     text = (EXAMPLE.parent / "car_platform.toml").read_text()
     start = text.index("[motion]")

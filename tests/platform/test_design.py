@@ -14,9 +14,9 @@ import pytest
 from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import Study, design_map, load_study, parallel_map, platform_values
-from cosim.platform.design.map import limit_along
-from cosim.platform.design.motion import basic_motions, shortest_time
-from cosim.platform.design.study import stubs
+from cosim.platform.design.search.map import limit_along
+from cosim.platform.design.spec.motion import basic_motions, shortest_time
+from cosim.platform.design.spec.study import stubs
 from cosim.platform.scene.parameter_sets import read_parameter_set
 from cosim.platform.core import Core
 
@@ -127,7 +127,7 @@ def test_a_ramp_shorter_than_the_times_resolution_plays_as_a_jump(tmp_path):
     """An all but unlimited acceleration (1e300 m/s^2) makes ramps of 5e-302 s, which the table's
     offset by HOLD rounds onto one instant: the table keeps each instant once, strictly increasing
     (the trajectory FMU refuses a table whose time does not increase)."""
-    from cosim.platform.design.confirm import HOLD, _table
+    from cosim.platform.design.search.confirm import HOLD, _table
     t, s, v, a = shortest_time(0.6, 0.05, 1e300, 5)
     keep = np.r_[True, np.diff(t) > 0]
     displacement = np.zeros((keep.sum(), 6))
@@ -258,7 +258,7 @@ def test_the_workspace_is_the_independent_admissibility_of_each_pose(study):
     grid (20 mm against 40 mm within 10 %); the heave reach agrees with the map's verdict; and
     each singular pose found is singular (the Jacobian's smallest singular value under 1e-6 of the
     neutral's) with none nearer along its DOF."""
-    from cosim.platform.design.workspace import reachable, workspace
+    from cosim.platform.design.search.workspace import reachable, workspace
     point, actuator = {"base_radius": 1.1, "disc_height": 1.4}, study.actuators[1]
     core = Core(actuators=False, motors=False, friction=False).use_start_values(platform_values(study, point))
     neutral = core.neutral_pose
@@ -298,7 +298,7 @@ def test_the_optimum_has_the_largest_worst_case_margin_and_runs_on_dask(study):
     """Differential evolution's design: its worst margin is at least the best of a 0.05 m grid over
     the same ranges (brute force), the same seed gives the same design, and its evaluations on two
     Dask workers give the design of one process bit for bit."""
-    from cosim.platform.design.optimise import margins, optimise
+    from cosim.platform.design.search.optimise import margins, optimise
     actuator = study.actuators[1]
     part = study.with_axes({"base_radius": np.arange(1.2, 1.501, 0.05), "disc_height": np.arange(0.9, 1.301, 0.05)})
     best = optimise(part, actuator, workers=0, max_iterations=15)
@@ -310,11 +310,11 @@ def test_the_optimum_has_the_largest_worst_case_margin_and_runs_on_dask(study):
 
 
 def test_a_scenes_motion_as_the_specification():
-    """Eq 35 on Meng's platform (cosim.platform.design.scene_fit): the legs' range over the
+    """Eq 35 on Meng's platform (cosim.platform.design.search.scene_fit): the legs' range over the
     reference motion equals the core's per-pose inverse kinematics (platform_leg_lengths) on the
     same poses; it needs more than Meng's 665 mm stroke at every l_0 tried (the main job's
     out-of-stroke warnings), and a longer l_0 lifts the whole range."""
-    from cosim.platform.design.scene_fit import scene_fit
+    from cosim.platform.design.search.scene_fit import scene_fit
     from cosim.platform.run.compile import scene_values
     from cosim.platform.scene import load_scene
     from cosim.platform.run.alone import reference_motion
@@ -335,7 +335,7 @@ def test_a_design_confirmed_by_co_simulation_agrees_with_its_inverse_dynamics(st
     friction): the peak leg force within 1 % of the full inverse dynamics' along the reference (the
     tracking error, under 0.1 mm and 1 mrad, moves it by less), the rms below the peak and within
     the continuous force; on two Dask workers bit for bit as in one process."""
-    from cosim.platform.design.confirm import confirm
+    from cosim.platform.design.search.confirm import confirm
     point, actuator = {"base_radius": 1.1, "disc_height": 1.37}, study.actuators[1]
     here = confirm(study, point, actuator, workers=0, motions=("heave", "roll"))
     for run in here:

@@ -14,8 +14,8 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import FAMILIES, design_map, load_study, platform_values
-from cosim.platform.design.motion import basic_motions, shortest_time
-from cosim.platform.design.report import map_rows
+from cosim.platform.design.spec.motion import basic_motions, shortest_time
+from cosim.platform.design.answer.report import map_rows
 from cosim.platform.scene.parameter_sets import read_parameter_set, sumnu_mechanics
 from cosim.platform.core import Core
 from cosim.platform.scene import load_scene
@@ -163,7 +163,7 @@ def test_a_confirmation_through_our_drives_reports_their_currents(meng, drive):
     error's effect: millimetres on metres of leg), and the currents the drive's own torque or
     force constant away from those forces (the current loop's error and the motor's friction:
     1 %)."""
-    from cosim.platform.design.confirm import confirm_motion, confirmation_rows, drive_parameters
+    from cosim.platform.design.search.confirm import confirm_motion, confirmation_rows, drive_parameters
     from cosim.platform.run.tuning import drive_defaults
     point = {"lower_joint_radius": 1.1, "middle_leg_length": 1.86}
     run = confirm_motion(meng, point, meng.actuators[1], "meng_eq35", drive=drive)

@@ -1,4 +1,4 @@
-"""Geometry and actuator chosen together (cosim.platform.design.pareto): the front is admissible and
+"""Geometry and actuator chosen together (cosim.platform.design.search.pareto): the front is admissible and
 non-dominated, no design of a brute-force grid beats it by more than 2 %, the same seed gives the
 same front in one process and on two Dask workers, a motor's screw lead turns its torque into force
 and its rotor's inertia onto the leg as the physics says, the knee is the compromise, and the
@@ -14,9 +14,9 @@ import pytest
 
 from cosim.engine.artifacts import ROOT
 from cosim.platform.design import Study, load_study
-from cosim.platform.design.map import at
-from cosim.platform.design.pareto import Front, candidate, knee, measure, pareto_front
-from cosim.platform.design.study import MAXIMISED
+from cosim.platform.design.search.map import at
+from cosim.platform.design.search.pareto import Front, candidate, knee, measure, pareto_front
+from cosim.platform.design.spec.study import MAXIMISED
 
 STUDY = ROOT / "studies" / "halder_pareto.toml"
 EC2_600, PMSM = "EC2-B23-10L-05B-600", "Meng PMSM, ball screw, 0.6 m"
@@ -122,7 +122,7 @@ def test_the_knee_confirmed_through_our_pmsm_drives_stays_within_its_currents(st
     force is the full inverse dynamics' within 3 %, its q-current peak is within the drive's
     limit, and the rms current carries the rms force through K_m and the K_FT of the knee's own lead
     within 1 % (the mechanics turned the screw the candidate chose)."""
-    from cosim.platform.design.confirm import confirm
+    from cosim.platform.design.search.confirm import confirm
     part = small(study, objectives=("force_margin", "actuator_force"), actuators=(PMSM,), population=12, generations=6)
     front = pareto_front(part)
     actuator = front.actuators[front.knee]

@@ -17,12 +17,12 @@ from cosim.cli import main
 from cosim.engine.artifacts import ROOT
 from cosim.platform.core import Core
 from cosim.platform.design import Study, design_map, load_study, platform_values
-from cosim.platform.design.assumptions import assumption_rows
-from cosim.platform.design.halder import paper_rows
-from cosim.platform.design.map import along, at, limit_along
-from cosim.platform.design.study import Thresholds, allowed, decimals, stubs
-from cosim.platform.design.verdicts import SINGULAR, conditioning, near_singular
-from cosim.platform.design.workspace import singular_distance
+from cosim.platform.design.answer.assumptions import assumption_rows
+from cosim.platform.design.answer.halder import paper_rows
+from cosim.platform.design.search.map import along, at, limit_along
+from cosim.platform.design.spec.study import Thresholds, allowed, decimals, stubs
+from cosim.platform.design.spec.verdicts import SINGULAR, conditioning, near_singular
+from cosim.platform.design.search.workspace import singular_distance
 
 STUDY = ROOT / "studies" / "halder_section5.toml"
 CHOSEN = {"base_radius": 1.1, "disc_height": 1.4}

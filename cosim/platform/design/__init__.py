@@ -29,11 +29,11 @@ assumptions first, each with what it changes at the chosen design (assumptions.p
 word comes from the study's thresholds (verdicts.py).
 """
 
-from .map import DesignMap, design_map, parallel_map
-from .reader import load_study
-from .report import report_rows, summary, write
-from .schema import StudyError
-from .study import FAMILIES, Actuator, Study, platform_values
+from .search.map import DesignMap, design_map, parallel_map
+from .spec.reader import load_study
+from .answer.report import report_rows, summary, write
+from .spec.schema import StudyError
+from .spec.study import FAMILIES, Actuator, Study, platform_values
 
 __all__ = ["Actuator", "DesignMap", "FAMILIES", "Study", "StudyError", "design_map", "load_study", "parallel_map",
            "platform_values", "report_rows", "summary", "write"]

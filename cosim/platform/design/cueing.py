@@ -29,7 +29,7 @@ from ..run.errors import BUILD_ERRORS, scene_error
 from ..run.runner import cueing_value, run_scene
 from ..scene import Scene
 from ..run.alone import play_cueing
-from .optimise import evolve
+from .search.optimise import evolve
 
 # searched where the scene's [cueing.tune] names no ranges: the horizontal channels and the tilt,
 # the ones a ground vehicle's motion exercises most

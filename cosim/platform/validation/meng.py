@@ -247,7 +247,7 @@ def stroke_study() -> tuple[list[Row], dict]:
     """Which stroke, or which middle leg length l_0, carries Eq 35 (issue 23): the scene's reference
     motion on Meng's platform with l_0 from 1.70 to 2.02 m in 10 mm steps (cosim.platform.design.
     scene_fit), every leg's range and the largest joint angle against the stroke and joint limit."""
-    from ..design.scene_fit import scene_fit
+    from ..design.search.scene_fit import scene_fit
     scene = meng_scene()
     fit = scene_fit(scene, "geometry.middle_leg_length", np.round(np.arange(1.70, 2.0201, 0.01), 10))
     k = int(np.argmin(np.abs(fit.values - 1.86)))

@@ -162,9 +162,9 @@ errors, here move the payload by what they demand (51.7 mm sway and 7.1 mm heave
 def _halder_section_5(figures: Path) -> str:
     from ...engine.artifacts import data_dir
     from ..design import design_map, load_study, report_rows
-    from ..design.halder import PAPER, figures as section5_figures
-    from ..design.map import at
-    from ..design.study import stubs
+    from ..design.answer.halder import PAPER, figures as section5_figures
+    from ..design.search.map import at
+    from ..design.spec.study import stubs
     study = load_study(data_dir("studies") / "halder_section5.toml")
     map_d = design_map(study)
     section5_figures(map_d, figures)
@@ -204,7 +204,7 @@ def _meng_stroke(figures: Path) -> str:
         """The paper's motion is beyond its platform: the main job warns that legs leave the 2.2 m stroke.
 Here Eq 35's reference poses (the scene's trajectory FMU stepped alone) go through the dynamics core
 on Meng's platform with the middle leg length l_0 (which sets the neutral height) from 1.70 to 2.02 m
-in 10 mm steps (`cosim.platform.design.scene_fit`): every leg's shortest and longest length and the
+in 10 mm steps (`cosim.platform.design.search.scene_fit`): every leg's shortest and longest length and the
 largest joint angle over the motion, against the 665 mm stroke and the joint limit.""",
         rows_s)
 

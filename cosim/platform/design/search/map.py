@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core import Core
-from .motion import basic_motions
-from .study import Actuator, Study, platform_values, stubs
-from .verdicts import SINGULAR
+from ...core import Core
+from ..spec.motion import basic_motions
+from ..spec.study import Actuator, Study, platform_values, stubs
+from ..spec.verdicts import SINGULAR
 
 
 @dataclass
@@ -158,7 +158,7 @@ def parallel_map(study: Study, dynamic: bool = True, workers: int | None = None,
     core, or a running scheduler); workers = 0: in this process. Bit for bit the in-process map."""
     if workers == 0 and scheduler is None:
         return design_map(study, dynamic)
-    from ...engine.sweep.dask_run import dask_client
+    from ....engine.sweep.dask_run import dask_client
     start = time.perf_counter()
     with dask_client(workers, scheduler) as client:
         n = max(len(client.scheduler_info()["workers"]), 1)

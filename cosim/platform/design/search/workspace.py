@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core import Core
-from ..report.rows import Row
-from .study import DOFS, ROTATIONS, Actuator, Study, platform_values, point_text, stubs
-from .verdicts import conditioning, near_text
+from ...core import Core
+from ...report.rows import Row
+from ..spec.study import DOFS, ROTATIONS, Actuator, Study, platform_values, point_text, stubs
+from ..spec.verdicts import conditioning, near_text
 
 REACH, ANGULAR_REACH = 1.0, math.pi  # [m], [rad] how far along each DOF a singular pose is sought
 SEARCH = {False: f"{REACH:g} m", True: f"{math.degrees(ANGULAR_REACH):g} deg"}

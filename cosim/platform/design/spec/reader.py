@@ -1,5 +1,5 @@
 """Reads a design study file into a `Study`: the schema checks every key's type and range
-(cosim.platform.design.schema), this module what depends on the platform family and on other
+(cosim.platform.design.spec.schema), this module what depends on the platform family and on other
 keys; a motion given as a time series (a scene's reference, or a table) is played by the
 trajectory FMU here. Every mistake is one line naming the file, the line and the full key."""
 
@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ...engine.schema import Document, read
-from ..ports import POSE
+from ....engine.schema import Document, read
+from ...ports import POSE
 from .motion import LONGEST, ramp_and_cruise
 from .schema import RECORDED, SCHEMA, StudyError
 from .study import (DOFS, FAMILIES, ROTATIONS, Actuator, ConfirmSpec, Motion, Motor, OptimiseSpec, ParetoSpec,
@@ -79,7 +79,7 @@ def _payload_from(doc: Document, family_name: str) -> str:
 def _not_degenerate(doc: Document, study: Study) -> None:
     """Every corner of the grid (and each design the study names) builds a platform whose legs hold
     it at its neutral pose: a finite neutral and a leg Jacobian there that is not singular."""
-    from ..core import Core
+    from ...core import Core
     from .study import platform_values
     (row_key, rows), (column_key, columns) = list(study.axes.items())
     named = [(f"study.chosen", study.chosen), ("workspace.point", study.workspace and study.workspace.point),
@@ -305,8 +305,8 @@ def _confirm(doc: Document, axes: dict[str, np.ndarray], actuators: list[str]) -
 
 def _cueing(doc: Document) -> dict[str, Any]:
     """[motion] cueing: the cueing FMU's parameter values, checked against its modelDescription."""
-    from ...engine.artifacts import fmu_path
-    from ...engine.checks import ParameterError, check_values
+    from ....engine.artifacts import fmu_path
+    from ....engine.checks import ParameterError, check_values
     given = doc.value("motion", "cueing", {})
     try:
         check_values("motion.cueing", fmu_path("cueing"), given)
@@ -324,11 +324,11 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int, cuei
     pose reference less its neutral pose). Each sampled `samples` times evenly over its duration (at
     least 4); the rates and accelerations are the samples' second-order differences. Raises
     StudyError with the reason (the caller adds the file and line)."""
-    from ..core import neutral_pose
-    from ..run.compile import scene_values
-    from ..scene import SceneError, Signal, load_scene, shipped
-    from ..run.alone import play
-    from ..scene.signals import scene_trajectory, trajectory_parameters
+    from ...core import neutral_pose
+    from ...run.compile import scene_values
+    from ...scene import SceneError, Signal, load_scene, shipped
+    from ...run.alone import play
+    from ...scene.signals import scene_trajectory, trajectory_parameters
     given = study_path.parent / source
     if kind == "scene":
         found = given if given.is_file() else shipped(source, "scenes")
@@ -371,7 +371,7 @@ def recorded_motion(study_path: Path, kind: str, source: Any, samples: int, cuei
 def _through_cueing(vehicle: Path, cueing: dict, duration: float, step: float) -> tuple[np.ndarray, np.ndarray]:
     """A vehicle's motion through the cueing FMU (its neutral pose at zero: the pose reference is
     the displacement), played at 1 ms (or `step`, if finer) and taken at every `step`."""
-    from ..run.alone import play_cueing
+    from ...run.alone import play_cueing
     values = {**cueing, "vehicle.file": vehicle.resolve(), **{f"neutral.{a}": 0.0 for a in POSE}}
     fine = min(step, 1e-3)
     times, poses, _, _ = play_cueing(values, duration, fine)

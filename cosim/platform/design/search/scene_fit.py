@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core import Core, mechanics_value
-from ..scene import Scene
-from ..run.alone import reference_motion
+from ...core import Core, mechanics_value
+from ...scene import Scene
+from ...run.alone import reference_motion
 
 
 @dataclass
@@ -40,7 +40,7 @@ def scene_fit(scene: Scene, parameter: str, values: np.ndarray, samples: int = 5
     through the dynamics core, against the platform's stroke and joint limit. The motion is the
     reference poses; a parameter that moves the neutral moves the platform under them (the scene's
     offsets at "neutral" follow it)."""
-    from ..run.compile import scene_values
+    from ...run.compile import scene_values
     shortest, longest, angle = [], [], []
     base_values = scene_values(scene)[0]
     stroke = (float(mechanics_value(base_values, "limit.leg_length_min")),

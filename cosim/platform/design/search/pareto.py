@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from ..report.rows import Row
+from ...report.rows import Row
 from .map import at
 from .optimise import margins_of
-from .study import MAXIMISED, OBJECTIVES, Actuator, Study, point_text
+from ..spec.study import MAXIMISED, OBJECTIVES, Actuator, Study, point_text
 from .workspace import position_volume
 
 
@@ -102,7 +102,7 @@ def pareto_front(study: Study, workers: int | None = 0, scheduler: str | None = 
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
-    from ...engine.sweep.dask_run import dask_client
+    from ....engine.sweep.dask_run import dask_client
     spec = study.pareto
     low, high = variables(study)
     start = time.perf_counter()
@@ -206,8 +206,8 @@ def write_front(study: Study, front: Front, out: Path) -> list[Path]:
     import pyarrow as pa
     import pyarrow.csv
     import pyarrow.parquet as pq
-    from ...engine.files import replacing
-    from .figures import plot_front
+    from ....engine.files import replacing
+    from ..answer.figures import plot_front
     stem = study.path.stem
     columns: dict[str, Any] = {k: [p[k] for p in front.points] for k in study.axes}
     columns["actuator"] = [a.name for a in front.actuators]

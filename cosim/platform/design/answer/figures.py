@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..report.plots import save_figure
-from .map import Actuator, DesignMap
-from .study import unit
+from ...report.plots import save_figure
+from ..search.map import Actuator, DesignMap
+from ..spec.study import unit
 
 
 def _plane(design: DesignMap):

@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..scene.parameter_sets import halder_mechanics, read_parameter_set, meng_mechanics, sumnu_mechanics
+from ...scene.parameter_sets import halder_mechanics, read_parameter_set, meng_mechanics, sumnu_mechanics
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 ROTATIONS = ("roll", "pitch", "yaw")

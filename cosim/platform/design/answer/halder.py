@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..report.rows import Row
+from ...report.rows import Row
 from .figures import plot_dynamic, plot_kinematic
-from .map import DesignMap, along, at, limit_along
-from .study import Actuator, Study, stubs
-from .verdicts import conditioning
+from ..search.map import DesignMap, along, at, limit_along
+from ..spec.study import Actuator, Study, stubs
+from ..spec.verdicts import conditioning
 
 PAPER = {"a": 1.19, "b": 1.06, "c": 0.62, "chosen": (1.10, 1.40), "lengths": (1.286, 1.647, 1.886),
          "zone_450": (1.25, 0.95), "zone_600": (1.10, 1.40)}

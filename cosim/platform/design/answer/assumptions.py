@@ -9,9 +9,9 @@ import copy
 
 import numpy as np
 
-from ..report.rows import Row
-from .map import DesignMap, at
-from .study import MARGIN_MODES, Actuator, Study, parameter_set, point_text, stubs
+from ...report.rows import Row
+from ..search.map import DesignMap, at
+from ..spec.study import MARGIN_MODES, Actuator, Study, parameter_set, point_text, stubs
 
 
 def chosen(study: Study) -> tuple[dict[str, float], str]:

@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..report.rows import Row
+from ...report.rows import Row
 from .map import DesignMap, at
-from .study import Actuator, Study, stubs, value
-from .verdicts import SINGULAR
+from ..spec.study import Actuator, Study, stubs, value
+from ..spec.verdicts import SINGULAR
 
 
 def margins(study: Study, point: dict[str, float], actuator: Actuator) -> dict[str, float]:
@@ -76,7 +76,7 @@ def evolve(objective, bounds: list[tuple[float, float]], workers: int | None, sc
     scipy's OptimizeResult."""
     from contextlib import nullcontext
     from scipy.optimize import differential_evolution
-    from ...engine.sweep.dask_run import dask_client
+    from ....engine.sweep.dask_run import dask_client
     with (dask_client(workers, scheduler) if workers != 0 or scheduler else nullcontext()) as client:
 
         def mapper(function, points):  # what differential_evolution evaluates its population through

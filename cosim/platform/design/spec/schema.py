@@ -1,12 +1,12 @@
 """The design study file's keys (docs/reference/study.md is generated from here): every table and
 key with its type, range, unit, default and what it does. What depends on the platform family
-(which design values exist) and on other keys the reader checks (cosim.platform.design.reader)."""
+(which design values exist) and on other keys the reader checks (cosim.platform.design.spec.reader)."""
 
 from __future__ import annotations
 
-from ...engine.errors import InputError
-from ...engine.schema import Key, Schema, Table
-from ...engine.values import REQUIRED, Choice, Flag, Free, ListOf, Number, Row, Text
+from ....engine.errors import InputError
+from ....engine.schema import Key, Schema, Table
+from ....engine.values import REQUIRED, Choice, Flag, Free, ListOf, Number, Row, Text
 from .study import (CONDITION_REASON, DOFS, FAMILIES, MARGIN_MODES, NEAR_REASON, OBJECTIVES, ROTATIONS,
                     Thresholds)
 

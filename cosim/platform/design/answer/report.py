@@ -9,18 +9,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ...engine.files import replacing, write_text
-from ..report.rows import Row, table
-from .confirm import confirmation_rows, study_confirmation
+from ....engine.files import replacing, write_text
+from ...report.rows import Row, table
+from ..search.confirm import confirmation_rows, study_confirmation
 from .figures import plot_dynamic, plot_kinematic
 from .halder import is_section5, longest, marks, paper_rows, shortest
-from .map import DesignMap
-from .optimise import optimum_rows, study_optimum
-from .pareto import Front, pareto_rows, write_front
+from ..search.map import DesignMap
+from ..search.optimise import optimum_rows, study_optimum
+from ..search.pareto import Front, pareto_rows, write_front
 from .assumptions import assumption_rows
-from .study import point_text, span, stubs
-from .verdicts import SINGULAR
-from .workspace import study_workspace, workspace_rows
+from ..spec.study import point_text, span, stubs
+from ..spec.verdicts import SINGULAR
+from ..search.workspace import study_workspace, workspace_rows
 
 
 def map_rows(design: DesignMap) -> list[Row]:

@@ -13,19 +13,19 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ...engine import FixedStep
-from ...engine.run import Plan, run
-from ..core import Core
-from ..ports import POSE, platform_algorithm
-from ..report.rows import Row
-from ..run.system import columns, platform_structure
-from ..run.tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
-from ..scene import Signal
-from ..scene.parameter_sets import drive_set, drive_set_name
-from ..scene.signals import trajectory_parameters
-from .motion import displacements, motion_profile
-from .schema import DRIVEN
-from .study import DOFS, ROTATIONS, Actuator, Study, platform_values
+from ....engine import FixedStep
+from ....engine.run import Plan, run
+from ...core import Core
+from ...ports import POSE, platform_algorithm
+from ...report.rows import Row
+from ...run.system import columns, platform_structure
+from ...run.tuning import SizingError, check_limit, check_sizing, design, drive_defaults, leg_plants
+from ...scene import Signal
+from ...scene.parameter_sets import drive_set, drive_set_name
+from ...scene.signals import trajectory_parameters
+from ..spec.motion import displacements, motion_profile
+from ..spec.schema import DRIVEN
+from ..spec.study import DOFS, ROTATIONS, Actuator, Study, platform_values
 
 HOLD = 0.5  # [s] at the start pose before a basic motion, and after it
 START_UP = 0.2  # [s] of a motion that starts moving at once, left out of its forces and currents
@@ -163,7 +163,7 @@ def confirm(study: Study, point: dict[str, float], actuator: Actuator, workers: 
     chosen = [m for m in displacements(study, False) if motions is None or m in motions]
     if workers == 0 and scheduler is None:
         return [confirm_motion(study, point, actuator, dof, drive=drive) for dof in chosen]
-    from ...engine.sweep.dask_run import dask_client
+    from ....engine.sweep.dask_run import dask_client
     with dask_client(workers, scheduler) as client:
         return client.gather([client.submit(confirm_motion, study, point, actuator, dof, drive=drive, pure=False)
                               for dof in chosen])
