@@ -5,7 +5,7 @@ The scene examples/vehicle/car_drive.toml (a car's braking, lane change and curv
 with the PMSM drives) tuned over the default ranges (eight parameters: the x and y translation,
 the tilt and the yaw rotation, gain and frequency each) by differential evolution on two Dask
 workers, its own cueing and the tuned one screened and co-simulated. Reported: the search's
-screenings and wall, per channel the perceived rms error, correlation and false cues of both
+screenings and wall, per channel the perceived rms error, correlation and cues by kind (spurious, sign error, missing) of both
 cueings as co-simulated, and their limits' margins; the perception figures of both runs are written
 to docs/figures/ for the user guide (docs/guide/cueing.md).
 
@@ -44,12 +44,13 @@ def main() -> None:
 
     def cells(q) -> str:
         correlation = "-" if math.isnan(q.correlation) else f"{q.correlation:.2f}"
-        return f"{q.rms_error:.3g} | {correlation} | {q.false_cue_time:.2f}"
+        return f"{q.rms_error:.3g} | {correlation} | {q.spurious_time:.2f} / {q.sign_error_time:.2f} / {q.missing_time:.2f}"
     lines = [f"Search: {len(tuning.ranges)} parameters, differential evolution ({iterations} generations of "
              f"{population} per parameter), {tuning.evaluations} screenings on 2 Dask workers in {tuning.seconds:.0f} s "
              f"wall; then both cueings co-simulated (20 s each).", "",
-             "| perceived, co-simulated | scene's cueing: rms error | correlation | false cues [s] | tuned: rms error | "
-             "correlation | false cues [s] |", "|---|---|---|---|---|---|---|"]
+             "| perceived, co-simulated | scene's cueing: rms error | correlation | spurious / sign error / missing "
+             "cues [s] | tuned: rms error | correlation | spurious / sign error / missing cues [s] |",
+             "|---|---|---|---|---|---|---|"]
     for a, b in zip(own.channels, best.channels):
         lines.append(f"| {a.channel} [{a.unit}] | {cells(a)} | {cells(b)} |")
     lines.append(f"| perceived error (rms in thresholds, summed) | {own.perceived_error:.3f} | | | "

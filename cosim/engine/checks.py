@@ -9,6 +9,7 @@ from a value that Python silently converted (bool("false") is True, int(4.7) is 
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
@@ -70,8 +71,8 @@ def problem(variable, value: Value) -> str | None:
     high = _bound(variable.max) if variable.max is not None else _bound(getattr(variable.declaredType, "max", None))
     if (low is not None and value < low) or (high is not None and value > high):
         unit = variable.unit or getattr(variable.declaredType, "unit", None) or ""
-        return (f"outside [{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}]"
-                + (f" {unit}" if unit else ""))
+        opening = "(0" if low == sys.float_info.min else f"[{'-inf' if low is None else f'{low:g}'}"  # > 0
+        return f"outside {opening}, {'inf' if high is None else f'{high:g}'}]" + (f" {unit}" if unit else "")
     return None
 
 

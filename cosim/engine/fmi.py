@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import functools
 import shutil
 import time as clock
 from dataclasses import dataclass
@@ -199,7 +200,30 @@ class FmuInstance:
 
     @property
     def can_interpolate_inputs(self) -> bool:
+        """Whether it takes its inputs' derivatives: FMI 2.0's canInterpolateInputs, or an FMI 3.0
+        FMU's own derivative inputs (input_derivative_span)."""
+        if self.fmi3:
+            return self.input_derivative_span > 0
         return bool(self.model_description.coSimulation.canInterpolateInputs)
+
+    @functools.cached_property
+    def input_derivative_span(self) -> int:
+        """For an FMI 3.0 FMU that takes each Float64 input's first and second derivative as inputs
+        of its own (fmi.rate.<input> and fmi.curvature.<input>, at value reference order x span +
+        the input's: our FMUs), the span; 0 for any other."""
+        if not self.fmi3:
+            return 0
+        span = 0x100000
+        by_name = {v.name: v for v in self.model_description.modelVariables}
+        inputs = [v for v in self.model_description.modelVariables if v.causality == "input"
+                  and v.type in ("Float64", "Real") and not v.name.startswith(("fmi.rate.", "fmi.curvature."))]
+        for v in inputs:
+            for order, kind in ((1, "rate"), (2, "curvature")):
+                found = by_name.get(f"fmi.{kind}.{v.name}")
+                if found is None or found.causality != "input" or int(found.valueReference) != order * span + \
+                        int(v.valueReference):
+                    return 0
+        return span if inputs else 0
 
     @property
     def extrapolates_inputs(self) -> bool:

@@ -52,7 +52,8 @@ class _Instance(ctypes.Structure):
 class _Fmi3Component(ctypes.Structure):
     """An FMI 3.0 instance as the kernel calls it (kernel/fmi3.c): the instance and its fmi3 functions."""
     _fields_ = [("instance", _P), ("set_float64", _P), ("get_float64", _P), ("get_output_derivatives", _P),
-                ("do_step", _P), ("get_state", _P), ("set_state", _P), ("free_state", _P)]
+                ("do_step", _P), ("get_state", _P), ("set_state", _P), ("free_state", _P),
+                ("derivative_span", ctypes.c_uint)]
 
 
 class _Kernel(ctypes.Structure):
@@ -229,7 +230,7 @@ class Kernel:
         if fmu.fmi3:
             adapted = _Fmi3Component(fmu.fmu.component, *(ctypes.cast(getattr(fmu.fmu.dll, f), _P).value for f in (
                 "fmi3SetFloat64", "fmi3GetFloat64", "fmi3GetOutputDerivatives", "fmi3DoStep", "fmi3GetFMUState",
-                "fmi3SetFMUState", "fmi3FreeFMUState")))
+                "fmi3SetFMUState", "fmi3FreeFMUState")), fmu.input_derivative_span)
             self._keep.append(adapted)
             c.component = ctypes.addressof(adapted)
             for field in ("set_real", "get_real", "set_input_derivatives", "get_output_derivatives", "do_step",

@@ -115,6 +115,12 @@ def mechanics_value(values: Mapping[str, object], name: str) -> object:
     return starts[references[name]]
 
 
+def gravity_of(values: Mapping[str, object]) -> np.ndarray:
+    """The platform's gravity vector (base frame) [m/s^2] from mechanics values: the one gravity
+    every FMU of a scene takes (the cueing FMU its magnitude)."""
+    return np.array([float(mechanics_value(values, f"environment.gravity_{a}")) for a in "xyz"])
+
+
 class LayoutImpossible(ValueError):
     """Mechanics parameters that give no platform (the FMU refuses them at initialization too)."""
 

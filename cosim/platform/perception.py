@@ -5,15 +5,21 @@ Six channels, in the occupant's frame (x forward, y left, z up): the specific fo
 z (z less gravity: the heave cue) and the angular velocity about x, y and z. The otoliths sense
 the specific force, the semicircular canals the angular velocity, each axis alike:
 
-  otoliths (Young and Meiry 1968):      f^ / f = 1.5 (s + 0.076) / ((s + 0.19)(s + 1.5))
-      static gain 0.4, unit gain between 0.2 and 1.5 rad/s;
+  otoliths (Young and Meiry 1968; the constants as Telban and Cardullo 2005, Table 2.1, give them):
+      f^ / f = K (1 + tau_a s) / ((1 + tau_L s)(1 + tau_S s)), K = 0.4 (the static gain),
+      tau_a = 13.2 s (the afferent's lead), tau_L = 5.33 s (the otolith's long time constant),
+      tau_S = 0.66 s (its short one): a gain that rises from 0.4 at rest to its largest, 0.89 near
+      0.5 rad/s, and falls off as 1.5 / w above about 2 rad/s;
   semicircular canals (Telban and Cardullo 2005, after Zacharias 1978):
       w^ / w = tau_a s / (1 + tau_a s) * tau_1 s (1 + tau_L s) / ((1 + tau_1 s)(1 + tau_2 s)),
       tau_a = 80 s (adaptation), tau_1 = 5.73 s (the cupula's long time constant), tau_2 = 0.005 s,
       tau_L = 0.06 s (the afferent's lead): unit gain between about 0.03 and 2.5 Hz.
 
 A cue is felt where it passes the perception threshold of its channel (Reid and Nahon 1985):
-0.17 m/s^2 along x and y, 0.28 m/s^2 along z, 3.0, 3.6 and 2.6 deg/s about x, y and z.
+0.17 m/s^2 along x and y, 0.28 m/s^2 along z, 3.0, 3.6 and 2.6 deg/s about x, y and z. The cues
+are sorted as the cueing literature sorts them, per channel (e.g. Grant and Reid 1997): a
+spurious cue where the platform is felt and the vehicle is not, a sign error where both are felt
+with opposite signs, a missing cue where the vehicle is felt and the platform is not.
 
 The vehicle's motion comes as the cueing FMU took it (its `vehicle.*` outputs); the platform's is
 its simulated motion at the head point: from the pose and the twist (base frame) of the mechanics,
@@ -83,8 +89,13 @@ class Vestibular:
         return out
 
 
+# the otoliths (Young and Meiry 1968, as Telban and Cardullo 2005 give them): gain, lead, long and short lags
+OTOLITH_K, OTOLITH_TAU_A, OTOLITH_TAU_L, OTOLITH_TAU_S = 0.4, 13.2, 5.33, 0.66
+# the canals (Telban and Cardullo 2005, after Zacharias 1978): adaptation, cupula long and short, afferent lead
 TAU_A, TAU_1, TAU_2, TAU_L = 80.0, 5.73, 0.005, 0.06
-OTOLITH = Vestibular("otoliths (Young and Meiry 1968)", (-0.076,), (-0.19, -1.5), 1.5)
+OTOLITH = Vestibular("otoliths (Young and Meiry 1968)", (-1.0 / OTOLITH_TAU_A,),
+                     (-1.0 / OTOLITH_TAU_L, -1.0 / OTOLITH_TAU_S),
+                     OTOLITH_K * OTOLITH_TAU_A / (OTOLITH_TAU_L * OTOLITH_TAU_S))
 CANAL = Vestibular("semicircular canals (Telban and Cardullo 2005)", (0.0, 0.0, -1.0 / TAU_L),
                    (-1.0 / TAU_A, -1.0 / TAU_1, -1.0 / TAU_2), TAU_L / TAU_2)
 ORGANS = (OTOLITH,) * 3 + (CANAL,) * 3
@@ -149,21 +160,43 @@ def perceive(times: np.ndarray, vehicle: np.ndarray, platform: np.ndarray, step:
 @dataclass(frozen=True)
 class ChannelQuality:
     """How well one channel's cue is felt: the perceived platform motion against the perceived
-    vehicle motion."""
+    vehicle motion, and its cues sorted by kind (felt: above the channel's threshold): spurious
+    (the platform felt, the vehicle not), sign error (both felt, opposite signs), missing (the
+    vehicle felt, the platform not); per kind its time [s] and largest size (the platform's
+    perceived motion for a spurious cue or a sign error, the vehicle's for a missing one)."""
     channel: str
     unit: str
     rms_error: float         # of perceived platform - perceived vehicle
     rms_vehicle: float       # of the perceived vehicle motion (the scale of the error)
     correlation: float       # Pearson's, nan where either is constant
-    false_cue_time: float    # [s] felt (above threshold) and of the wrong sign (or where the vehicle has none)
-    largest_false_cue: float  # its largest size
+    spurious_time: float
+    spurious_largest: float
+    sign_error_time: float
+    sign_error_largest: float
+    missing_time: float
+    missing_largest: float
     threshold: float
+
+    @property
+    def false_cue_time(self) -> float:
+        """The time of the false cues, spurious or of the wrong sign [s]."""
+        return self.spurious_time + self.sign_error_time
+
+
+CUE_KINDS = ("spurious", "sign error", "missing")
+
+
+def cue_kinds(vehicle: np.ndarray, platform: np.ndarray, threshold: float) -> dict[str, np.ndarray]:
+    """Where each kind of cue is, sample by sample, for one channel's perceived motions."""
+    vehicle_felt, platform_felt = np.abs(vehicle) > threshold, np.abs(platform) > threshold
+    return {"spurious": platform_felt & ~vehicle_felt,
+            "sign error": platform_felt & vehicle_felt & (platform * vehicle < 0.0),
+            "missing": vehicle_felt & ~platform_felt}
 
 
 def quality(p: Perceived) -> list[ChannelQuality]:
-    """Per channel: rms error and correlation of the perceived motions, and the false cues: the
-    platform's perceived motion above the channel's threshold where the vehicle's perceived motion
-    has the other sign or is nil."""
+    """Per channel: rms error and correlation of the perceived motions, and the cues by kind
+    (cue_kinds), their times and largest sizes."""
     out = []
     dt = float(np.mean(np.diff(p.times))) if len(p.times) > 1 else 0.0
     for c, channel in enumerate(CHANNELS):
@@ -171,10 +204,13 @@ def quality(p: Perceived) -> list[ChannelQuality]:
         error = platform - vehicle
         constant = np.ptp(vehicle) < 1e-12 or np.ptp(platform) < 1e-12
         correlation = float("nan") if constant else float(np.corrcoef(vehicle, platform)[0, 1])
-        false = (np.abs(platform) > THRESHOLDS[c]) & (platform * vehicle <= 0.0)
+        kinds = cue_kinds(vehicle, platform, THRESHOLDS[c])
+        figures = []
+        for kind, felt in (("spurious", platform), ("sign error", platform), ("missing", vehicle)):
+            where = kinds[kind]
+            figures += [float(where.sum() * dt), float(np.abs(felt[where]).max()) if where.any() else 0.0]
         out.append(ChannelQuality(channel, UNITS[c], float(np.sqrt(np.mean(error ** 2))),
-                                  float(np.sqrt(np.mean(vehicle ** 2))), correlation, float(false.sum() * dt),
-                                  float(np.abs(platform[false]).max()) if false.any() else 0.0, float(THRESHOLDS[c])))
+                                  float(np.sqrt(np.mean(vehicle ** 2))), correlation, *figures, float(THRESHOLDS[c])))
     return out
 
 
@@ -184,14 +220,20 @@ def perceived_error(channels: list[ChannelQuality]) -> float:
     return float(sum(q.rms_error / q.threshold for q in channels))
 
 
+def cue_figures(q: ChannelQuality) -> list[tuple[str, float, float]]:
+    """A channel's cues by kind: (kind, time [s], largest size)."""
+    return [("spurious", q.spurious_time, q.spurious_largest), ("sign error", q.sign_error_time, q.sign_error_largest),
+            ("missing", q.missing_time, q.missing_largest)]
+
+
 def quality_lines(channels: list[ChannelQuality]) -> list[str]:
     """The quality per channel, a line each, and the sum tuning minimises."""
     lines = []
     for q in channels:
         correlation = "constant" if math.isnan(q.correlation) else f"{q.correlation:.2f}"
+        cues = "; ".join(f"{kind} {time:.2f} s" + (f" (up to {largest:.3g})" if time else "")
+                         for kind, time, largest in cue_figures(q))
         lines.append(f"perceived {q.channel}: rms error {q.rms_error:.3g} {q.unit} (the vehicle's {q.rms_vehicle:.3g}), "
-                     f"correlation {correlation}, false cues {q.false_cue_time:.2f} s"
-                     + (f" (up to {q.largest_false_cue:.3g} {q.unit}, threshold {q.threshold:.3g})"
-                        if q.false_cue_time else ""))
+                     f"correlation {correlation}; cues beyond the threshold {q.threshold:.3g}: {cues}")
     lines.append(f"perceived error (rms per channel in thresholds, summed): {perceived_error(channels):.3f}")
     return lines

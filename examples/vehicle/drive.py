@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-G = 9.80665
+G = 9.81  # the platform's gravity (params/meng2010.toml): one gravity for the vehicle and every FMU
 RATE = 100.0  # samples per second
 DURATION = 20.0
 COLUMNS = ("time", "specific_force.x", "specific_force.y", "specific_force.z", "angular_rate.x", "angular_rate.y",

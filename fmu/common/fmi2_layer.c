@@ -66,6 +66,11 @@ static int check_settable(FmuInstance *fmu, const char *call, int vr, double val
         LOG_ERROR(fmu, "%s: '%s' = %g rejected: not a finite number", call, var->name, value);
         return 0;
     }
+    if (var->min == FMU_POSITIVE && !(value >= var->min)) {
+        LOG_ERROR(fmu, "%s: '%s' = %g %s: must be > 0 (rejected: outside (0, %g])", call, var->name, value, var->unit,
+                  var->max);
+        return 0;
+    }
     if (value < var->min || value > var->max) {
         LOG_ERROR(fmu, "%s: '%s' = %g rejected: outside [%g, %g] %s", call, var->name, value, var->min,
                   var->max, var->unit);

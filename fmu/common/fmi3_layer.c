@@ -13,7 +13,10 @@
  *   variable tables are scalars; Float64, Int32, Boolean and String, as Real, Integer, Boolean and
  *   String in FMI 2.0 with the same names, value references, units and starts.
  * - Output derivatives (fmi3GetOutputDerivatives) as in FMI 2.0. FMI 3.0 has no input
- *   derivatives: an FMI 3.0 instance holds its inputs over a step (order 0).
+ *   derivatives: each Real input's first and second derivative over the next step are inputs of
+ *   their own, fmi.rate.<input> and fmi.curvature.<input> (FMU_INPUT_DERIVATIVE_VR), set as
+ *   fmi2SetRealInputDerivatives sets them; an instance given none holds its inputs over a step
+ *   (or extrapolates them itself: fmi.extrapolate_inputs).
  * - FMU state get, set and serialization (the FMI 2.0 layer's checksummed state).
  * The binary exports the fmi2 entry points too (the layer it is built on); tools load the fmi3 ones.
  */
@@ -150,28 +153,79 @@ fmi3Status fmi3Reset(fmi3Instance instance) { return (fmi3Status)fmi2Reset(insta
 
 /* ---- get and set: Float64, Int32, Boolean and String are the FMI 2.0 layer's types ---- */
 
-/* Value reference 0 is the independent variable, time (FMI 3.0 lists it among the variables). */
+/* Is `vr` an input's derivative (fmi.rate.*, fmi.curvature.*)? Its input and order if so. */
+static int input_derivative(fmi3ValueReference vr, fmi2ValueReference *input, fmi2Integer *order) {
+    const unsigned of = vr % FMU_INPUT_DERIVATIVE_SPAN, k = vr / FMU_INPUT_DERIVATIVE_SPAN;
+    if (k < 1 || k > 2 || of < 1 || of >= VR_COUNT || fmu_variables[of].causality != FMU_INPUT ||
+        fmu_variables[of].type != FMU_REAL)
+        return 0;
+    *input = of, *order = (fmi2Integer)k;
+    return 1;
+}
+
+static int any_input_derivative(const fmi3ValueReference references[], size_t n) {
+    fmi2ValueReference input;
+    fmi2Integer order;
+    for (size_t i = 0; i < n && references; i++)
+        if (input_derivative(references[i], &input, &order)) return 1;
+    return 0;
+}
+
+/* A derivative's value as last set since the last step (0 where none was). */
+static double derivative_value(fmi3Instance instance, fmi2ValueReference input, fmi2Integer order) {
+    const FmuInstance *fmu = fmu_of(instance);
+    return fmu->s.input_derivative_given[input] >= order ? fmu->s.input_derivative[input][order - 1] : 0.0;
+}
+
+/* Value reference 0 is the independent variable, time (FMI 3.0 lists it among the variables); the
+ * inputs' derivatives read back as set. */
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           fmi3Float64 values[], size_t nValues) {
     if (!scalars(instance, "fmi3GetFloat64", nValueReferences, nValues)) return fmi3Error;
-    int has_time = 0;
+    int has_time = any_input_derivative(valueReferences, nValueReferences);
     for (size_t i = 0; i < nValueReferences && valueReferences; i++) has_time |= valueReferences[i] == 0;
     if (!has_time || !values) return (fmi3Status)fmi2GetReal(instance, valueReferences, nValueReferences, values);
     fmi2Status worst = fmi2OK;
     for (size_t i = 0; i < nValueReferences; i++) {
-        const fmi2Status status = valueReferences[i] == 0 ? fmi2GetReal(instance, NULL, 0, NULL)
+        fmi2ValueReference input;
+        fmi2Integer order;
+        const int derivative = input_derivative(valueReferences[i], &input, &order);
+        const fmi2Status status = valueReferences[i] == 0 || derivative ? fmi2GetReal(instance, NULL, 0, NULL)
                                                           : fmi2GetReal(instance, &valueReferences[i], 1, &values[i]);
         if (status > fmi2Warning) return (fmi3Status)status;
         if (valueReferences[i] == 0) values[i] = fmu_of(instance)->s.time;
+        if (derivative) values[i] = derivative_value(instance, input, order);
         worst = status > worst ? status : worst;
     }
     return (fmi3Status)worst;
 }
 
+/* Values, then the inputs' derivatives among them (as fmi2SetReal, then fmi2SetRealInputDerivatives:
+ * each call checks all its references before it changes anything). */
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           const fmi3Float64 values[], size_t nValues) {
     if (!scalars(instance, "fmi3SetFloat64", nValueReferences, nValues)) return fmi3Error;
-    return (fmi3Status)fmi2SetReal(instance, valueReferences, nValueReferences, values);
+    if (!any_input_derivative(valueReferences, nValueReferences))
+        return (fmi3Status)fmi2SetReal(instance, valueReferences, nValueReferences, values);
+    enum { MOST = 4 * VR_COUNT };
+    fmi2ValueReference plain[MOST], inputs[MOST];
+    fmi2Real plain_values[MOST], derivatives[MOST];
+    fmi2Integer orders[MOST];
+    if (nValueReferences > MOST) return refuse(instance, "fmi3SetFloat64: more value references than the FMU has");
+    if (!values) return refuse(instance, "fmi3SetFloat64: NULL array");
+    size_t n_plain = 0, n_derivatives = 0;
+    for (size_t i = 0; i < nValueReferences; i++) {
+        if (input_derivative(valueReferences[i], &inputs[n_derivatives], &orders[n_derivatives])) {
+            derivatives[n_derivatives++] = values[i];
+        } else {
+            plain[n_plain] = valueReferences[i];
+            plain_values[n_plain++] = values[i];
+        }
+    }
+    const fmi2Status set = fmi2SetReal(instance, plain, n_plain, plain_values);
+    if (set > fmi2Warning) return (fmi3Status)set;
+    const fmi2Status rates = fmi2SetRealInputDerivatives(instance, inputs, n_derivatives, orders, derivatives);
+    return (fmi3Status)(rates > set ? rates : set);
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,

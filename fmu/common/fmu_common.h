@@ -91,11 +91,9 @@ void fmu_log(const FmuInstance *fmu, fmi2Status status, const char *category, co
     ;
 
 /* Logs that parameter `vr` breaks `rule` (naming it, its value and unit) and returns 1, so that
- * model_validate can count violations: errors += fmu_reject(fmu, VR_x, "must be > 0"). */
+ * model_validate can count violations: errors += fmu_reject(fmu, VR_x, "must be below limit.y"). A
+ * rule the table can state (a bound, "> 0": FMU_POSITIVE) lives in the table, not here. */
 int fmu_reject(const FmuInstance *fmu, int vr, const char *rule);
-/* In model_validate (with `v` the variables and `errors` the count): a field that must be > 0. */
-#define FMU_REQUIRE_POSITIVE(field) \
-    if (!(v->field > 0.0)) errors += fmu_reject(fmu, VR_##field, "must be > 0")
 
 /* Value of the real input `vr` at time t: the value set, extrapolated with the derivatives given
  * through fmi2SetRealInputDerivatives (orders 1 and 2, if any) from the time it was set. */

@@ -10,7 +10,7 @@
  *   field        C name of the variable in ModelVariables (the FMI name with '.' -> '_')
  *   causality    parameter | input | output | local
  *   variability  fixed | tunable | discrete | continuous
- *   min, max     inclusive bounds; -FMU_INF / FMU_INF for none. The FMI layer rejects a parameter
+ *   min, max     inclusive bounds; -FMU_INF / FMU_INF for none, FMU_POSITIVE for "> 0". The FMI layer rejects a parameter
  *                or input outside them with fmi2Error, naming the variable.
  *
  * From this one table follow: the ModelVariables struct the C model reads and writes, the value
@@ -21,10 +21,22 @@
 #ifndef FMU_TABLE_H
 #define FMU_TABLE_H
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
 #define FMU_INF HUGE_VAL
+/* The min of a value that must be > 0 (a gain, a time constant, a mass): the smallest positive
+ * normal double, so that the table's inclusive bound states it and the FMI layer refuses 0 with
+ * "must be > 0". */
+#define FMU_POSITIVE DBL_MIN
+
+/* FMI 3.0 has no input derivatives: the FMI 3.0 binaries take each Real input's first and second
+ * time derivatives over the next step as inputs of their own, fmi.rate.<input> and
+ * fmi.curvature.<input>, at these value references (docs/interfaces.md); what
+ * fmi2SetRealInputDerivatives is to the FMI 2.0 binaries. */
+#define FMU_INPUT_DERIVATIVE_SPAN 0x100000u
+#define FMU_INPUT_DERIVATIVE_VR(vr, order) ((unsigned)(order) * FMU_INPUT_DERIVATIVE_SPAN + (unsigned)(vr))
 
 /* Rows every model puts in its table: the internal solver's settings. */
 #define FMU_SOLVER_VARIABLES(X, method, step, rtol, atol)                                          \

@@ -245,6 +245,17 @@ static int write_model_description3(const char *path) {
         if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
         fprintf(f, "/>\n");
     }
+    for (int vr = 1; vr < VR_COUNT; vr++) { /* each Real input's rate and curvature (FMU_INPUT_DERIVATIVE_VR) */
+        const FmuVariable *v = &fmu_variables[vr];
+        if (v->causality != FMU_INPUT || v->type != FMU_REAL) continue;
+        for (int order = 1; order <= 2; order++)
+            fprintf(f, "    <Float64 name=\"fmi.%s.%s\" valueReference=\"%u\" causality=\"input\" "
+                       "variability=\"continuous\" start=\"0\"\n      description=\"The %s time derivative of "
+                       "%s over the next step, from the communication point (FMI 3.0 has no input derivatives; "
+                       "set before each step, as fmi2SetRealInputDerivatives; not set: the input held, or "
+                       "extrapolated by fmi.extrapolate_inputs)\"/>\n", order == 1 ? "rate" : "curvature", v->name,
+                    FMU_INPUT_DERIVATIVE_VR(vr, order), order == 1 ? "first" : "second", v->name);
+    }
     fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n");
     for (int vr = 1; vr < VR_COUNT; vr++) { /* dependencies: value references in FMI 3.0 (ours equal the indices) */
         if (fmu_variables[vr].causality != FMU_OUTPUT) continue;

@@ -15,7 +15,7 @@
  *     l = w_n^2 / (s^2 + 2 zeta w_n s + w_n^2) u, the sustained part of the specific force, stood
  *     for by gravity: pitch_t = -asin(l_x / g), roll_t = asin(l_y / g) (R = Rz Ry Rx: a pitch theta
  *     is felt as f_x = -g sin theta, a roll phi as f_y = g sin phi), at most tilt.limit; the tilt
- *     follows its target at no more than tilt.rate_limit.
+ *     follows its target with the tilt vector (roll, pitch) turning at no more than tilt.rate_limit.
  *
  * The pose reference is the neutral pose plus p and b, with the tilt added to roll and pitch; its
  * rate and acceleration (fmi2GetRealOutputDerivatives) are the filters' own, exact. The filters are
@@ -230,42 +230,40 @@ static void tilt_target(FmuInstance *fmu, int j, double t, double out[4]) {
 }
 
 /* The tilt at t after the target has moved: towards it at no more than the rate limit over h (h
- * = 0: on it, at the start). */
+ * = 0: on it, at the start). The limit is on the tilt vector's rate (roll and pitch together: the
+ * rate the semicircular canals feel), not per axis: a diagonal tilt turns no faster than one
+ * about a single axis. */
 static void tilt_follow(FmuInstance *fmu, double t, double h) {
     const double limit = fmu->s.v.tilt_rate_limit;
+    double target[N_TILT][4], gap[N_TILT], *tilt[N_TILT];
     for (int j = 0; j < N_TILT; j++) {
-        double target[4], *tilt = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
-        tilt_target(fmu, j, t, target);
-        const double gap = target[0] - tilt[0];
-        if (h == 0.0 || fabs(gap) <= limit * h) { /* on its target */
-            tilt[0] = target[0];
-            tilt[1] = clip(target[1], limit);
-            tilt[2] = fabs(target[1]) < limit ? target[2] : 0.0;
-            tilt[3] = fabs(target[1]) < limit ? target[3] : 0.0;
-        } else {
-            tilt[0] += copysign(limit * h, gap);
-            tilt[1] = copysign(limit, gap);
-            tilt[2] = tilt[3] = 0.0;
+        tilt_target(fmu, j, t, target[j]);
+        tilt[j] = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
+        gap[j] = target[j][0] - tilt[j][0];
+    }
+    const double distance = sqrt(gap[0] * gap[0] + gap[1] * gap[1]); /* (not hypot: glibc 2.35 versions it anew) */
+    if (h == 0.0 || distance <= limit * h) { /* on its target, turning at most at the limit */
+        const double speed = sqrt(target[0][1] * target[0][1] + target[1][1] * target[1][1]);
+        const int within = speed < limit;
+        for (int j = 0; j < N_TILT; j++) {
+            tilt[j][0] = target[j][0];
+            tilt[j][1] = within ? target[j][1] : target[j][1] * (limit / speed);
+            tilt[j][2] = within ? target[j][2] : 0.0;
+            tilt[j][3] = within ? target[j][3] : 0.0;
+        }
+    } else { /* towards it along the gap, at the limit */
+        for (int j = 0; j < N_TILT; j++) {
+            tilt[j][0] += limit * h * gap[j] / distance;
+            tilt[j][1] = limit * gap[j] / distance;
+            tilt[j][2] = tilt[j][3] = 0.0;
         }
     }
 }
 
 /* ---- hooks ---- */
 
-fmi2Status model_validate(FmuInstance *fmu) {
+fmi2Status model_validate(FmuInstance *fmu) { /* the bounds, "> 0" among them, are the table's */
     const ModelVariables *v = &fmu->s.v;
-    int errors = 0;
-    for (int a = 0; a < 3; a++) {
-        errors += !(*fmu_real(fmu, TRANSLATION[a][2]) > 0.0) && fmu_reject(fmu, TRANSLATION[a][2], "must be > 0");
-        errors += !(*fmu_real(fmu, TRANSLATION[a][3]) > 0.0) && fmu_reject(fmu, TRANSLATION[a][3], "must be > 0");
-        errors += !(*fmu_real(fmu, ROTATION[a][2]) > 0.0) && fmu_reject(fmu, ROTATION[a][2], "must be > 0");
-        errors += !(*fmu_real(fmu, ROTATION[a][3]) > 0.0) && fmu_reject(fmu, ROTATION[a][3], "must be > 0");
-    }
-    FMU_REQUIRE_POSITIVE(tilt_frequency);
-    FMU_REQUIRE_POSITIVE(tilt_damping);
-    FMU_REQUIRE_POSITIVE(tilt_rate_limit);
-    FMU_REQUIRE_POSITIVE(gravity);
-    if (errors) return fmi2Error;
     ModelData *data = (ModelData *)fmu->model_data;
     if (!data) {
         data = (ModelData *)fmu_calloc(fmu, 1, sizeof(ModelData));

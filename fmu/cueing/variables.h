@@ -38,9 +38,9 @@ X(Real, translation_##a##_gain, "translation." #a ".gain", parameter, fixed, "1"
   "Scale of the specific force along " #a " (after gravity is taken off z)") \
 X(Real, translation_##a##_limit, "translation." #a ".limit", parameter, fixed, "m/s2", limit, 0.0, FMU_INF, \
   "Largest scaled specific force along " #a " passed on (larger ones are clipped)") \
-X(Real, translation_##a##_frequency, "translation." #a ".frequency", parameter, fixed, "rad/s", omega, 0.0, FMU_INF, \
+X(Real, translation_##a##_frequency, "translation." #a ".frequency", parameter, fixed, "rad/s", omega, FMU_POSITIVE, FMU_INF, \
   "omega_n of the second-order high-pass s^2 / (s^2 + 2 zeta omega_n s + omega_n^2) along " #a) \
-X(Real, translation_##a##_damping, "translation." #a ".damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, \
+X(Real, translation_##a##_damping, "translation." #a ".damping", parameter, fixed, "1", 1.0, FMU_POSITIVE, FMU_INF, \
   "zeta of that high-pass along " #a) \
 X(Real, translation_##a##_break, "translation." #a ".break", parameter, fixed, "rad/s", 0.3, 0.0, FMU_INF, \
   "omega_b of the third order's first-order high-pass s / (s + omega_b) along " #a " (0: second order)")
@@ -51,9 +51,9 @@ X(Real, rotation_##r##_gain, "rotation." #r ".gain", parameter, fixed, "1", 0.5,
   "Scale of the angular rate about " #axis) \
 X(Real, rotation_##r##_limit, "rotation." #r ".limit", parameter, fixed, "rad/s", 0.5, 0.0, FMU_INF, \
   "Largest scaled angular rate about " #axis " passed on (larger ones are clipped)") \
-X(Real, rotation_##r##_frequency, "rotation." #r ".frequency", parameter, fixed, "rad/s", 1.0, 0.0, FMU_INF, \
+X(Real, rotation_##r##_frequency, "rotation." #r ".frequency", parameter, fixed, "rad/s", 1.0, FMU_POSITIVE, FMU_INF, \
   "omega_n of the second-order high-pass of the rate about " #axis ", integrated into the angle") \
-X(Real, rotation_##r##_damping, "rotation." #r ".damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, \
+X(Real, rotation_##r##_damping, "rotation." #r ".damping", parameter, fixed, "1", 1.0, FMU_POSITIVE, FMU_INF, \
   "zeta of that high-pass about " #axis)
 
 #define POSE_VARIABLES(X, dof, unit, offset, what) \
@@ -77,7 +77,7 @@ X(Real, specific_force_x, "specific_force.x", input, continuous, "m/s2", 0.0, -F
   "Vehicle's specific force at the head, x forward (vehicle frame: x forward, y left, z up)") \
 X(Real, specific_force_y, "specific_force.y", input, continuous, "m/s2", 0.0, -FMU_INF, FMU_INF, \
   "Vehicle's specific force at the head, y left") \
-X(Real, specific_force_z, "specific_force.z", input, continuous, "m/s2", 9.80665, -FMU_INF, FMU_INF, \
+X(Real, specific_force_z, "specific_force.z", input, continuous, "m/s2", 9.81, -FMU_INF, FMU_INF, \
   "Vehicle's specific force at the head, z up (+g at rest)") \
 X(Real, angular_rate_x, "angular_rate.x", input, continuous, "rad/s", 0.0, -FMU_INF, FMU_INF, \
   "Vehicle's angular rate about x (roll)") \
@@ -93,7 +93,7 @@ POSE_VARIABLES(X, pitch, "rad", 0.0, "pitch") \
 POSE_VARIABLES(X, yaw, "rad", 0.0, "yaw") \
 VEHICLE_VARIABLES(X, specific_force, x, "m/s2", 0.0, "specific force along x") \
 VEHICLE_VARIABLES(X, specific_force, y, "m/s2", 0.0, "specific force along y") \
-VEHICLE_VARIABLES(X, specific_force, z, "m/s2", 9.80665, "specific force along z") \
+VEHICLE_VARIABLES(X, specific_force, z, "m/s2", 9.81, "specific force along z") \
 VEHICLE_VARIABLES(X, angular_rate, x, "rad/s", 0.0, "angular rate about x") \
 VEHICLE_VARIABLES(X, angular_rate, y, "rad/s", 0.0, "angular rate about y") \
 VEHICLE_VARIABLES(X, angular_rate, z, "rad/s", 0.0, "angular rate about z") \
@@ -109,10 +109,10 @@ ROTATION_VARIABLES(X, pitch, y) \
 ROTATION_VARIABLES(X, yaw, z) \
 X(Real, tilt_gain, "tilt.gain", parameter, fixed, "1", 0.5, 0.0, FMU_INF, \
   "Scale of the specific force along x and y that tilt coordination renders (0: no tilt)") \
-X(Real, tilt_frequency, "tilt.frequency", parameter, fixed, "rad/s", 2.0, 0.0, FMU_INF, \
+X(Real, tilt_frequency, "tilt.frequency", parameter, fixed, "rad/s", 2.0, FMU_POSITIVE, FMU_INF, \
   "omega_n of the second-order low-pass omega_n^2 / (s^2 + 2 zeta omega_n s + omega_n^2) of that force") \
-X(Real, tilt_damping, "tilt.damping", parameter, fixed, "1", 1.0, 0.0, FMU_INF, "zeta of that low-pass") \
-X(Real, tilt_rate_limit, "tilt.rate_limit", parameter, fixed, "rad/s", 0.0523598775598299, 0.0, FMU_INF, \
+X(Real, tilt_damping, "tilt.damping", parameter, fixed, "1", 1.0, FMU_POSITIVE, FMU_INF, "zeta of that low-pass") \
+X(Real, tilt_rate_limit, "tilt.rate_limit", parameter, fixed, "rad/s", 0.0523598775598299, FMU_POSITIVE, FMU_INF, \
   "Largest tilt rate, below what the semicircular canals notice (default 3 deg/s)") \
 X(Real, tilt_limit, "tilt.limit", parameter, fixed, "rad", 0.349065850398866, 0.0, 1.5707963267948966, \
   "Largest tilt angle (default 20 deg)") \
@@ -122,8 +122,9 @@ X(String, vehicle_file, "vehicle.file", parameter, fixed, "", 0, 0, 0, \
   "of numbers in s, m/s2 and rad/s with time increasing, linear between them; lines starting with # are skipped. A " \
   "column given there replaces its input; before the first and after the last row the end values are held.") \
 X(Integer, vehicle_rows, "vehicle.rows", output, discrete, "", 0, -FMU_INF, FMU_INF, "Rows read from vehicle.file") \
-X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.80665, 0.0, FMU_INF, \
-  "Gravity: taken off the vertical specific force, and what tilt turns into specific force") \
+X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.81, FMU_POSITIVE, FMU_INF, \
+  "Gravity: taken off the vertical specific force, and what tilt turns into specific force; the platform's, one " \
+  "for every FMU (the master sets it from the mechanics' environment.gravity_x/y/z; default as the mechanics')") \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 

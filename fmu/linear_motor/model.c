@@ -211,18 +211,6 @@ void model_compute_outputs(FmuInstance *fmu) {
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    FMU_REQUIRE_POSITIVE(motor_force_constant);
-    FMU_REQUIRE_POSITIVE(motor_back_emf_constant);
-    FMU_REQUIRE_POSITIVE(motor_resistance);
-    FMU_REQUIRE_POSITIVE(motor_inductance);
-    FMU_REQUIRE_POSITIVE(friction_stribeck_velocity);
-    FMU_REQUIRE_POSITIVE(friction_smoothing_velocity);
-    FMU_REQUIRE_POSITIVE(ripple_period);
-    FMU_REQUIRE_POSITIVE(control_position_kp);
-    FMU_REQUIRE_POSITIVE(control_current_kp);
-    FMU_REQUIRE_POSITIVE(limit_force);
-    FMU_REQUIRE_POSITIVE(limit_current);
-    FMU_REQUIRE_POSITIVE(limit_voltage);
     if (v->friction_static < v->friction_coulomb)
         errors += fmu_reject(fmu, VR_friction_static, "must not be below friction.coulomb (Stribeck: f_s >= f_c)");
     return errors ? fmi2Error : fmi2OK;

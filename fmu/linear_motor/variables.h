@@ -63,10 +63,10 @@ X(Real, energy_electromagnetic, "energy.electromagnetic", output, continuous, "J
 X(Real, energy_mechanical_loss, "energy.mechanical_loss", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Work against damping and friction since the start") \
 X(Real, energy_ripple, "energy.ripple", output, continuous, "J", 0.0, -FMU_INF, FMU_INF, "Work against the force ripple since the start") \
 \
-X(Real, motor_force_constant, "motor.force_constant", parameter, fixed, "N/A", 44.0, 0.0, FMU_INF, "K_f (Table 4.2)") \
-X(Real, motor_back_emf_constant, "motor.back_emf_constant", parameter, fixed, "V.s/m", 26.0, 0.0, FMU_INF, "K_e (Table 4.2)") \
-X(Real, motor_resistance, "motor.resistance", parameter, fixed, "Ohm", 3.1, 0.0, FMU_INF, "R (Table 4.2)") \
-X(Real, motor_inductance, "motor.inductance", parameter, fixed, "H", 0.010, 0.0, FMU_INF, \
+X(Real, motor_force_constant, "motor.force_constant", parameter, fixed, "N/A", 44.0, FMU_POSITIVE, FMU_INF, "K_f (Table 4.2)") \
+X(Real, motor_back_emf_constant, "motor.back_emf_constant", parameter, fixed, "V.s/m", 26.0, FMU_POSITIVE, FMU_INF, "K_e (Table 4.2)") \
+X(Real, motor_resistance, "motor.resistance", parameter, fixed, "Ohm", 3.1, FMU_POSITIVE, FMU_INF, "R (Table 4.2)") \
+X(Real, motor_inductance, "motor.inductance", parameter, fixed, "H", 0.010, FMU_POSITIVE, FMU_INF, \
   "L (assumed: not in the thesis; L/R = 3.2 ms, usual for an iron-core forcer of this size)") \
 X(Real, motor_damping, "motor.damping", parameter, fixed, "N.s/m", 0.01, 0.0, FMU_INF, "B_l (Table 4.2)") \
 X(Real, motor_forcer_mass, "motor.forcer_mass", parameter, fixed, "kg", 1.8, 0.0, FMU_INF, \
@@ -77,13 +77,13 @@ X(Real, motor_continuous_force, "motor.continuous_force", parameter, fixed, "N",
   "F_net (Table 4.2): thermal rating; a force command above it is reported once per excursion") \
 X(Real, friction_coulomb, "friction.coulomb", parameter, fixed, "N", 8.0, 0.0, FMU_INF, "f_c of Eq 4.30 (assumed)") \
 X(Real, friction_static, "friction.static", parameter, fixed, "N", 12.0, 0.0, FMU_INF, "f_s of Eq 4.30 (assumed)") \
-X(Real, friction_stribeck_velocity, "friction.stribeck_velocity", parameter, fixed, "m/s", 0.01, 0.0, FMU_INF, "x_s of Eq 4.30 (assumed)") \
+X(Real, friction_stribeck_velocity, "friction.stribeck_velocity", parameter, fixed, "m/s", 0.01, FMU_POSITIVE, FMU_INF, "x_s of Eq 4.30 (assumed)") \
 X(Real, friction_stribeck_exponent, "friction.stribeck_exponent", parameter, fixed, "1", 2.0, 0.0, FMU_INF, "delta of Eq 4.30 (assumed)") \
 X(Real, friction_viscous, "friction.viscous", parameter, fixed, "N.s/m", 0.01, 0.0, FMU_INF, "f_v of Eq 4.30 (assumed, = B_l)") \
-X(Real, friction_smoothing_velocity, "friction.smoothing_velocity", parameter, fixed, "m/s", 1e-3, 0.0, FMU_INF, \
+X(Real, friction_smoothing_velocity, "friction.smoothing_velocity", parameter, fixed, "m/s", 1e-3, FMU_POSITIVE, FMU_INF, \
   "sgn(v) is replaced by tanh(v / this), so the force is smooth through zero speed and the solver does not chatter") \
 X(Real, ripple_amplitude, "ripple.amplitude", parameter, fixed, "N", 2.0, 0.0, FMU_INF, "A of Eq 4.31 (assumed: 1 % of F_net)") \
-X(Real, ripple_period, "ripple.period", parameter, fixed, "m", 0.030, 0.0, FMU_INF, "Ripple period 2 pi / w of Eq 4.31 (assumed: one magnet pole pitch)") \
+X(Real, ripple_period, "ripple.period", parameter, fixed, "m", 0.030, FMU_POSITIVE, FMU_INF, "Ripple period 2 pi / w of Eq 4.31 (assumed: one magnet pole pitch)") \
 X(Real, ripple_phase, "ripple.phase", parameter, fixed, "rad", 0.0, -FMU_INF, FMU_INF, "phi of Eq 4.31") \
 X(Boolean, effects_electrical, "effects.electrical", parameter, fixed, "", 1, 0, 1, \
   "Electrical dynamics (RL winding, back-EMF, current loop); off: an ideal force source delivering the limited force command") \
@@ -93,7 +93,7 @@ X(Boolean, effects_ripple, "effects.ripple", parameter, fixed, "", 0, 0, 1, "For
 X(Integer, control_mode, "control.mode", parameter, fixed, "", 1, 1, 3, \
   "1 = position (PID on leg length -> force -> PI current loop), 2 = force (force_ff -> current loop), " \
   "3 = voltage (voltage_ref applied to the winding, open loop)") \
-X(Real, control_position_kp, "control.position_kp", parameter, tunable, "N/m", 19739.0, 0.0, FMU_INF, \
+X(Real, control_position_kp, "control.position_kp", parameter, tunable, "N/m", 19739.0, FMU_POSITIVE, FMU_INF, \
   "Position PID: m w^2 for a design mass m = 5 kg and w = 2 pi 10 Hz (critically damped)") \
 X(Real, control_position_ki, "control.position_ki", parameter, tunable, "N/(m.s)", 124025.0, 0.0, FMU_INF, \
   "Position PID integral gain: Kp w / 10 (integral zero a decade below w)") \
@@ -101,14 +101,14 @@ X(Real, control_position_kd, "control.position_kd", parameter, tunable, "N.s/m",
   "Position PID derivative gain 2 m w, acting on the velocity error (reference velocity from the derivative of position_ref when given)") \
 X(Boolean, control_velocity_ref_input, "control.velocity_ref_input", parameter, fixed, "", 0, 0, 1, \
   "The derivative term's reference velocity: the input velocity_ref (true) or the rate of position_ref (false)") \
-X(Real, control_current_kp, "control.current_kp", parameter, tunable, "V/A", 62.83, 0.0, FMU_INF, \
+X(Real, control_current_kp, "control.current_kp", parameter, tunable, "V/A", 62.83, FMU_POSITIVE, FMU_INF, \
   "Current PI: L w_c with w_c = 2 pi 1 kHz (zero cancels L/R)") \
 X(Real, control_current_ki, "control.current_ki", parameter, tunable, "V/(A.s)", 19478.0, 0.0, FMU_INF, \
   "Current PI integral gain R w_c") \
-X(Real, limit_force, "limit.force", parameter, tunable, "N", 610.0, 0.0, FMU_INF, \
+X(Real, limit_force, "limit.force", parameter, tunable, "N", 610.0, FMU_POSITIVE, FMU_INF, \
   "Force command limit: peak force (assumed about 3 x F_net, usual for iron-core forcers)") \
-X(Real, limit_current, "limit.current", parameter, tunable, "A", 13.9, 0.0, FMU_INF, "Current limit: peak force / K_f (assumed)") \
-X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 325.0, 0.0, FMU_INF, "Voltage limit: DC bus of a 230 V AC drive (assumed)") \
+X(Real, limit_current, "limit.current", parameter, tunable, "A", 13.9, FMU_POSITIVE, FMU_INF, "Current limit: peak force / K_f (assumed)") \
+X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 325.0, FMU_POSITIVE, FMU_INF, "Voltage limit: DC bus of a 230 V AC drive (assumed)") \
 X(Boolean, solver_exponential, "solver.exponential", parameter, fixed, "", 0, 0, 1, \
   "1: the current loop and the winding, linear with constant coefficients while the voltage limit " \
   "does not hold, taken exactly (exponential integrator ETDRK4, Cox and Matthews 2002) and the rest " \

@@ -230,16 +230,6 @@ void model_compute_outputs(FmuInstance *fmu) {
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    FMU_REQUIRE_POSITIVE(geometry_upper_joint_radius);
-    FMU_REQUIRE_POSITIVE(geometry_lower_joint_radius);
-    FMU_REQUIRE_POSITIVE(geometry_middle_leg_length);
-    FMU_REQUIRE_POSITIVE(platform_mass);
-    FMU_REQUIRE_POSITIVE(platform_inertia_xx);
-    FMU_REQUIRE_POSITIVE(platform_inertia_yy);
-    FMU_REQUIRE_POSITIVE(platform_inertia_zz);
-    FMU_REQUIRE_POSITIVE(transmission_screw_ratio);
-    FMU_REQUIRE_POSITIVE(transmission_force_torque);
-    if (errors) return fmi2Error;
     if (v->transmission_force_torque > v->transmission_screw_ratio)
         errors += fmu_reject(fmu, VR_transmission_force_torque,
                          "exceeds transmission.screw_ratio: the transfer efficiency K_FT / i_theta would pass 1");

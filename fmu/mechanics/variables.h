@@ -151,21 +151,21 @@ X(Integer, geometry_layout, "geometry.layout", parameter, fixed, "", 1, 1, 2, "J
 JOINT_VARIABLES(X, 1) JOINT_VARIABLES(X, 2) JOINT_VARIABLES(X, 3) \
 JOINT_VARIABLES(X, 4) JOINT_VARIABLES(X, 5) JOINT_VARIABLES(X, 6) \
 POSE_VARIABLES(X, "geometry.neutral", geometry_neutral_, parameter, fixed, "Layout 2: the pose at which every motor angle is zero") \
-X(Real, geometry_upper_joint_radius, "geometry.upper_joint_radius", parameter, fixed, "m", 0.8, 0.0, FMU_INF, "r_a (Table 1)") \
-X(Real, geometry_lower_joint_radius, "geometry.lower_joint_radius", parameter, fixed, "m", 1.1, 0.0, FMU_INF, "r_b (Table 1)") \
+X(Real, geometry_upper_joint_radius, "geometry.upper_joint_radius", parameter, fixed, "m", 0.8, FMU_POSITIVE, FMU_INF, "r_a (Table 1)") \
+X(Real, geometry_lower_joint_radius, "geometry.lower_joint_radius", parameter, fixed, "m", 1.1, FMU_POSITIVE, FMU_INF, "r_b (Table 1)") \
 X(Real, geometry_upper_joint_spacing, "geometry.upper_joint_spacing", parameter, fixed, "m", 0.2, 0.0, FMU_INF, "d_a, chord between the two joints of an upper pair (Table 1)") \
 X(Real, geometry_lower_joint_spacing, "geometry.lower_joint_spacing", parameter, fixed, "m", 0.3, 0.0, FMU_INF, "d_b, chord between the two joints of a lower pair (Table 1)") \
-X(Real, geometry_middle_leg_length, "geometry.middle_leg_length", parameter, fixed, "m", 1.86, 0.0, FMU_INF, "l_0, leg length at the neutral pose (Table 1); defines the neutral height") \
+X(Real, geometry_middle_leg_length, "geometry.middle_leg_length", parameter, fixed, "m", 1.86, FMU_POSITIVE, FMU_INF, "l_0, leg length at the neutral pose (Table 1); defines the neutral height") \
 X(Real, geometry_lower_pair_centre_1, "geometry.lower_pair_centre_1", parameter, fixed, "rad", 0.0, -FMU_INF, FMU_INF, "Angle of the first lower joint pair's centre (legs 1, 2)") \
 X(Real, geometry_lower_pair_centre_2, "geometry.lower_pair_centre_2", parameter, fixed, "rad", 2.0943951023931957, -FMU_INF, FMU_INF, "Second lower pair (legs 3, 4): 120 deg") \
 X(Real, geometry_lower_pair_centre_3, "geometry.lower_pair_centre_3", parameter, fixed, "rad", 4.1887902047863914, -FMU_INF, FMU_INF, "Third lower pair (legs 5, 6): 240 deg") \
 X(Real, geometry_upper_pair_centre_1, "geometry.upper_pair_centre_1", parameter, fixed, "rad", 1.0471975511965979, -FMU_INF, FMU_INF, "First upper pair (legs 2, 3): 60 deg") \
 X(Real, geometry_upper_pair_centre_2, "geometry.upper_pair_centre_2", parameter, fixed, "rad", 3.1415926535897931, -FMU_INF, FMU_INF, "Second upper pair (legs 4, 5): 180 deg") \
 X(Real, geometry_upper_pair_centre_3, "geometry.upper_pair_centre_3", parameter, fixed, "rad", 5.2359877559829888, -FMU_INF, FMU_INF, "Third upper pair (legs 6, 1): 300 deg") \
-X(Real, platform_mass, "platform.mass", parameter, fixed, "kg", 950.0, 0.0, FMU_INF, "m_p (Table 3)") \
-X(Real, platform_inertia_xx, "platform.inertia_xx", parameter, fixed, "kg.m2", 216.0, 0.0, FMU_INF, "I_p^p about the centre of mass (the origin), xx (assumed: disc r = 0.95 m, h = 0.15 m)") \
-X(Real, platform_inertia_yy, "platform.inertia_yy", parameter, fixed, "kg.m2", 216.0, 0.0, FMU_INF, "I_p^p, yy (assumed)") \
-X(Real, platform_inertia_zz, "platform.inertia_zz", parameter, fixed, "kg.m2", 429.0, 0.0, FMU_INF, "I_p^p, zz (assumed)") \
+X(Real, platform_mass, "platform.mass", parameter, fixed, "kg", 950.0, FMU_POSITIVE, FMU_INF, "m_p (Table 3)") \
+X(Real, platform_inertia_xx, "platform.inertia_xx", parameter, fixed, "kg.m2", 216.0, FMU_POSITIVE, FMU_INF, "I_p^p about the centre of mass (the origin), xx (assumed: disc r = 0.95 m, h = 0.15 m)") \
+X(Real, platform_inertia_yy, "platform.inertia_yy", parameter, fixed, "kg.m2", 216.0, FMU_POSITIVE, FMU_INF, "I_p^p, yy (assumed)") \
+X(Real, platform_inertia_zz, "platform.inertia_zz", parameter, fixed, "kg.m2", 429.0, FMU_POSITIVE, FMU_INF, "I_p^p, zz (assumed)") \
 X(Real, actuator_moving_mass, "actuator.moving_mass", parameter, fixed, "kg", 30.0, 0.0, FMU_INF, "m_a, piston rod and nut (Table 3)") \
 X(Real, actuator_moving_inertia, "actuator.moving_inertia", parameter, fixed, "kg.m2", 2.5, 0.0, FMU_INF, "i_a, transverse, about its centre of mass (assumed: slender 1.0 m rod)") \
 X(Real, actuator_moving_com, "actuator.moving_com", parameter, fixed, "m", 0.5, 0.0, FMU_INF, "r_ac, centre of mass from the upper joint (assumed)") \
@@ -176,8 +176,8 @@ X(Real, motor_system_mass, "motor_system.mass", parameter, fixed, "kg", 27.6, 0.
 X(Real, motor_system_inertia, "motor_system.inertia", parameter, fixed, "kg.m2", 1.5, 0.0, FMU_INF, "i_s, transverse inertia of the motor system about its centre of mass (assumed)") \
 X(Real, motor_system_com, "motor_system.com", parameter, fixed, "m", 0.6, 0.0, FMU_INF, "r_sc, its centre of mass from the lower joint (assumed, as Eq 18 uses J_bc)") \
 X(Real, motor_system_rotor_inertia, "motor_system.rotor_inertia", parameter, fixed, "kg.m2", 6.66e-3, 0.0, FMU_INF, "i_R, rotor and screw spin inertia (Table 3)") \
-X(Real, transmission_screw_ratio, "transmission.screw_ratio", parameter, fixed, "rad/m", 277.777777777778, 0.0, FMU_INF, "i_theta, motor angle per metre of leg (assumed: eta = K_FT / i_theta = 0.9)") \
-X(Real, transmission_force_torque, "transmission.force_torque", parameter, fixed, "1/m", 250.0, 0.0, FMU_INF, "K_FT, leg force per motor torque (Table 3)") \
+X(Real, transmission_screw_ratio, "transmission.screw_ratio", parameter, fixed, "rad/m", 277.777777777778, FMU_POSITIVE, FMU_INF, "i_theta, motor angle per metre of leg (assumed: eta = K_FT / i_theta = 0.9)") \
+X(Real, transmission_force_torque, "transmission.force_torque", parameter, fixed, "1/m", 250.0, FMU_POSITIVE, FMU_INF, "K_FT, leg force per motor torque (Table 3)") \
 X(Real, motor_viscous_friction, "motor.viscous_friction", parameter, fixed, "N.m.s/rad", 0.00792, 0.0, FMU_INF, "B_m on the motor shaft (Table 2)") \
 X(Real, actuator_spin_inertia, "actuator.spin_inertia", parameter, fixed, "kg.m2", 0.0, 0.0, FMU_INF, "I_s, the leg about its own axis, for legs that turn with the platform (spherical joint at the base, universal at the top: Halder et al.'s 6-SBU, I^ml); 0 for Meng's UPS legs") \
 X(Real, joint_friction_lower, "joint.friction_lower", parameter, fixed, "N.m.s/rad", 0.0, 0.0, FMU_INF, "C_S, viscous friction of the lower (spherical) joint on the leg's angular velocity (Halder et al.)") \

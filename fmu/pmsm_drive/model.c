@@ -389,21 +389,6 @@ void model_compute_outputs(FmuInstance *fmu) {
 fmi2Status model_validate(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     int errors = 0;
-    FMU_REQUIRE_POSITIVE(motor_torque_constant);
-    FMU_REQUIRE_POSITIVE(motor_inductance_d);
-    FMU_REQUIRE_POSITIVE(motor_inductance_q);
-    FMU_REQUIRE_POSITIVE(motor_inductance_0);
-    FMU_REQUIRE_POSITIVE(motor_resistance);
-    FMU_REQUIRE_POSITIVE(inverter_gain);
-    FMU_REQUIRE_POSITIVE(inverter_time_constant);
-    FMU_REQUIRE_POSITIVE(inverter_dc_link_voltage);
-    FMU_REQUIRE_POSITIVE(inverter_hysteresis_band);
-    FMU_REQUIRE_POSITIVE(control_position_kp);
-    FMU_REQUIRE_POSITIVE(control_speed_kp);
-    FMU_REQUIRE_POSITIVE(control_current_kp);
-    FMU_REQUIRE_POSITIVE(limit_speed);
-    FMU_REQUIRE_POSITIVE(limit_current);
-    FMU_REQUIRE_POSITIVE(limit_voltage);
     if (!(fabs(v->control_current_d_ref) < v->limit_current))
         errors += fmu_reject(fmu, VR_control_current_d_ref, "|i_d*| must be below limit.current");
     if (!(fabs(v->initial_current_q) <= v->limit_current))

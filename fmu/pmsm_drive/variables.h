@@ -75,23 +75,23 @@ X(Integer, inverter_switchings, "inverter.switchings", output, discrete, "", 0, 
 \
 X(Integer, motor_pole_pairs, "motor.pole_pairs", parameter, fixed, "", 4, 1, 64, \
   "Number of pole pairs P (Table 2)") \
-X(Real, motor_torque_constant, "motor.torque_constant", parameter, fixed, "N.m/A", 1.5, 0.0, FMU_INF, \
+X(Real, motor_torque_constant, "motor.torque_constant", parameter, fixed, "N.m/A", 1.5, FMU_POSITIVE, FMU_INF, \
   "Torque constant K_m = P psi_r (Table 2); psi_r = K_m / P") \
-X(Real, motor_inductance_d, "motor.inductance_d", parameter, fixed, "H", 6.9e-3, 0.0, FMU_INF, \
+X(Real, motor_inductance_d, "motor.inductance_d", parameter, fixed, "H", 6.9e-3, FMU_POSITIVE, FMU_INF, \
   "Stator inductance L_d (assumed = L_q: surface magnets; the paper gives only L_q)") \
-X(Real, motor_inductance_q, "motor.inductance_q", parameter, fixed, "H", 6.9e-3, 0.0, FMU_INF, \
+X(Real, motor_inductance_q, "motor.inductance_q", parameter, fixed, "H", 6.9e-3, FMU_POSITIVE, FMU_INF, \
   "Stator inductance L_q (Table 2, printed 6.9 M.h, read as 6.9 mH)") \
-X(Real, motor_resistance, "motor.resistance", parameter, fixed, "Ohm", 0.7, 0.0, FMU_INF, \
+X(Real, motor_resistance, "motor.resistance", parameter, fixed, "Ohm", 0.7, FMU_POSITIVE, FMU_INF, \
   "Stator resistance R_s (Table 2)") \
 \
 X(Integer, inverter_model, "inverter.model", parameter, fixed, "", 2, 1, 3, \
   "Inverter model: 1 = ideal (voltage = K_v times command), 2 = averaged K_v / (tau_v s + 1) (Fig 4), " \
   "3 = switching two-level inverter with hysteresis-band phase-current control (Fig 3)") \
-X(Real, inverter_gain, "inverter.gain", parameter, fixed, "1", 50.7, 0.0, FMU_INF, \
+X(Real, inverter_gain, "inverter.gain", parameter, fixed, "1", 50.7, FMU_POSITIVE, FMU_INF, \
   "Inverter magnification K_v: volts per unit of current-controller output (Table 2, printed V/A)") \
-X(Real, inverter_time_constant, "inverter.time_constant", parameter, fixed, "s", 1.0e-4, 0.0, FMU_INF, \
+X(Real, inverter_time_constant, "inverter.time_constant", parameter, fixed, "s", 1.0e-4, FMU_POSITIVE, FMU_INF, \
   "Averaged inverter delay tau_v (assumed: one period of a 10 kHz PWM carrier)") \
-X(Real, inverter_dc_link_voltage, "inverter.dc_link_voltage", parameter, fixed, "V", 860.0, 0.0, FMU_INF, \
+X(Real, inverter_dc_link_voltage, "inverter.dc_link_voltage", parameter, fixed, "V", 860.0, FMU_POSITIVE, FMU_INF, \
   "DC-link voltage of the switching inverter (assumed; see meng2010.toml)") \
 X(Real, inverter_hysteresis_band, "inverter.hysteresis_band", parameter, fixed, "A", 0.5, 0.01, FMU_INF, \
   "Half width of the hysteresis band of each phase-current comparator (assumed)") \
@@ -99,7 +99,7 @@ X(Boolean, inverter_neutral_connected, "inverter.neutral_connected", parameter, 
   "Switching inverter: false = star point isolated (Fig 3; the three comparators interact and a phase " \
   "error can reach twice the band), true = star point tied to the DC-link midpoint (phases independent, " \
   "errors inside the band; zero-sequence current flows through motor.inductance_0)") \
-X(Real, motor_inductance_0, "motor.inductance_0", parameter, fixed, "H", 1.4e-3, 0.0, FMU_INF, \
+X(Real, motor_inductance_0, "motor.inductance_0", parameter, fixed, "H", 1.4e-3, FMU_POSITIVE, FMU_INF, \
   "Zero-sequence inductance, used only with inverter.neutral_connected (assumed: 0.2 L_q, the order " \
   "of the leakage inductance of a surface-magnet machine)") \
 X(Real, inverter_max_step, "inverter.max_step", parameter, fixed, "s", 5e-6, 1e-7, 1e-3, \
@@ -108,25 +108,25 @@ X(Real, inverter_max_step, "inverter.max_step", parameter, fixed, "s", 5e-6, 1e-
 X(Integer, control_mode, "control.mode", parameter, fixed, "", 1, 1, 3, \
   "Outermost loop closed: 1 = position (APR-ASR-ACR), 2 = speed (reference speed_ff), " \
   "3 = torque (current loop only, reference torque_ff)") \
-X(Real, control_position_kp, "control.position_kp", parameter, tunable, "1/s", 60.0, 0.0, FMU_INF, \
+X(Real, control_position_kp, "control.position_kp", parameter, tunable, "1/s", 60.0, FMU_POSITIVE, FMU_INF, \
   "Position loop (APR) proportional gain: rad/s of speed reference per rad of angle error") \
 X(Real, control_position_ki, "control.position_ki", parameter, tunable, "1/s2", 300.0, 0.0, FMU_INF, \
   "Position loop (APR) integral gain") \
-X(Real, control_speed_kp, "control.speed_kp", parameter, tunable, "A.s/rad", 6.97, 0.0, FMU_INF, \
+X(Real, control_speed_kp, "control.speed_kp", parameter, tunable, "A.s/rad", 6.97, FMU_POSITIVE, FMU_INF, \
   "Speed loop (ASR) proportional gain (symmetric-optimum style design, see documentation)") \
 X(Real, control_speed_ki, "control.speed_ki", parameter, tunable, "A/rad", 580.5, 0.0, FMU_INF, \
   "Speed loop (ASR) integral gain") \
-X(Real, control_current_kp, "control.current_kp", parameter, tunable, "1/A", 0.6805, 0.0, FMU_INF, \
+X(Real, control_current_kp, "control.current_kp", parameter, tunable, "1/A", 0.6805, FMU_POSITIVE, FMU_INF, \
   "Current loops (ACR, d and q) proportional gain (modulus optimum, see documentation)") \
 X(Real, control_current_ki, "control.current_ki", parameter, tunable, "1/(A.s)", 69.03, 0.0, FMU_INF, \
   "Current loops (ACR, d and q) integral gain") \
 X(Real, control_current_d_ref, "control.current_d_ref", parameter, tunable, "A", 0.0, -FMU_INF, FMU_INF, \
   "d-axis current reference (0: field-oriented control with i_d* = 0)") \
-X(Real, limit_speed, "limit.speed", parameter, tunable, "rad/s", 600.0, 0.0, FMU_INF, \
+X(Real, limit_speed, "limit.speed", parameter, tunable, "rad/s", 600.0, FMU_POSITIVE, FMU_INF, \
   "Speed reference limit omega_max (Table 4)") \
-X(Real, limit_current, "limit.current", parameter, tunable, "A", 42.0, 0.0, FMU_INF, \
+X(Real, limit_current, "limit.current", parameter, tunable, "A", 42.0, FMU_POSITIVE, FMU_INF, \
   "Current reference limit I_max (Table 4): |i_q*| <= sqrt(I_max^2 - i_d*^2)") \
-X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 1200.0, 0.0, FMU_INF, \
+X(Real, limit_voltage, "limit.voltage", parameter, tunable, "V", 1200.0, FMU_POSITIVE, FMU_INF, \
   "Current-controller output limit per axis, in volts after K_v (ideal and averaged inverters); " \
   "the switching inverter is bounded by its DC link instead") \
 X(Real, initial_current_q, "initial.current_q", parameter, fixed, "A", 0.0, -FMU_INF, FMU_INF, \

@@ -12,7 +12,7 @@ from scipy import signal
 from cosim.engine.artifacts import ROOT, fmu_path
 from cosim.engine.fmi import FmuError, FmuInstance
 
-G = 9.80665
+G = 9.81  # the platform's gravity, the cueing FMU's default (one gravity for every FMU)
 INPUTS = ["specific_force.x", "specific_force.y", "specific_force.z", "angular_rate.x", "angular_rate.y",
           "angular_rate.z"]
 POSE = ["pose_ref.x", "pose_ref.y", "pose_ref.z", "pose_ref.roll", "pose_ref.pitch", "pose_ref.yaw"]
@@ -158,6 +158,28 @@ def test_a_sustained_acceleration_ends_as_tilt_within_its_rate_limit(cueing):
     assert abs(felt - 2.0) < 1e-6  # the whole acceleration, through tilt alone
     assert abs(rows[-1, 0]) < 1e-3 and rows[:, 0].max() > 0.05  # the surge cue moved forward, then washed out
     assert np.abs(rows[:, 1:4] - [0.0, NEUTRAL_Z, 0.0]).max() == 0.0  # nothing else moved
+
+
+def test_a_diagonal_acceleration_turns_the_tilt_vector_within_the_rate_limit(cueing):
+    """Braking and cornering at once (2 m/s^2 along x and y): roll and pitch tilt together, and the
+    tilt vector's rate, sqrt(roll'^2 + pitch'^2), stays within the limit, every step; each axis
+    alone then turns at 1/sqrt(2) of it (a per-axis limit would let the vector turn at sqrt(2)
+    times the limit, 4.24 deg/s for 3)."""
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 0] = u[:, 1] = np.where(t >= 1.0, 2.0, 0.0)
+        u[:, 2] = G
+        return u
+
+    h = 1e-3
+    t, _, rows, rates, _ = drive(cueing({"translation.x.gain": 1.0, "translation.y.gain": 1.0, "tilt.gain": 1.0}),
+                                 motion, h, 30000, POSE + ["tilt.roll", "tilt.pitch"])
+    limit = np.radians(3.0)
+    stepped = np.hypot(np.diff(rows[:, 6]), np.diff(rows[:, 7])) / h
+    assert stepped.max() <= limit * (1 + 1e-9)
+    assert np.hypot(rates[:, 6], rates[:, 7]).max() <= limit * (1 + 1e-9)
+    assert stepped.max() > 0.99 * limit  # the limit holds it back
+    assert np.abs(np.diff(rows[:, 6]) / h).max() < 0.75 * limit  # each axis alone: about 1/sqrt(2) of it
 
 
 def test_the_platform_comes_back_to_neutral_after_a_manoeuvre(cueing):

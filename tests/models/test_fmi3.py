@@ -1,6 +1,7 @@
 """Every model as an FMI 3.0 Co-Simulation FMU (build/fmus3/, fmu/common/fmi3_layer.c over the
 same model and FMI 2.0 layer): fmpy validates it; its variables are its FMI 2.0 twin's (names,
-value references, causalities, units, starts) in FMI 3.0's types; it runs the twin's experiment
+value references, causalities, units, starts) in FMI 3.0's types, and each Real input's rate and
+curvature as inputs of their own, which act as FMI 2.0's input derivatives; it runs the twin's experiment
 bit for bit (one source, one compiler: an FMI 3.0 instance holds its inputs over a step, as the
 experiment's held inputs do); its state kept, serialized and set back replays bit for bit; wrong
 use is refused with a logged reason; its sources/ rebuild it (fmpy's build of buildDescription.xml)
@@ -22,6 +23,7 @@ from cosim.engine.artifacts import fmu_path
 from shipped import MODELS
 
 STEPS = 2000
+SPAN = 0x100000  # an input's derivative of order k at k * SPAN + its value reference
 FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
 
 
@@ -33,7 +35,12 @@ def test_the_fmi3_fmu_validates_and_has_its_twins_variables(name):
     assert three.coSimulation.modelIdentifier == two.coSimulation.modelIdentifier == name
     time, *variables = three.modelVariables
     assert (time.name, time.causality, time.valueReference) == ("time", "independent", 0)
-    assert len(variables) == len(two.modelVariables)
+    variables, derivatives = variables[:len(two.modelVariables)], variables[len(two.modelVariables):]
+    # then each Real input's rate and curvature, inputs of their own (FMI 3.0 has no input derivatives)
+    inputs = [v for v in two.modelVariables if v.causality == "input" and v.type == "Real"]
+    assert [(d.name, d.valueReference, d.causality, d.type, float(d.start)) for d in derivatives] == [
+        (f"fmi.{kind}.{v.name}", order * SPAN + v.valueReference, "input", "Float64", 0.0)
+        for v in inputs for order, kind in ((1, "rate"), (2, "curvature"))]
     for a, b in zip(two.modelVariables, variables):
         assert (b.name, b.valueReference, b.causality, b.type, b.unit) == \
                (a.name, a.valueReference, a.causality, FMI3_TYPES[a.type], a.unit), a.name
@@ -186,7 +193,8 @@ def test_the_engine_runs_the_meng_scene_on_fmi3_fmus_as_on_fmi2_at_order_0():
 def test_an_fmi3_run_that_extrapolates_says_how_its_inputs_reach_the_fmus(tmp_path, capsys):
     from cosim.cli import main
     assert main(["run", "meng_eq35", "--fmi", "3", "--duration", "0.05", "--no-plots", "--out", str(tmp_path)]) == 0
-    assert "FMI 3.0: the FMUs take no input derivatives" in capsys.readouterr().out
+    assert "FMI 3.0: FMI 3.0 has no input derivatives; the master gives each input's rate and curvature through " \
+           "the FMUs' own inputs fmi.rate.* and fmi.curvature.*" in capsys.readouterr().out
     assert main(["export", "meng_eq35", "--ssp", str(tmp_path / "m.ssp"), "--scene-step"]) == 0
     from cosim.engine.ssp import read_ssp
     assert main(["run", str(tmp_path / "m.ssp"), "--fmi", "3", "--out", str(tmp_path)]) == 2
@@ -239,3 +247,36 @@ def test_a_users_drive_fmu_may_be_fmi3(tmp_path):
     assert runs[0].dtype.names == runs[1].dtype.names
     for name in runs[0].dtype.names:
         assert np.array_equal(runs[0][name], runs[1][name]), name
+
+
+def test_the_inputs_derivatives_act_as_fmi2s_and_read_back():
+    """A drive stepped with its inputs' rates given: through fmi2SetRealInputDerivatives on the FMI
+    2.0 binary and through fmi.rate.* on the FMI 3.0 one, bit for bit; the rate reads back as set,
+    0 after the step (a derivative holds for one step); a derivative reference of an output is
+    refused."""
+    from cosim.engine.fmi import FmuError, FmuInstance
+    runs = []
+    for fmi in (2, 3):
+        drive = FmuInstance(fmu_path("pmsm_drive", fmi=fmi), f"drive{fmi}")
+        try:
+            drive.initialize({})
+            assert drive.can_interpolate_inputs
+            rows = []
+            for k in range(200):
+                drive.set({"angle_ref": 0.01 * k})
+                if fmi == 2:
+                    drive._call("fmi2SetRealInputDerivatives", drive.fmu.setRealInputDerivatives,
+                                [drive.vr("angle_ref")], [1], [1.0 / 1e-3 * 0.01])
+                else:
+                    drive.set({"fmi.rate.angle_ref": 1.0 / 1e-3 * 0.01})
+                    assert drive.get("fmi.rate.angle_ref") == 10.0
+                drive.do_step(1e-3)
+                rows.append([drive.get(n) for n in ("torque", "speed_ref", "current.q")])
+            if fmi == 3:
+                assert drive.get("fmi.rate.angle_ref") == 0.0
+                with pytest.raises(FmuError, match="unknown value reference"):
+                    drive._call("fmi3SetFloat64", drive.fmu.setFloat64, [SPAN + drive.vr("torque")], [1.0])
+            runs.append(np.array(rows))
+        finally:
+            drive.free()
+    assert np.array_equal(runs[0], runs[1]) and np.abs(runs[0][:, 1]).max() > 0

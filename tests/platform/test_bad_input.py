@@ -44,7 +44,7 @@ CASES = {
     "integer with a fraction": (drive_parameter('"motor.pole_pairs" = 4.7'),
                                 ':10: drive.parameters."motor.pole_pairs" = 4.7: must be a whole number (pmsm_drive)'),
     "value outside its bounds": (drive_parameter('"motor.resistance" = -0.7'),
-                                 ':10: drive.parameters."motor.resistance" = -0.7: outside [0, inf] Ohm (pmsm_drive)'),
+                                 ':10: drive.parameters."motor.resistance" = -0.7: outside (0, inf] Ohm (pmsm_drive)'),
     "misspelt parameter": (drive_parameter('"motor.resistnce" = 0.7'),
                            "no such variable (did you mean 'motor.resistance'?) (pmsm_drive)"),
     "NaN amplitude": ("[scene]\nduration = 1.0\n[trajectory.x]\nsines = [{amplitude = nan, frequency = 1.0}]\n",
@@ -284,7 +284,7 @@ def test_ctrl_c_during_a_run_is_one_line(tmp_path):
 
 
 VEHICLE_HEADER = "time,specific_force.x,specific_force.y,specific_force.z,angular_rate.x,angular_rate.y,angular_rate.z"
-VEHICLE_ROWS = [f"{0.01 * k:g},{0.5 * (k > 5):g},0,9.80665,0,0,0" for k in range(40)]
+VEHICLE_ROWS = [f"{0.01 * k:g},{0.5 * (k > 5):g},0,9.81,0,0,0" for k in range(40)]
 
 
 @pytest.mark.parametrize("break_it, reason", [

@@ -46,13 +46,17 @@ def test_a_vehicle_run_reports_what_the_occupant_feels(tmp_path):
 def test_the_screening_stands_in_for_the_co_simulation(braking):
     """The platform tracks its reference to millimetres: the perceived error of the screening (the
     platform on its reference) is within 3 % of the co-simulated one, the stroke and joint margins
-    within a hundredth of the limit, and the current, where the drives smooth what the screening
-    spreads over 4 ms, within a tenth of the limit."""
+    within a hundredth of the limit. The current peaks where the tilt's rate limiter reverses the
+    tilt within one step (rate +limit to -limit: the reference's acceleration jumps by 105 rad/s^2),
+    which the drives take differently with where the reversal falls in their steps (a change of
+    gravity in the fourth digit moves the co-simulated peak from 27 to 16 A); the screening spreads
+    it over 4 ms and never promises more: its current margin at most a tenth of the limit above the
+    co-simulated one."""
     screened, simulated = screen(braking, {}), confirm(braking, {})
     assert screened.perceived_error == pytest.approx(simulated.perceived_error, rel=0.03)
     for name in ("stroke (long end)", "stroke (short end)", "joint angle"):
         assert screened.margins[name] == pytest.approx(simulated.margins[name], abs=0.01), name
-    assert screened.margins["current"] == pytest.approx(simulated.margins["current"], abs=0.1)
+    assert screened.margins["current"] <= simulated.margins["current"] + 0.1
 
 
 def test_tuning_beats_the_scenes_cueing_within_every_limit_and_is_the_same_on_dask(braking):

@@ -32,20 +32,28 @@ def test_the_recursion_is_the_transfer_function_exactly(organ):
 
 
 def test_the_otoliths_are_young_and_meirys():
-    """1.5 (s + 0.076) / ((s + 0.19)(s + 1.5)): a sustained specific force is sensed at 0.4 of it;
-    a step of 1 m/s^2 gives 0.4 + 0.687 e^(-0.19 t) - 1.087 e^(-1.5 t) (its partial fractions)."""
-    assert OTOLITH.static_gain() == pytest.approx(0.4, rel=1e-12)
+    """K (1 + tau_a s) / ((1 + tau_L s)(1 + tau_S s)) with K = 0.4, tau_a = 13.2 s, tau_L = 5.33 s,
+    tau_S = 0.66 s (Young and Meiry 1968, as Telban and Cardullo 2005 give them): a sustained
+    specific force is sensed at 0.4 of it; a step of 1 m/s^2 gives
+    K [1 + (tau_a - tau_L)/(tau_L - tau_S) e^(-t/tau_L) - (tau_a - tau_S)/(tau_L - tau_S) e^(-t/tau_S)]
+    (its partial fractions); the gain at each frequency is the published magnitude, largest (0.89)
+    near 0.5 rad/s."""
+    K, tau_a, tau_L, tau_S = 0.4, 13.2, 5.33, 0.66
+    assert OTOLITH.static_gain() == pytest.approx(K, rel=1e-12)
+    for w in (0.05, 0.2, 0.5, 1.0, 1.5, 5.0, 20.0):
+        published = K * math.hypot(1, tau_a * w) / (math.hypot(1, tau_L * w) * math.hypot(1, tau_S * w))
+        assert abs(OTOLITH.response(np.array([w]))[0]) == pytest.approx(published, rel=1e-12)
+    w = np.logspace(-2, 2, 4001)
+    gain = np.abs(OTOLITH.response(w))
+    assert gain.max() == pytest.approx(0.891, abs=1e-3) and 0.4 < w[gain.argmax()] < 0.6
     t = np.arange(0, 40.0, 1e-3)
     u = np.where(t > 0, 1.0, 0.0)
-    u[0] = 0.0
-    a = 1.5 * (-0.19 + 0.076) / (-0.19 * (-0.19 + 1.5))
-    b = 1.5 * (-1.5 + 0.076) / (-1.5 * (-1.5 + 0.19))
-    assert a == pytest.approx(0.687, abs=1e-3) and b == pytest.approx(-1.087, abs=1e-3)
-    exact = 0.4 + a * np.exp(-0.19 * t) + b * np.exp(-1.5 * t)
+    a, b = (tau_a - tau_L) / (tau_L - tau_S), -(tau_a - tau_S) / (tau_L - tau_S)
+    exact = K * (1 + a * np.exp(-t / tau_L) + b * np.exp(-t / tau_S))
     # the step between the first two samples is a ramp to the recursion: compare from 10 ms on
     late = t > 0.01
     assert np.abs(OTOLITH.perceive(t, u)[late] - exact[late] - (OTOLITH.perceive(t, u) - exact)[late][-1]).max() < 2e-3
-    assert OTOLITH.perceive(t, u)[-1] == pytest.approx(0.4, abs=2e-3)
+    assert OTOLITH.perceive(t, u)[-1] == pytest.approx(K, abs=2e-3)
 
 
 def test_the_canals_sense_rotation_between_their_time_constants_and_forget_a_steady_one():
@@ -138,24 +146,42 @@ def test_the_body_angular_velocity_is_the_rotations_own():
 
 def test_the_quality_figures_on_motions_whose_answer_is_known():
     """The platform's cue a copy of the vehicle's: no error, correlation 1, no false cue; its cue of
-    the other sign: a false cue wherever it is felt; a cue where the vehicle has none: false too."""
+    the other sign: a sign error wherever both are felt; a cue where the vehicle has none:
+    spurious; a vehicle's cue the platform leaves out: missing."""
     t = np.arange(0, 20.0, 1e-2)
     vehicle = np.zeros((len(t), 6))
     vehicle[:, 0] = 2.0 * np.sin(0.5 * t)
     vehicle[:, 5] = 0.2 * np.sin(0.7 * t)
     same = quality(perceive(t, vehicle, vehicle))
-    assert all(q.rms_error == 0.0 and q.false_cue_time == 0.0 for q in same)
+    assert all(q.rms_error == 0.0 and q.false_cue_time == 0.0 and q.missing_time == 0.0 for q in same)
     assert same[0].correlation == pytest.approx(1.0) and math.isnan(same[1].correlation)
     wrong = vehicle.copy()
     wrong[:, 0] *= -1
     wrong[:, 3] = np.where(t > 5.0, 0.2, 0.0)  # a roll the vehicle does not have: felt at first, then faded
+    wrong[:, 5] = 0.0                         # the yaw left out
     felt = perceive(t, vehicle, wrong)
     q = quality(felt)
     assert q[0].correlation == pytest.approx(-1.0)
-    expected = np.sum(np.abs(felt.platform_perceived[:, 0]) > THRESHOLDS[0]) * 1e-2
-    assert q[0].false_cue_time == pytest.approx(expected) and q[0].false_cue_time > 10.0
-    assert q[3].false_cue_time > 0 and q[3].largest_false_cue > THRESHOLDS[3]
+    both = (np.abs(felt.platform_perceived[:, 0]) > THRESHOLDS[0]) & (np.abs(felt.vehicle_perceived[:, 0]) > THRESHOLDS[0])
+    assert q[0].sign_error_time == pytest.approx(both.sum() * 1e-2) and q[0].sign_error_time > 10.0
+    assert q[0].spurious_time == q[0].missing_time == 0.0  # the same size, so felt together
+    assert q[3].spurious_time > 0 and q[3].spurious_largest > THRESHOLDS[3] and q[3].sign_error_time == 0.0
+    yaw_felt = np.abs(felt.vehicle_perceived[:, 5]) > THRESHOLDS[5]
+    assert q[5].missing_time == pytest.approx(yaw_felt.sum() * 1e-2) and q[5].missing_time > 5.0
+    assert q[5].missing_largest == pytest.approx(np.abs(felt.vehicle_perceived[:, 5]).max())
+    assert q[5].false_cue_time == 0.0
     assert [c.channel for c in q] == list(CHANNELS)
+
+
+def test_the_cue_kinds_on_constructed_signals():
+    """Felt means beyond the threshold: each sample is spurious, a sign error, missing or none."""
+    from cosim.platform.perception import cue_kinds
+    vehicle = np.array([0.0, 0.5, 0.5, -0.5, 0.05, 0.0])
+    platform = np.array([0.5, 0.5, -0.5, 0.05, 0.5, 0.05])
+    kinds = cue_kinds(vehicle, platform, 0.17)
+    assert kinds["spurious"].tolist() == [True, False, False, False, True, False]
+    assert kinds["sign error"].tolist() == [False, False, True, False, False, False]
+    assert kinds["missing"].tolist() == [False, False, False, True, False, False]
 
 
 def test_the_vehicle_at_rest_feels_nothing():

@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Core, mechanics_value
+from ..core import Core, gravity_of, mechanics_value
 from ..perception import ChannelQuality, perceive, perceived_error, platform_motion, quality, vehicle_motion
 from ..ports import DRIVES, LEGS, POSE
 from ..run.compile import scene_cueing, scene_values
 from ..run.errors import BUILD_ERRORS, scene_error
-from ..run.runner import cueing_value, run_scene
+from ..run.runner import run_scene
 from ..scene import Scene
 from ..run.alone import play_cueing
 from .search.optimise import evolve
@@ -105,10 +105,6 @@ class Judged:
                 + (" (within every limit)" if self.within else f" (past the {worst} limit)"))
 
 
-def _gravity(mechanics: dict) -> np.ndarray:
-    return np.array([float(mechanics_value(mechanics, f"environment.gravity_{a}")) for a in "xyz"])
-
-
 def screen(scene: Scene, parameters: dict[str, float]) -> Judged:
     """The kinematic screening of cueing `parameters` (over the scene's own): the cueing FMU alone
     at the scene's step, the platform on its reference (its rates and accelerations by
@@ -124,9 +120,9 @@ def screen(scene: Scene, parameters: dict[str, float]) -> Judged:
     spread = max(1, int(round(SPREAD / scene.step)))  # a jump of the rate (the tilt's limiter) as the drives take it
     accelerations = uniform_filter1d(accelerations, spread, axis=0, mode="nearest")
     twist = np.column_stack([rates[:, :3], euler_angular_velocity(poses, rates)])
-    gravity = _gravity(mechanics)
-    felt = perceive(times, vehicle_motion(taken[:, :3], taken[:, 3:], float(values.get("gravity", cueing_value(
-        scene, "gravity")))), platform_motion(times, poses, twist, np.array(scene.head), gravity))
+    gravity = gravity_of(mechanics)
+    felt = perceive(times, vehicle_motion(taken[:, :3], taken[:, 3:], float(np.linalg.norm(gravity))),
+                    platform_motion(times, poses, twist, np.array(scene.head), gravity))
     channels = quality(felt)
     core = _core(scene)
     kinematics = core.pose_kinematics(poses)

@@ -179,15 +179,16 @@ def _pacing(pacing) -> str:
 
 def _perception(perceived) -> str:
     """A cueing run judged by perception (cosim.platform.perception): per channel the rms error,
-    correlation and false cues, and the vehicle's motion against what the occupant perceives of it
-    and of the platform's."""
+    correlation and cues by kind (spurious, sign error, missing), and the vehicle's motion against
+    what the occupant perceives of it and of the platform's."""
     import plotly.graph_objects as go
     import plotly.io as pio
     from ..perception import CHANNELS, UNITS, perceived_error, quality
     channels = quality(perceived)
-    rows = [(f"{q.channel} [{q.unit}]: rms error / the vehicle's / correlation / false cues [s]",
+    rows = [(f"{q.channel} [{q.unit}]: rms error / the vehicle's / correlation / spurious, sign error, missing cues [s]",
              f"{q.rms_error:.3g} / {q.rms_vehicle:.3g} / "
-             f"{'constant' if np.isnan(q.correlation) else f'{q.correlation:.2f}'} / {q.false_cue_time:.2f}",
+             f"{'constant' if np.isnan(q.correlation) else f'{q.correlation:.2f}'} / "
+             f"{q.spurious_time:.2f}, {q.sign_error_time:.2f}, {q.missing_time:.2f}",
              repr(q.rms_error)) for q in channels]
     total = perceived_error(channels)
     rows.append(("perceived error (rms per channel in thresholds, summed)", f"{total:.3f}", repr(total)))

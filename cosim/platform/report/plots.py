@@ -4,16 +4,22 @@ written by cosim.engine.results."""
 from __future__ import annotations
 
 from pathlib import Path
-import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
-from ...engine.artifacts import fmu_path  # noqa: E402
-from ...engine.checks import variables  # noqa: E402
-from ...engine.files import write_figure  # noqa: E402
-from ..ports import DRIVES, LEGS, POSE  # noqa: E402
+from ...engine.artifacts import fmu_path
+from ...engine.checks import variables
+from ...engine.files import write_figure
+from ..ports import DRIVES, LEGS, POSE
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend, imported when a figure is drawn (a run without
+    plots never loads it)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
 
 
 def units(drive: str) -> dict[str, str]:
@@ -40,7 +46,7 @@ def save_figure(fig, path: Path, dpi: int = 100) -> Path:
         fig.tight_layout()
         return write_figure(fig, path, dpi)
     finally:
-        plt.close(fig)
+        pyplot().close(fig)
 
 
 DRIVE_QUANTITIES = {"torque": "motor torque", "speed": "motor speed", "current.q": "i_q", "force": "motor force",
@@ -67,7 +73,7 @@ def plot_tracking(result: np.ndarray, path: Path, title: str, source: str = "", 
     error after `settle` seconds; an inset shows the whole error with the start-up. `source` names
     the paper's figure it corresponds to; `impacts` are (start, end) windows to mark."""
     t = result["time"]
-    fig, axes = plt.subplots(6, 2, figsize=(12, 13), sharex=True)
+    fig, axes = pyplot().subplots(6, 2, figsize=(12, 13), sharex=True)
     for k, (label, a) in enumerate(zip(DOF, POSE)):
         unit = "mm" if k < 3 else "mrad"
         error = 1e3 * (result[f"pose.{a}"] - result[f"pose_ref.{a}"])
@@ -105,7 +111,7 @@ def plot_drives(result: np.ndarray, path: Path, title: str, effort: str, speed: 
     Meng's Fig 8 shows."""
     t = result["time"]
     rows = 2 + (1 if impacts else 0)
-    fig, axes = plt.subplots(rows, 1, figsize=(12, 4 * rows))
+    fig, axes = pyplot().subplots(rows, 1, figsize=(12, 4 * rows))
     (speed_name, speed_unit), (effort_name, effort_unit) = ((DRIVE_QUANTITIES[q], units[q]) for q in (speed, effort))
     for i in LEGS:
         axes[0].plot(t, result[f"{speed}[{i}]"], lw=1, label=f"leg {i}")
@@ -137,7 +143,7 @@ def plot_perception(perceived, path: Path, title: str) -> None:
     vehicle's motion, what the occupant would perceive of it, and what the occupant perceives of
     the platform's motion at the head."""
     from ..perception import CHANNELS, UNITS
-    fig, axes = plt.subplots(3, 2, figsize=(12, 10), sharex=True)
+    fig, axes = pyplot().subplots(3, 2, figsize=(12, 10), sharex=True)
     t = perceived.times
     for c, (channel, unit) in enumerate(zip(CHANNELS, UNITS)):
         ax = axes[c % 3, c // 3]

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
+
 from ...engine import Algorithm, Experiment, SystemStructure
 from ...engine.artifacts import fmu_path
 from ...engine.checks import variables
@@ -156,23 +158,19 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
                                    interface_jacobian=scene.interface_jacobian, drive_fmus=fmus,
                                    cueing_values=scene_cueing(scene, mechanics_values), fmi=scene.fmi)
     structure.settings = {**to_strings(algorithm, scene.control), **output_settings(*record, scene.output_interval)}
-    if scene.fmi == 3 and scene.algorithm.order > 0:
-        # FMI 3.0 FMUs take no input derivatives: the coupling's extrapolation reaches them through their
-        # own, from their inputs at the communication points (the reference with its exact rate)
-        for component in structure.components:
-            if "fmi.extrapolate_inputs" in variables(component.fmu):
-                component.parameters.setdefault("fmi.extrapolate_inputs", True)
     return structure
 
 
 def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
     """The cueing FMU's values for a scene with a [motion] vehicle (None without): the vehicle's
-    file, the platform's neutral pose (where the washout returns it), then [cueing.parameters]."""
+    file, the platform's neutral pose (where the washout returns it) and its gravity (one for
+    every FMU: the mechanics'), then [cueing.parameters]."""
     if scene.vehicle is None:
         return None
-    from ..core import neutral_pose
+    from ..core import gravity_of, neutral_pose
     neutral = dict(zip((f"neutral.{a}" for a in POSE), neutral_pose(mechanics_values).tolist()))
-    return {"vehicle.file": scene.vehicle, **neutral, **scene.cueing_parameters}
+    return {"vehicle.file": scene.vehicle, **neutral, "gravity": float(np.linalg.norm(gravity_of(mechanics_values))),
+            **scene.cueing_parameters}
 
 
 def scene_algorithm(scene: Scene) -> Algorithm:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ...engine.outcome import Outcome, Report
 from ...engine.run import Plan, run
-from ..core import mechanics_value
+from ..core import gravity_of
 from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines, vehicle_motion
 from ..ports import DRIVES, POSE, per_leg
 from ..report.plots import units
@@ -42,6 +42,7 @@ class RunReport(Report):
     # with the 0.2 s after it, steady tracking) the pose's and the efforts' largest difference
     windows: list = field(default_factory=list)  # (window, pose error, effort error, effort error / own change)
     perceived: Perceived | None = None  # a cueing scene's: vehicle and platform as the occupant feels them
+    channels: list = field(default_factory=list)  # its quality per channel, cues by kind (perception.quality)
 
     @property
     def scene(self) -> str:
@@ -112,17 +113,15 @@ def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) 
                           tuning=compiled.tuning, diverged=outcome.diverged)
     report.name = scene.name
     if scene.fmi == 3 and scene.algorithm.order > 0:
-        from ..scene.reader import FMI3_REFINE
-        report.remarks.append(f"FMI 3.0: the FMUs take no input derivatives, so each extrapolates its inputs itself over "
-                              "a step, linearly from the communication points (fmi.extrapolate_inputs; the reference with "
-                              "its exact rate): first order, as our Jacobi, whatever the coupling; the fixed step is "
-                              f"1/{FMI3_REFINE} of the scene's ({scene.step:g} s), where every shipped scene holds its tolerances (with coupling.order "
-                              "= 0 the run is the FMI 2.0 one at the scene's step, bit for bit)")
+        report.remarks.append("FMI 3.0: FMI 3.0 has no input derivatives; the master gives each input's rate and "
+                              "curvature through the FMUs' own inputs fmi.rate.* and fmi.curvature.*, so the run "
+                              "couples as on the FMI 2.0 FMUs, at the scene's step")
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
         if len(result) > 3:
             report.perceived = perceived_motion(scene, compiled.mechanics, result)
-            report.remarks += quality_lines(quality(report.perceived))
+            report.channels = quality(report.perceived)
+            report.remarks += quality_lines(report.channels)
     return report
 
 
@@ -130,13 +129,13 @@ def perceived_motion(scene: Scene, mechanics_values: dict, result: np.ndarray) -
     """A cueing scene's vehicle and platform motion at the occupant's head ([cueing] head) and
     what the occupant perceives of each (cosim.platform.perception), on the platform of these
     mechanics values."""
-    gravity = np.array([float(mechanics_value(mechanics_values, f"environment.gravity_{a}")) for a in "xyz"])
+    gravity = gravity_of(mechanics_values)
     times = result["time"]
     keep = np.r_[True, np.diff(times) > 0]
     poses = np.column_stack([result[f"pose.{a}"] for a in POSE])[keep]
     twist = np.column_stack([result[n] for n in TWIST])[keep]
     taken = np.column_stack([result[f"vehicle.{c}"] for c in CHANNELS])[keep]
-    vehicle = vehicle_motion(taken[:, :3], taken[:, 3:], cueing_value(scene, "gravity"))
+    vehicle = vehicle_motion(taken[:, :3], taken[:, 3:], float(np.linalg.norm(gravity)))
     return perceive(times[keep], vehicle, platform_motion(times[keep], poses, twist, np.array(scene.head), gravity))
 
 
@@ -147,15 +146,34 @@ def cueing_value(scene: Scene, name: str) -> float:
     return float(scene.cueing_parameters.get(name, variables(fmu_path("cueing"))[name].start))
 
 
+def tilt_rates(result: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A cueing run's tilt: times, the commanded tilt vector's rate (the cueing FMU's tilt.roll and
+    tilt.pitch) and the realised one (the simulated platform's roll and pitch less the rest of the
+    reference: pose - (pose_ref - tilt)), each |(roll', pitch')| [rad/s], by differences in time."""
+    t = result["time"]
+    keep = np.r_[True, np.diff(t) > 0]
+    t = t[keep]
+    commanded = np.column_stack([result[f"tilt.{a}"][keep] for a in ("roll", "pitch")])
+    realised = np.column_stack([(result[f"pose.{a}"] - result[f"pose_ref.{a}"] + result[f"tilt.{a}"])[keep]
+                                for a in ("roll", "pitch")])
+    rate = [np.hypot(*np.gradient(angles, t, axis=0).T) for angles in (commanded, realised)]
+    return t, rate[0], rate[1]
+
+
 def tilt_line(scene: Scene, result: np.ndarray) -> str:
-    """What the tilt coordination of a scene's motion cueing did: its largest roll and pitch and
-    its peak rate against its limit (below which the semicircular canals do not notice it)."""
+    """What the tilt coordination of a scene's motion cueing did: its largest roll and pitch, and
+    the tilt vector's peak rate, commanded and as the simulated platform realised it, against the
+    limit (below which the semicircular canals do not notice it), with the time the platform
+    turned faster."""
     limit = cueing_value(scene, "tilt.rate_limit")
-    dt = np.diff(result["time"])
-    rates = [np.abs(np.diff(result[f"tilt.{a}"]) / dt).max() for a in ("roll", "pitch")]
     largest = [np.abs(result[f"tilt.{a}"]).max() for a in ("roll", "pitch")]
+    t, commanded, realised = tilt_rates(result)
+    over = float(np.sum(np.diff(t)[realised[1:] > limit * 1.05])) if len(t) > 1 else 0.0
     return (f"motion cueing: tilt up to {np.degrees(largest[0]):.2f} deg in roll and {np.degrees(largest[1]):.2f} deg "
-            f"in pitch, turning at most {np.degrees(max(rates)):.2f} deg/s (its limit {np.degrees(limit):.2f} deg/s)")
+            f"in pitch, the tilt vector turning at most {np.degrees(commanded.max()):.2f} deg/s as commanded and "
+            f"{np.degrees(realised.max()):.2f} deg/s as the platform realised it (its limit "
+            f"{np.degrees(limit):.2f} deg/s" + (f"; the platform beyond it by more than 5 % for {over:.2f} s)" if over
+                                                 else ")"))
 
 
 def write_figures(compiled: CompiledScene, result: np.ndarray, report: RunReport, outcome: Outcome,

@@ -27,11 +27,6 @@ from .schema import CAPACITY, NATIVE_DRIVE, SCHEMA, SceneError
 # Step doubling's error scale on what the mechanics hands the drives (leg angles and speeds, or
 # lengths and velocities: m, rad, m/s, rad/s) when the scene gives no atol.
 DOUBLING_ATOL = 1e-3
-# On FMI 3.0 FMUs (no input derivatives) a fixed step of order 1 or 2 is this fraction of the scene's:
-# the FMUs then extrapolate their inputs themselves, from the communication points (first order, as
-# our Jacobi: Gauss-Seidel's interpolation cannot reach them), and every shipped scene holds its
-# tolerances at an eighth of its step (at a quarter three do not; tests/platform/test_fmi3_scenes.py)
-FMI3_REFINE = 8
 
 
 def shipped_scenes(folder: str = "scenes") -> list[str]:
@@ -79,6 +74,10 @@ def derive(scene: Scene) -> dict[str, Any]:
     out["trajectory"], out["neutral"] = _signals(doc)
     out["table"], out["interpolation"] = _table(doc), doc.value("trajectory", "interpolation")
     out["vehicle"], out["cueing_parameters"] = _vehicle(doc), _parameters(doc, "cueing", "cueing")
+    if "gravity" in out["cueing_parameters"]:
+        raise doc.fail('cueing.parameters."gravity"', "is the platform's, one gravity for every FMU: give it as "
+                       "the mechanics' environment.gravity_x/y/z in [mechanics.parameters]",
+                       out["cueing_parameters"]["gravity"])
     out["head"] = tuple(float(c) for c in doc.value("cueing", "head"))
     out["cueing_ranges"] = _cueing_ranges(doc)
     out["cueing_search"] = tuple(int(doc.value("cueing.tune", k)) for k in ("iterations", "population", "seed"))
@@ -247,6 +246,8 @@ def _cueing_ranges(doc: Document) -> dict[str, tuple[float, float]] | None:
         variable = fmu.get(name)
         if variable is None or variable.causality != "parameter" or variable.type != "Real":
             raise doc.fail(key, "is not a Real parameter of the cueing FMU", name)
+        if name == "gravity":
+            raise doc.fail(key, "is the platform's gravity, not a cueing parameter to tune", name)
         if not (isinstance(span, list) and len(span) == 2 and all(isinstance(v, (int, float)) and
                                                                   not isinstance(v, bool) for v in span)):
             raise doc.fail(key, "must be [low, high]", span)
@@ -287,16 +288,15 @@ def _settings(doc: Document, drive: str, duration: float, pulses: tuple[Pulse, .
         algorithm = dataclasses.replace(platform_algorithm(drive, doc.value("coupling", "algorithm"), int(order)),
                                         threads=int(doc.value("coupling", "threads")),
                                         feedthrough=doc.value("coupling", "feedthrough"))
-        refine = FMI3_REFINE if int(doc.value("scene", "fmi")) == 3 and int(order) > 0 else 1
-        return algorithm, _control(doc, duration, pulses, refine)
+        return algorithm, _control(doc, duration, pulses)
     except SettingsError as error:  # what the settings objects refuse beyond the schema's checks
         key = {None: "scene.step", "step": "scene.step", "kind": "coupling.algorithm",
                "windows": "coupling.edge_time"}.get(error.setting, f"coupling.{error.setting}")
         raise doc.fail(key, f"is refused: {error}") from None
 
 
-def _control(doc: Document, duration: float, pulses: tuple[Pulse, ...], refine: int = 1) -> StepControl:
-    """The macro-step control; a fixed step `refine` times finer than the scene's (FMI3_REFINE)."""
+def _control(doc: Document, duration: float, pulses: tuple[Pulse, ...]) -> StepControl:
+    """The macro-step control."""
     step = float(doc.value("scene", "step"))
     given = {key: float(doc.value("coupling", key)) for key in ("rtol", "h_min", "h_max")
              if doc.value("coupling", key) is not None}
@@ -316,7 +316,6 @@ def _control(doc: Document, duration: float, pulses: tuple[Pulse, ...], refine: 
     if edge_time > 0 and not startup_time > 0:
         raise doc.fail("coupling.edge_time", "needs startup_time and startup_step (the finer step it is taken at)",
                        edge_time)
-    step /= refine
     if startup_time > 0 and startup_step < step:
         # the first startup_time seconds, rounded up to whole steps, at the largest whole fraction
         # of the step that is no longer than startup_step (a run at a finer step needs no finer start)

@@ -35,8 +35,8 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("duration", SECONDS, "the simulated time", REQUIRED),
         Key("step", SECONDS, "the macro step", 1e-3),
         Key("fmi", Number("", 2, 3, whole=True), "the FMI version of our FMUs the run takes: 2, or 3 (the same models "
-            "as FMI 3.0 Co-Simulation FMUs, which take no input derivatives: at order 1 or 2 each extrapolates its "
-            "inputs itself and a fixed step is an eighth of the scene's; docs/guide/fmus.md)", 2)),
+            "as FMI 3.0 Co-Simulation FMUs, which take their inputs' derivatives through inputs of their own, "
+            "fmi.rate.* and fmi.curvature.*: the same run, bit for bit; docs/guide/fmus.md)", 2)),
           required=True),
     Table("drive", "The six legs' drives: one line swaps them (`kind`).", (
         Key("kind", Choice(tuple(DRIVES)), "the drive: a PMSM with a ball screw (pmsm_drive) or a linear motor "
