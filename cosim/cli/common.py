@@ -8,10 +8,12 @@ import os
 import sys
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import TYPE_CHECKING, Callable, Iterator
 
 from ..engine.errors import UsageError
-from ..engine.outcome import Report, RunStopped
+
+if TYPE_CHECKING:
+    from ..engine.outcome import Report
 
 
 def unwritable(folder: Path) -> str | None:
@@ -84,6 +86,7 @@ def workers(args: argparse.Namespace) -> int | None:
 def report(run: Callable[[], Report], written: str, out: Path) -> int:
     """Runs `run` (which returns a report); prints the report and what was written (exit 0), or a
     stopped run's report with where its partial results went (exit 1)."""
+    from ..engine.outcome import RunStopped
     try:
         outcome = run()
     except RunStopped as stopped:

@@ -8,7 +8,6 @@ import argparse
 from pathlib import Path
 
 from ..engine.errors import UsageError
-from ..engine.ssp import ANNOTATION
 from .common import unwritable
 
 
@@ -45,6 +44,7 @@ def main(args: argparse.Namespace) -> int:
     print("\n".join(exported.lines))
     for path in exported.files:
         if path.suffix == ".ssp":
+            from ..engine.ssp import ANNOTATION
             print(f"written: {path} (SSP 1.0; our run settings in its annotation '{ANNOTATION}', which other tools "
                   "ignore)")
         else:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..api import SYSTEM_SUFFIXES, simulate
 from ..engine.errors import InputError, UsageError
 from .common import report, seconds
 
@@ -68,6 +67,7 @@ def set_values(items: list[str]) -> dict[str, object]:
 
 
 def main(args: argparse.Namespace) -> int:
+    from ..api import SYSTEM_SUFFIXES, simulate
     duration = seconds("--duration", args.duration)
     factor = seconds("--real-time", args.real_time, "expected a real-time factor > 0 (1: the wall clock's pace)")
     if args.listen_key is not None and not args.listen:

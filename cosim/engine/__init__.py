@@ -6,15 +6,21 @@ controllers (settings; implemented once, in the C step kernel: kernel), one way 
 back (outcome) and observers (observers). It knows nothing of any particular system.
 """
 
-from .artifacts import ArtifactMissing, fmu_path
-from .checks import ParameterError
-from .execution import NoStep, RunFailed
-from .fmi import FmuError, FmuInstance
-from .observers import DivergenceMonitor, Diverged, Observer, Progress, RecordFull, Recorder
-from .settings import Algorithm, EnergyControl, FixedStep, SettingsError, StepControl, StepDoubling
-from .structure import Bond, Component, Connection, Experiment, SystemStructure
+import importlib
 
-__all__ = ["Algorithm", "ArtifactMissing", "NoStep", "ParameterError", "Bond", "Component", "Connection", "DivergenceMonitor", "Diverged",
-           "EnergyControl", "Experiment", "FixedStep", "FmuError", "FmuInstance", "Observer",
-           "Progress", "RecordFull", "Recorder", "RunFailed", "SettingsError", "StepControl", "StepDoubling", "SystemStructure",
-           "fmu_path"]
+# each public name and the module that defines it, imported on first use (PEP 562): a command that
+# needs the engine's errors or file locations does not load fmpy, lxml and the kernel with them
+_WHERE = {"ArtifactMissing": "artifacts", "fmu_path": "artifacts", "ParameterError": "checks", "NoStep": "execution",
+          "RunFailed": "execution", "FmuError": "fmi", "FmuInstance": "fmi", "DivergenceMonitor": "observers",
+          "Diverged": "observers", "Observer": "observers", "Progress": "observers", "RecordFull": "observers",
+          "Recorder": "observers", "Algorithm": "settings", "EnergyControl": "settings", "FixedStep": "settings",
+          "SettingsError": "settings", "StepControl": "settings", "StepDoubling": "settings", "Bond": "structure",
+          "Component": "structure", "Connection": "structure", "Experiment": "structure",
+          "SystemStructure": "structure"}
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        return getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

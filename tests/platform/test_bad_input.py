@@ -171,12 +171,12 @@ def test_a_folder_given_as_the_scene_is_one_line(capsys):
 
 
 def test_an_unexpected_failure_says_it_is_a_bug(monkeypatch, capsys):
-    import cosim.cli.run as command
+    import cosim.api as api  # what `cosim run` calls (imported when the command runs)
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("deliberately broken for this test")
 
-    monkeypatch.setattr(command, "simulate", broken)
+    monkeypatch.setattr(api, "simulate", broken)
     assert main(["run", str(ROOT / "scenes" / "meng_eq35.toml"), "--no-plots"]) == 3
     err = capsys.readouterr().err
     assert "Traceback" in err and "is a bug in cosim" in err
