@@ -48,6 +48,11 @@ function(add_fmu name)
   file(GLOB model_sources "${model_dir}/*.c")
   file(GLOB model_headers "${model_dir}/*.h")
   set(include_dirs "${model_dir}" "${FMU_COMMON_DIR}" "${generated_dir}" "${FMI2_HEADERS_DIR}")
+  # What a model builds in besides its folder (another model's code it shares, a library):
+  # fmu/<name>/sources.cmake appends to model_sources, model_headers and include_dirs.
+  if(EXISTS "${model_dir}/sources.cmake")
+    include("${model_dir}/sources.cmake")
+  endif()
 
   add_library(${name} SHARED ${model_sources} ${FMU_COMMON_SOURCES})
   target_include_directories(${name} PRIVATE ${include_dirs})

@@ -25,8 +25,11 @@
  * rate limit acts once a step. Angular rates are taken as the rates of roll, pitch and yaw (small
  * angles), and the translational channel's specific force in the vehicle frame as in the platform's.
  * The motion is the inputs', or a recorded one's from vehicle.file (linear between its rows).
+ *
+ * algorithm = 2 takes the model-predictive cueing of mpc.c instead of these filters.
  */
 #include "fmu_common.h"
+#include "mpc.h"
 #include "table.h"
 
 #include <math.h>
@@ -89,11 +92,13 @@ static int motion_within_bounds(FmuInstance *fmu, const FmuTable *table) {
     return 1;
 }
 
-/* The model data: the phi-functions per step size (derived) and the vehicle table (read once). */
+/* The model data: the phi-functions per step size (derived), the vehicle table (read once) and the
+ * MPC's data (algorithm 2). */
 typedef struct PhiCache PhiCache;
 typedef struct {
     PhiCache *cache;
     FmuTable *vehicle;
+    MpcData *mpc;
 } ModelData;
 
 /* Motion k (0-2 specific force, 3-5 angular rate) at t, and its rate into *rate. */
@@ -108,6 +113,19 @@ static double motion(FmuInstance *fmu, int k, double t, double *rate) {
     }
     if (rate) *rate = fmu_input_rate_at(fmu, vr, t);
     return fmu_input_at(fmu, vr, t);
+}
+
+double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate) { return motion(fmu, k, t, rate); }
+
+double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t) {
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    const int recorded = data && data->vehicle && data->vehicle->column_of[k] >= 0;
+    return motion(fmu, k, recorded ? t : t_now, NULL);
+}
+
+static MpcData *mpc_of(const FmuInstance *fmu) {
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    return data && fmu->s.v.algorithm == 2 ? data->mpc : NULL;
 }
 
 static double clip(double value, double limit) { return value > limit ? limit : value < -limit ? -limit : value; }
@@ -186,6 +204,7 @@ static void free_data(FmuInstance *fmu, void *data) {
     ModelData *d = (ModelData *)data;
     fmu_free(fmu, d->cache);
     fmu_table_free(fmu, d->vehicle);
+    mpc_free(fmu, d->mpc);
     fmu_free(fmu, d);
 }
 
@@ -290,12 +309,19 @@ fmi2Status model_validate(FmuInstance *fmu) { /* the bounds, "> 0" among them, a
             return fmi2Error;
         }
     }
+    mpc_free(fmu, data->mpc); /* the parameters may have changed */
+    data->mpc = NULL;
+    if (v->algorithm == 2 && !(data->mpc = mpc_create(fmu))) return fmi2Error;
     return fmi2OK;
 }
 
 /* Each filter settled for the inputs at the start (a vehicle at rest, or in steady motion, starts
  * with its cue settled: no translational or rotational cue, the tilt on its target). */
 void model_initialize(FmuInstance *fmu) {
+    if (mpc_of(fmu)) {
+        mpc_initialize(fmu, mpc_of(fmu));
+        return;
+    }
     double *x = fmu->s.internal.x;
     memset(x, 0, sizeof fmu->s.internal.x);
     for (int c = 0; c < N_CHANNELS; c++) {
@@ -315,6 +341,7 @@ void model_initialize(FmuInstance *fmu) {
 }
 
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
+    if (mpc_of(fmu)) return mpc_do_step(fmu, mpc_of(fmu), h);
     const double t = fmu->s.time;
     for (int c = 0; c < N_CHANNELS; c++) {
         const Filter f = filter(fmu, c);
@@ -346,9 +373,9 @@ static void state_rate(const Filter *f, const double *x, double u, double out[MA
     }
 }
 
-void model_compute_outputs(FmuInstance *fmu) {
+/* The classical washout's pose (from neutral) with its first three derivatives. */
+static void classical_pose(FmuInstance *fmu, double pose[6][4]) {
     const double t = fmu->s.time, *x = fmu->s.internal.x;
-    double (*pose)[4] = fmu->s.internal.pose;
     for (int c = 0; c < N_TRANSLATION + N_ROTATION; c++) { /* each channel's output, its second state, */
         const Filter f = filter(fmu, c);                     /* and that state's first three derivatives */
         const double *s = x + f.first, u = channel_input(fmu, c, t), du = channel_input_rate(fmu, c, t);
@@ -361,6 +388,20 @@ void model_compute_outputs(FmuInstance *fmu) {
     for (int k = 0; k < 4; k++) { /* tilt onto roll (3) and pitch (4) */
         pose[3][k] += fmu->s.internal.tilt[0][k];
         pose[4][k] += fmu->s.internal.tilt[1][k];
+    }
+}
+
+void model_compute_outputs(FmuInstance *fmu) {
+    const double t = fmu->s.time;
+    double (*pose)[4] = fmu->s.internal.pose;
+    if (mpc_of(fmu)) { /* the MPC does not split its roll and pitch: the tilt is all of them */
+        mpc_pose(fmu, pose);
+        for (int k = 0; k < 4; k++) fmu->s.internal.tilt[0][k] = pose[3][k], fmu->s.internal.tilt[1][k] = pose[4][k];
+        for (int c = 0; c < 6; c++) *fmu_real(fmu, VR_mpc_perceived_error_specific_force_x + c) = fmu->s.internal.mpc.perceived[c];
+        fmu->s.v.mpc_iterations = fmu->s.internal.mpc.iterations;
+        fmu->s.v.mpc_softened = fmu->s.internal.mpc.softened;
+    } else {
+        classical_pose(fmu, pose);
     }
     for (int d = 0; d < 6; d++) {
         *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];

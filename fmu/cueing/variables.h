@@ -23,6 +23,16 @@
 /* Meng 2010's neutral height (../shared/params/meng2010.toml), the default neutral.z. */
 #define CUEING_NEUTRAL_HEIGHT 1.689527733348906
 
+/* The model-predictive cueing's state (algorithm 2, mpc.c): the platform's motion it commands and
+ * the perceived error's filter states. */
+typedef struct {
+    double q[6], v[6], a[6]; /* the pose from neutral [m, rad], its rate, its acceleration until the next solve */
+    double xi[15];           /* perception of the error: otoliths x, y, z (2 states each), canals roll, pitch, yaw (3) */
+    double since;            /* [s] since the last solve */
+    double perceived[6];     /* the perceived error at the communication point */
+    int iterations, softened;
+} MpcState;
+
 typedef struct {
     /* the filters' states, each channel's in a row: per translational axis x, y, z (3: the break
      * filter's state, position, velocity), per rotational axis roll, pitch, yaw (2), per tilt axis
@@ -30,6 +40,7 @@ typedef struct {
     double x[19];
     double tilt[2][4];   /* roll and pitch of the tilt coordination: angle and its first three derivatives */
     double pose[6][4];   /* the pose's value and first three derivatives at the communication point */
+    MpcState mpc;
 } ModelInternal;
 
 /* One translational axis a (x, y, z) of the vehicle's specific force into platform position. */
@@ -125,7 +136,70 @@ X(Integer, vehicle_rows, "vehicle.rows", output, discrete, "", 0, -FMU_INF, FMU_
 X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.81, FMU_POSITIVE, FMU_INF, \
   "Gravity: taken off the vertical specific force, and what tilt turns into specific force; the platform's, one " \
   "for every FMU (the master sets it from the mechanics' environment.gravity_x/y/z; default as the mechanics')") \
+MPC_VARIABLES(X) \
 FMU_LAYER_VARIABLES(X)
+/* clang-format on */
+
+/* The platform's joints (the mechanics' own parameters of these names, its computed layout): what
+ * the MPC keeps in its envelope. Defaults: Meng's platform (the mechanics' geometry.layout 1). */
+#define JOINT_VARIABLES(X, i, bx, by, ax, ay) \
+X(Real, geometry_base_joint_##i##_x, "geometry.base_joint[" #i "].x", parameter, fixed, "m", bx, -FMU_INF, FMU_INF, "Lower joint b_" #i ", base frame, x (the MPC's envelope)") \
+X(Real, geometry_base_joint_##i##_y, "geometry.base_joint[" #i "].y", parameter, fixed, "m", by, -FMU_INF, FMU_INF, "Lower joint b_" #i ", y") \
+X(Real, geometry_base_joint_##i##_z, "geometry.base_joint[" #i "].z", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Lower joint b_" #i ", z") \
+X(Real, geometry_platform_joint_##i##_x, "geometry.platform_joint[" #i "].x", parameter, fixed, "m", ax, -FMU_INF, FMU_INF, "Upper joint a_" #i ", platform frame, x (the MPC's envelope)") \
+X(Real, geometry_platform_joint_##i##_y, "geometry.platform_joint[" #i "].y", parameter, fixed, "m", ay, -FMU_INF, FMU_INF, "Upper joint a_" #i ", y") \
+X(Real, geometry_platform_joint_##i##_z, "geometry.platform_joint[" #i "].z", parameter, fixed, "m", 0.0, -FMU_INF, FMU_INF, "Upper joint a_" #i ", z")
+
+#define MPC_WEIGHT(X, name, unit, value, what) \
+X(Real, mpc_weight_##name, "mpc.weight." #name, parameter, fixed, unit, value, 0.0, FMU_INF, what)
+
+#define MPC_PERCEIVED(X, quantity, a, unit) \
+X(Real, mpc_perceived_error_##quantity##_##a, "mpc.perceived_error." #quantity "." #a, output, continuous, unit, 0.0, \
+  -FMU_INF, FMU_INF, "MPC: the " #quantity " along " #a " the occupant perceives less what the vehicle's would (the " \
+  "vestibular models of its prediction, on its linearised platform motion)")
+
+/* clang-format off */
+#define MPC_VARIABLES(X) \
+X(Integer, algorithm, "algorithm", parameter, fixed, "", 1, 1, 2, \
+  "1: the classical washout; 2: model-predictive cueing (MPC: the perceived error least over mpc.horizon, the " \
+  "platform's legs within limit.* at its joints geometry.*)") \
+X(Real, mpc_period, "mpc.period", parameter, fixed, "s", 0.02, FMU_POSITIVE, FMU_INF, \
+  "MPC: time between two solves (each a QP over the horizon; the acceleration it gives is held until the next)") \
+X(Real, mpc_horizon, "mpc.horizon", parameter, fixed, "s", 3.0, FMU_POSITIVE, FMU_INF, \
+  "MPC: how far it looks ahead (12 intervals, the first mpc.period long, growing evenly)") \
+MPC_WEIGHT(X, specific_force, "s4/m2", 1.0, "MPC: weight of the perceived specific force's error (per axis)") \
+MPC_WEIGHT(X, angular_rate, "s2/rad2", 30.0, "MPC: weight of the perceived angular rate's error (per axis)") \
+MPC_WEIGHT(X, position, "1/m2", 1.0, "MPC: weight of the platform's translation from neutral (the washout)") \
+MPC_WEIGHT(X, angle, "1/rad2", 1.0, "MPC: weight of its rotation from neutral") \
+MPC_WEIGHT(X, velocity, "s2/m2", 1.0, "MPC: weight of its velocity") \
+MPC_WEIGHT(X, angular_velocity, "s2/rad2", 1.0, "MPC: weight of its angular velocity") \
+MPC_WEIGHT(X, acceleration, "s4/m2", 0.1, "MPC: weight of its acceleration") \
+MPC_WEIGHT(X, angular_acceleration, "s4/rad2", 0.01, "MPC: weight of its angular acceleration") \
+X(Real, mpc_acceleration_limit, "mpc.acceleration_limit", parameter, fixed, "m/s2", 6.0, FMU_POSITIVE, FMU_INF, \
+  "MPC: largest acceleration along x, y, z it commands") \
+X(Real, mpc_angular_acceleration_limit, "mpc.angular_acceleration_limit", parameter, fixed, "rad/s2", 3.0, FMU_POSITIVE, \
+  FMU_INF, "MPC: largest angular acceleration it commands") \
+MPC_PERCEIVED(X, specific_force, x, "m/s2") MPC_PERCEIVED(X, specific_force, y, "m/s2") \
+MPC_PERCEIVED(X, specific_force, z, "m/s2") MPC_PERCEIVED(X, angular_rate, x, "rad/s") \
+MPC_PERCEIVED(X, angular_rate, y, "rad/s") MPC_PERCEIVED(X, angular_rate, z, "rad/s") \
+X(Integer, mpc_iterations, "mpc.iterations", output, discrete, "", 0, -FMU_INF, FMU_INF, \
+  "MPC: the active-set iterations of the latest solve (DAQP)") \
+X(Integer, mpc_softened, "mpc.softened", output, discrete, "", 0, -FMU_INF, FMU_INF, \
+  "MPC: solves so far whose answer broke a limit (the stroke less the margin, a leg's speed, a joint's tilt, the tilt " \
+  "rate) by more than 1e-3 of its units: its constraints are soft, so that a solve always has an answer") \
+JOINT_VARIABLES(X, 1, 1.0897247358851685, -0.15, 0.4834652370381326, -0.637386354243376) \
+JOINT_VARIABLES(X, 2, 1.0897247358851685, 0.15, 0.48346523703813243, 0.6373863542433761) \
+JOINT_VARIABLES(X, 3, -0.4149585573749186, 1.0187293044088437, 0.3102601562812446, 0.7373863542433761) \
+JOINT_VARIABLES(X, 4, -0.6747661785102501, 0.8687293044088438, -0.7937253933193772, 0.10000000000000014) \
+JOINT_VARIABLES(X, 5, -0.6747661785102494, -0.8687293044088441, -0.7937253933193773, -0.09999999999999995) \
+JOINT_VARIABLES(X, 6, -0.41495855737491816, -1.018729304408844, 0.3102601562812448, -0.7373863542433761) \
+X(Real, limit_leg_length_min, "limit.leg_length_min", parameter, fixed, "m", 1.535, 0.0, FMU_INF, "Shortest leg of the stroke (the mechanics')") \
+X(Real, limit_leg_length_max, "limit.leg_length_max", parameter, fixed, "m", 2.2, 0.0, FMU_INF, "Longest leg of the stroke (the mechanics')") \
+X(Real, limit_stroke_margin, "limit.stroke_margin", parameter, fixed, "m", 0.01, 0.0, FMU_INF, \
+  "The stroke the MPC may use is limit.leg_length_min/max less this at each end (the mechanics')") \
+X(Real, limit_leg_velocity, "limit.leg_velocity", parameter, fixed, "m/s", 1.0, FMU_POSITIVE, FMU_INF, "A leg's largest extension rate (the mechanics')") \
+X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, \
+  "Largest tilt of a leg from its neutral direction at either joint (the mechanics')")
 /* clang-format on */
 
 /* Direct feed-through: the vehicle's motion taken, from its input; the rotations' rates, whose

@@ -31,12 +31,17 @@ from ..scene import Scene
 from ..run.alone import play_cueing
 from .search.optimise import evolve
 
-# searched where the scene's [cueing.tune] names no ranges: the horizontal channels and the tilt,
-# the ones a ground vehicle's motion exercises most
-DEFAULT_RANGES = {"translation.x.gain": (0.1, 1.0), "translation.x.frequency": (0.5, 5.0),
+# searched where the scene's [cueing.tune] names no ranges, per [cueing] algorithm: for the classical
+# washout the horizontal channels and the tilt, the ones a ground vehicle's motion exercises most;
+# for the MPC its weights (each a decade or more about its default)
+DEFAULT_RANGES = {
+    "classical": {"translation.x.gain": (0.1, 1.0), "translation.x.frequency": (0.5, 5.0),
                   "translation.y.gain": (0.1, 1.0), "translation.y.frequency": (0.5, 5.0),
                   "tilt.gain": (0.1, 1.0), "tilt.frequency": (0.5, 5.0),
-                  "rotation.yaw.gain": (0.1, 1.0), "rotation.yaw.frequency": (0.1, 2.0)}
+                  "rotation.yaw.gain": (0.1, 1.0), "rotation.yaw.frequency": (0.1, 2.0)},
+    "mpc": {"mpc.weight.specific_force": (0.2, 5.0), "mpc.weight.angular_rate": (3.0, 100.0),
+            "mpc.weight.position": (0.1, 5.0), "mpc.weight.angle": (0.1, 5.0),
+            "mpc.weight.acceleration": (0.01, 1.0)}}
 # the drive's effort per ampere, by drive kind: the PMSM's torque constant, the linear motor's force constant
 PER_AMPERE = {"pmsm": "motor.torque_constant", "linear": "motor.force_constant"}
 CURRENT = {"pmsm": "current.q", "linear": "current"}
@@ -211,9 +216,9 @@ class Tuning:
 def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, workers: int | None = 0,
          scheduler: str | None = None, seed: int = 1, iterations: int = 15, population: int = 6) -> Tuning:
     """The cueing parameters within `ranges` (default: the scene's [cueing.tune] ranges, or
-    DEFAULT_RANGES) whose screened objective is least (Judged.objective), searched on Dask
+    DEFAULT_RANGES of its algorithm) whose screened objective is least (Judged.objective), searched on Dask
     (workers, scheduler as for a sweep), then it and the scene's own confirmed by co-simulation."""
-    ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES)
+    ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES[scene.cueing_algorithm])
     keys = tuple(ranges)
     start = time.perf_counter()
     try:  # the scene's own cueing first: a vehicle file the cueing FMU refuses, or a run too long to record,

@@ -161,15 +161,28 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
     return structure
 
 
+# the cueing FMU's algorithm parameter per [cueing] algorithm
+CUEING_ALGORITHMS = {"classical": 1, "mpc": 2}
+# the mechanics' limits the cueing FMU takes by the same names (the MPC's envelope)
+CUEING_LIMITS = ("leg_length_min", "leg_length_max", "stroke_margin", "leg_velocity", "joint_angle")
+
+
 def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
     """The cueing FMU's values for a scene with a [motion] vehicle (None without): the vehicle's
-    file, the platform's neutral pose (where the washout returns it) and its gravity (one for
-    every FMU: the mechanics'), then [cueing.parameters]."""
+    file, the algorithm, the platform's neutral pose (where the cueing returns it), its gravity
+    (one for every FMU: the mechanics'), its joints and limits (the MPC's envelope: the mechanics'
+    own, its layout as the mechanics computes it), then [cueing.parameters]."""
     if scene.vehicle is None:
         return None
-    from ..core import gravity_of, neutral_pose
+    from ..core import Core, gravity_of, mechanics_value, neutral_pose
     neutral = dict(zip((f"neutral.{a}" for a in POSE), neutral_pose(mechanics_values).tolist()))
-    return {"vehicle.file": scene.vehicle, **neutral, "gravity": float(np.linalg.norm(gravity_of(mechanics_values))),
+    platform = Core().use_start_values(mechanics_values).p
+    joints = {f"geometry.{name}[{leg}].{axis}": float(side[leg - 1][k])
+              for name, side in (("base_joint", platform.lower_joint), ("platform_joint", platform.upper_joint))
+              for leg in LEGS for k, axis in enumerate("xyz")}
+    limits = {f"limit.{name}": float(mechanics_value(mechanics_values, f"limit.{name}")) for name in CUEING_LIMITS}
+    return {"vehicle.file": scene.vehicle, "algorithm": CUEING_ALGORITHMS[scene.cueing_algorithm], **neutral,
+            "gravity": float(np.linalg.norm(gravity_of(mechanics_values))), **joints, **limits,
             **scene.cueing_parameters}
 
 

@@ -79,6 +79,7 @@ def derive(scene: Scene) -> dict[str, Any]:
                        "the mechanics' environment.gravity_x/y/z in [mechanics.parameters]",
                        out["cueing_parameters"]["gravity"])
     out["head"] = tuple(float(c) for c in doc.value("cueing", "head"))
+    out["cueing_algorithm"] = doc.value("cueing", "algorithm")
     out["cueing_ranges"] = _cueing_ranges(doc)
     out["cueing_search"] = tuple(int(doc.value("cueing.tune", k)) for k in ("iterations", "population", "seed"))
     out["pulses"] = _pulses(doc)

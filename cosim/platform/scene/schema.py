@@ -112,6 +112,9 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("vehicle", Text(path=True), "a CSV of the vehicle's motion at the occupant's head: time, then any of "
             "specific_force.x/y/z [m/s^2] and angular_rate.x/y/z [rad/s] (vehicle frame: x forward, y left, z up)"),)),
     Table("cueing", "The motion cueing of a [motion] vehicle.", (
+        Key("algorithm", Choice(("classical", "mpc")), "the classical washout (Reid and Nahon), or model-predictive "
+            "cueing: the perceived error least over a horizon, the legs within their stroke (docs/guide/cueing.md)",
+            "classical"),
         Key("parameters", Free("cueing FMU variable = value"), "values of the cueing FMU's parameters (gains, limits, "
             "filter frequencies and dampings, the tilt's rate limit), checked against its modelDescription"),
         Key("head", Row((Number("m"),) * 3), "the occupant's head in the platform's frame, from its origin: where "
@@ -119,7 +122,9 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
     Table("cueing.tune", "What `cosim tune SCENE` searches (docs/guide/cueing.md): the cueing parameters that "
           "feel most like the vehicle within the platform's limits, by differential evolution on Dask.", (
         Key("ranges", Free("cueing FMU parameter = [low, high]"), "the parameters searched and their ranges (default: "
-            "the gain and frequency of the x and y translation, the tilt and the yaw rotation)"),
+            "for the classical washout the gain and frequency of the x and y translation, the tilt and the yaw rotation; "
+            "for the MPC its weights of the perceived specific force and angular rate, the position, the angle and the "
+            "acceleration)"),
         Key("iterations", Number("", 1, whole=True), "generations of the search", 15),
         Key("population", Number("", 1, whole=True), "points per parameter in a generation", 6),
         Key("seed", Number("", 0, whole=True), "the search's seed: the same seed, the same answer", 1))),

@@ -312,6 +312,10 @@ def _cueing(doc: Document) -> dict[str, Any]:
         check_values("motion.cueing", fmu_path("cueing"), given)
     except ParameterError as error:
         raise doc.fail(f'motion.cueing."{error.variable}"', f"{error.reason} (cueing)", error.value) from None
+    if given.get("algorithm", 1) != 1:
+        raise doc.fail('motion.cueing."algorithm"', "a study plays one cueing reference for all its designs, which "
+                       "the classical washout (1) gives; the MPC (2) keeps the one platform it is given in its "
+                       "envelope: run it per design with `cosim run` and [cueing] algorithm = \"mpc\"", given["algorithm"])
     return dict(given)
 
 

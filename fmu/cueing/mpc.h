@@ -1,0 +1,28 @@
+/* cueing: the model-predictive cueing (algorithm 2, mpc.c), which model.c calls in the classical
+ * washout's place. */
+#ifndef CUEING_MPC_H
+#define CUEING_MPC_H
+
+#include "fmu_common.h"
+
+/* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t, its rate into *rate (model.c). */
+double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
+/* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t as the MPC predicts it: the
+ * recorded motion where vehicle.file gives it (its future known), else the input now, held. */
+double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
+
+typedef struct MpcData MpcData;
+
+/* Builds the MPC's data for the parameters (the prediction, the QP's constant parts, the solver's
+ * workspace); NULL with a logged reason if it cannot be had. */
+MpcData *mpc_create(FmuInstance *fmu);
+void mpc_free(FmuInstance *fmu, MpcData *data);
+
+/* At the start: the platform at neutral, the perception settled, then the first solve. */
+void mpc_initialize(FmuInstance *fmu, MpcData *data);
+/* One communication step of h: the motion and the perception advanced, a solve where one is due. */
+fmi2Status mpc_do_step(FmuInstance *fmu, MpcData *data, double h);
+/* The pose reference (value and first three derivatives per DOF, from neutral) into pose. */
+void mpc_pose(const FmuInstance *fmu, double pose[6][4]);
+
+#endif

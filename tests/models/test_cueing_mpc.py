@@ -1,0 +1,156 @@
+"""The cueing FMU's model-predictive cueing (algorithm 2, fmu/cueing/mpc.c): its vestibular models
+are the published ones (the same as cosim.platform.perception's, on a platform held at neutral),
+its pose reference keeps every leg within the stroke less the margin, every joint within its tilt
+and every leg within its speed on the shipped drive and on sustained motions far past what the
+workspace holds, its roll and pitch turn within the threshold (beyond the vehicle's own turning), its derivatives are its own, and settings
+it cannot run are refused with a reason."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cosim.engine.artifacts import ROOT, fmu_path
+from cosim.engine.fmi import FmuError, FmuInstance
+from cosim.platform import perception
+from cosim.platform.core import Core
+
+INPUTS = ["specific_force.x", "specific_force.y", "specific_force.z", "angular_rate.x", "angular_rate.y",
+          "angular_rate.z"]
+POSE = ["pose_ref.x", "pose_ref.y", "pose_ref.z", "pose_ref.roll", "pose_ref.pitch", "pose_ref.yaw"]
+PERCEIVED = [f"mpc.perceived_error.{name}" for name in INPUTS]
+G = 9.81
+# the FMU's defaults: Meng's platform (the mechanics' limits)
+LENGTH_MIN, LENGTH_MAX, MARGIN, LEG_VELOCITY, JOINT_ANGLE = 1.535, 2.2, 0.01, 1.0, np.radians(20.0)
+TILT_RATE = np.radians(3.0)
+# what the linearisation about the pose at each solve may miss over the horizon's first interval,
+# and the soft constraints' own give: 1 mm of a leg, 1 % of a speed or an angle
+LENGTH_SLACK, RELATIVE_SLACK = 1e-3, 0.01
+
+
+def run(values: dict, motion, duration: float, h: float = 1e-3, outputs=POSE):
+    """The cueing FMU alone through `motion(t)` (n x 6), each step's input the chord to the next
+    sample; the times, the outputs with their first derivatives, and the inputs."""
+    instance = FmuInstance(fmu_path("cueing"), "mpc")
+    try:
+        n = int(round(duration / h))
+        t = np.arange(n + 1) * h
+        u = motion(t)
+        inputs = instance.real_group(INPUTS)
+        instance.initialize({"algorithm": 2, **values, **dict(zip(INPUTS, u[0].tolist()))})
+        out = instance.real_group(list(outputs))
+        rows, rates = [out.read().copy()], [out.read_derivatives(1)]
+        for k in range(n):
+            inputs.write(u[k])
+            inputs.write_derivatives((u[k + 1] - u[k]) / h)
+            instance.do_step(h)
+            rows.append(out.read().copy())
+            rates.append(out.read_derivatives(1))
+        return t, np.array(rows), np.array(rates), u
+    finally:
+        instance.free()
+
+
+def at_rest(t: np.ndarray) -> np.ndarray:
+    u = np.zeros((len(t), 6))
+    u[:, 2] = G
+    return u
+
+
+def sustained(t: np.ndarray) -> np.ndarray:
+    """Far past any workspace: 8 m/s^2 forward and 6 m/s^2 to the left for 10 s, a 0.5 rad/s
+    yaw and a 0.3 rad/s roll for as long, then braking at 9 m/s^2."""
+    u = at_rest(t)
+    on = (t >= 0.5) & (t < 10.5)
+    u[on, 0], u[on, 1], u[on, 5], u[on, 3] = 8.0, 6.0, 0.5, 0.3
+    u[t >= 10.5, 0] = np.where(t[t >= 10.5] < 13.0, -9.0, 0.0)
+    return u
+
+
+def drive_csv(t: np.ndarray) -> np.ndarray:
+    """The shipped car drive (examples/vehicle/drive.csv), linear between its rows."""
+    path = ROOT / "examples/vehicle/drive.csv"
+    header = next(line for line in path.read_text().splitlines() if not line.startswith("#")).split(",")
+    data = np.loadtxt(path, delimiter=",", comments="#", skiprows=2)
+    return np.column_stack([np.interp(t, data[:, 0], data[:, header.index(name)]) for name in INPUTS])
+
+
+def envelope_of(poses: np.ndarray, rates: np.ndarray) -> dict[str, np.ndarray]:
+    core = Core()
+    kinematics = core.pose_kinematics(poses)
+    return {"length": kinematics["length"], "angle": np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]),
+            "speed": core.leg_velocities_many(poses, rates)}
+
+
+def test_its_vestibular_models_are_the_published_ones():
+    """A platform that cannot move (its accelerations limited to 1e-12) leaves the perceived error
+    at minus what the vehicle's occupant perceives: the otoliths' and canals' responses to a
+    multisine (exact for its piecewise-linear samples) equal perception.py's, which hold the
+    published transfer functions at every frequency."""
+    def multisine(t):
+        u = at_rest(t)
+        wave = np.sin(0.3 * t) + 0.6 * np.sin(1.7 * t + 0.4) + 0.3 * np.sin(6.0 * t + 1.0)
+        u[:, :3] += np.outer(wave, [1.5, -1.0, 0.8])
+        u[:, 3:] += np.outer(wave, [0.2, -0.1, 0.3])
+        return u
+    t, perceived, _, u = run({"mpc.acceleration_limit": 1e-12, "mpc.angular_acceleration_limit": 1e-12}, multisine,
+                             20.0, outputs=PERCEIVED)
+    vehicle = perception.vehicle_motion(u[:, :3], u[:, 3:], G)
+    for c, organ in enumerate(perception.ORGANS):
+        expected = -organ.perceive(t, vehicle[:, c])
+        scale = np.abs(expected).max()
+        assert np.abs(perceived[:, c] - expected).max() < 1e-6 * scale, INPUTS[c]
+
+
+@pytest.mark.parametrize("motion, duration", [(drive_csv, 20.0), (sustained, 16.0)], ids=["car drive", "sustained"])
+def test_keeps_the_platform_in_its_envelope(motion, duration):
+    t, poses, rates, u = run({}, motion, duration, h=2e-3)
+    envelope = envelope_of(poses, rates)
+    length = envelope["length"]
+    assert length.min() >= LENGTH_MIN + MARGIN - LENGTH_SLACK, length.min()
+    assert length.max() <= LENGTH_MAX - MARGIN + LENGTH_SLACK, length.max()
+    assert envelope["angle"].max() <= JOINT_ANGLE * (1 + RELATIVE_SLACK)
+    assert np.abs(envelope["speed"]).max() <= LEG_VELOCITY * (1 + RELATIVE_SLACK)
+    # the platform's roll and pitch turn no faster than the tilt threshold plus the vehicle's own turning
+    turning, allowed = np.hypot(rates[:, 3], rates[:, 4]), TILT_RATE + np.hypot(u[:, 3], u[:, 4])
+    assert (turning <= allowed * (1 + RELATIVE_SLACK)).all(), np.degrees((turning - allowed).max())
+    if motion is sustained:  # it did use the workspace: the tilt held for the sustained force
+        assert np.degrees(np.abs(poses[:, 4]).max()) > 10.0
+
+
+def test_a_sustained_acceleration_is_rendered_by_tilt():
+    """Sustained forward acceleration ends up felt through gravity: the platform pitched back by
+    about asin(a / g) (the perceived error of a sustained force is then what the joints' limits
+    leave), not translated: the leg lengths stay within the stroke."""
+    def forward(t):
+        u = at_rest(t)
+        u[t >= 0.5, 0] = 1.0
+        return u
+    t, poses, _, _ = run({}, forward, 30.0, h=2e-3)
+    pitch = poses[-1, 4]
+    assert pitch == pytest.approx(-np.arcsin(1.0 / G), rel=0.05)
+    assert abs(poses[-1, 0]) < 0.05
+
+
+def test_its_derivatives_are_its_own():
+    """pose_ref's rate (the output derivative) is the derivative of pose_ref: its integral over
+    the run equals the change of the pose (the MPC's motion is piecewise quadratic, exact)."""
+    t, poses, rates, _ = run({}, drive_csv, 8.0)
+    integral = np.concatenate([[0.0 * poses[0]], np.cumsum(0.5 * (rates[1:] + rates[:-1]) * np.diff(t)[:, None], axis=0)])
+    np.testing.assert_allclose(poses - poses[0], integral, atol=1e-5)
+
+
+@pytest.mark.parametrize("values, says", [
+    ({"mpc.horizon": 0.1}, "mpc.horizon = 0.1 s is shorter than its 12 intervals"),
+    ({"limit.leg_length_max": 1.8}, "the neutral pose puts leg 1 at"),
+    ({"geometry.base_joint[1].x": 0.4834652370381326, "geometry.base_joint[1].y": -0.637386354243376,
+      "geometry.base_joint[1].z": 1.689527733348906}, "a leg has no length at the neutral pose"),
+])
+def test_settings_it_cannot_run_are_refused(values, says):
+    instance = FmuInstance(fmu_path("cueing"), "refused")
+    try:
+        with pytest.raises(FmuError) as error:
+            instance.initialize({"algorithm": 2, **values})
+        assert says in str(error.value)
+    finally:
+        instance.free()
