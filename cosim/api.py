@@ -94,7 +94,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
              overrides: Mapping[str, Any] | None = None, settings: Mapping[str, str] | None = None,
              out: str | Path | None = None, plots: bool = False, progress: bool = False, advice: bool = False,
              twin: bool = False, real_time: float | None = None, stream: str | None = None, listen: str | None = None,
-             listen_key: str | Path | bytes | None = None) -> Run:
+             listen_key: str | Path | bytes | None = None, model_exchange: bool = False) -> Run:
     """Runs a scene or an SSP system and returns its named results.
 
     Args:
@@ -121,6 +121,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
             (127.0.0.0/8, ::1) needs `listen_key`.
         listen_key: the shared key (bytes, or a file holding it) every live datagram is tagged
             with (HMAC-SHA256; docs/guide/realtime.md).
+        model_exchange: a scene's FMUs as Model Exchange, integrated as one system by one solver
+            (CVODE): no coupling (cosim.engine.monolithic; not with real_time, stream or listen).
 
     Raises:
         SceneError, SspError, SettingsError: the input cannot run (one line).
@@ -134,7 +136,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
                                               and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
         given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin),
-                                          ("listen", listen), ("listen_key", listen_key)) if value]
+                                          ("listen", listen), ("listen_key", listen_key),
+                                          ("model_exchange", model_exchange)) if value]
         if given:
             raise UsageError(f"simulate: {given[0]} applies to a scene, not to an SSP system (its run settings go in "
                              "settings)")
@@ -155,20 +158,33 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     scene = model.changed(overrides or {}) if isinstance(model, Scene) else load_scene(model, overrides)
     if duration is not None:
         scene = scene.changed({"scene.duration": float(duration)})
+    adapt = _scene_plan(model_exchange, real_time, stream, listen, listen_key)
+    values, report = run_scene(scene, target, plots=plots, progress=progress, advice=advice, twin=twin,
+                               adapt=adapt)
+    return Run(values, report)
+
+
+def _scene_plan(model_exchange: bool, real_time: float | None, stream: str | None, listen: str | None,
+                listen_key: str | Path | bytes | None):
+    """How a scene's compiled plan is made over for the run asked for (run_scene's adapt): as
+    Model Exchange under one solver, or in real time; None: as compiled."""
     if listen_key is not None and not listen:
         raise UsageError("simulate: listen_key goes with listen")
     if isinstance(listen_key, (str, Path)):
         from .engine.realtime import read_key
         listen_key = read_key(listen_key, "listen_key")
-    adapt = None
+    if model_exchange:
+        if real_time is not None or stream or listen:
+            raise UsageError("simulate: model_exchange integrates the system by one solver, as fast as it goes: not "
+                             "with real_time, stream or listen")
+        from .platform.run.compile import model_exchange_plan
+        return model_exchange_plan
     if real_time is not None or stream or listen:
         from functools import partial
 
         from .platform.realtime import real_time_plan
-        adapt = partial(real_time_plan, factor=real_time, stream=stream, listen=listen, key=listen_key)
-    values, report = run_scene(scene, target, plots=plots, progress=progress, advice=advice, twin=twin,
-                               adapt=adapt)
-    return Run(values, report)
+        return partial(real_time_plan, factor=real_time, stream=stream, listen=listen, key=listen_key)
+    return None
 
 
 def export_ssp(scene: str | Path | Scene, path: str | Path, *, measure: bool = True) -> Path:

@@ -25,6 +25,8 @@ def add(commands) -> argparse.ArgumentParser:
                      "at an eighth of the scene's fixed step)")
     run.add_argument("--twin", action="store_true", help="a scene's run judged against its converged twin (the scene "
                      "at a 16th of its step throughout), per window: start-up, each load pulse, steady tracking")
+    run.add_argument("--me", action="store_true", help="a scene's FMUs as Model Exchange, integrated as one system by "
+                     "one solver (CVODE): no coupling, the reference a co-simulation is judged against")
     run.add_argument("--real-time", nargs="?", const="1", metavar="FACTOR", help="pace the run to the wall clock (each "
                      "macro step at its deadline), FACTOR simulated seconds per wall second (default 1)")
     run.add_argument("--stream", metavar="udp://HOST:PORT[?every=N]", help="send the run's samples live, one datagram "
@@ -84,6 +86,8 @@ def main(args: argparse.Namespace) -> int:
                                                      f", plots and the report {stem}.html")
     if args.fmi is not None and system:
         raise UsageError(f"--fmi: for a scene; {args.scene.name} names its own FMUs")
+    if args.me and system:
+        raise UsageError(f"--me: for a scene; {args.scene.name} names its own FMUs")
     if system:  # an SSP's run settings by name (cosim.engine.settings), checked by the engine
         given = {"settings": settings(args.set) or None}
     else:  # a scene's keys
@@ -91,4 +95,5 @@ def main(args: argparse.Namespace) -> int:
                  or None}
     return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
                                    twin=args.twin, progress=True, advice=True, real_time=factor, stream=args.stream,
-                                   listen=args.listen, listen_key=args.listen_key, **given).report, written, args.out)
+                                   listen=args.listen, listen_key=args.listen_key, model_exchange=args.me,
+                                   **given).report, written, args.out)

@@ -49,6 +49,7 @@ class Plan:
     clock: str | None = None
     divergence: float | None = 0.05
     real_time: RealTime | None = None
+    model_exchange: bool = False  # the structure's FMUs as Model Exchange under one solver (cosim.engine.monolithic)
 
 
 def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progress: bool = False,
@@ -66,8 +67,12 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
                  *([Progress(plan.structure.name)] if progress else [])]
     with folder_lock(out) if out is not None else nullcontext(), deferred():  # one run's files at a time in a
         #                                                                         folder; Ctrl-C never lost in an FMU
-        outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
-                          clock=plan.clock, observers=observers, advice=advice, real_time=plan.real_time)
+        if plan.model_exchange:
+            from .monolithic import integrate
+            outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval)
+        else:
+            outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
+                              clock=plan.clock, observers=observers, advice=advice, real_time=plan.real_time)
         result = thin(outcome.result, plan.output_interval)
         made = report(outcome, result)
         if out is not None:

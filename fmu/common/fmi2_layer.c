@@ -176,9 +176,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         LOG_ERROR(&probe, "fmi2Instantiate: missing instance name");
         return NULL;
     }
-    if (fmuType != fmi2CoSimulation) {
-        LOG_ERROR(&probe, "fmi2Instantiate: %s is a Co-Simulation FMU; Model Exchange is not supported",
-                  MODEL_IDENTIFIER_STRING);
+    if (fmuType != fmi2CoSimulation && !(MODEL_MODEL_EXCHANGE && fmuType == fmi2ModelExchange)) {
+        LOG_ERROR(&probe, "fmi2Instantiate: %s is %s", MODEL_IDENTIFIER_STRING,
+                  MODEL_MODEL_EXCHANGE ? "Co-Simulation or Model Exchange; the type asked for is neither"
+                                       : "a Co-Simulation FMU; Model Exchange is not supported");
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, MODEL_GUID) != 0) {
@@ -194,6 +195,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!fmu->instance_name) { functions->freeMemory(fmu); return NULL; }
     strcpy(fmu->instance_name, instanceName);
     fmu->logging_on = loggingOn;
+    fmu->model_exchange = fmuType == fmi2ModelExchange;
     fmu->log_errors = 1; /* errors and returned warnings are always reported; the rest only with logging on */
     fmu->log_warnings = fmu->log_events = fmu->log_all = loggingOn;
     for (int vr = 1; vr < VR_COUNT; vr++)
@@ -243,6 +245,13 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!fmu_allowed(fmu, "fmi2ExitInitializationMode", PHASE_INITIALIZATION)) return fmi2Error;
     if (model_validate(fmu) != fmi2OK) return fmi2Error;
+#if MODEL_MODEL_EXCHANGE
+    const char *refusal = fmu->model_exchange ? model_exchange_refusal(fmu) : NULL;
+    if (refusal) {
+        LOG_ERROR(fmu, "fmi2ExitInitializationMode: as Model Exchange, %s", refusal);
+        return fmi2Error;
+    }
+#endif
     model_initialize(fmu);
     fmu->s.input_previous_valid = 0; /* the FMU's own extrapolation starts with the first step */
     fmu->s.phase = PHASE_STEP_COMPLETE;
@@ -283,6 +292,12 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (!refresh_outputs(fmu, "fmi2GetReal")) return fmi2Error;
     int all_finite = 1;
     for (size_t i = 0; i < nvr; i++) {
+#if MODEL_MODEL_EXCHANGE
+        if (fmu_me_value(fmu, vr[i], &value[i])) { /* a continuous state or its derivative */
+            all_finite = all_finite && isfinite(value[i]);
+            continue;
+        }
+#endif
         if (!check_reference(fmu, "fmi2GetReal", vr[i], FMU_REAL)) return fmi2Error;
         value[i] = *(double *)fmu_value_address(fmu, (int)vr[i]);
         all_finite = all_finite && isfinite(value[i]);
@@ -401,6 +416,10 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        const fmi2Integer order[], const fmi2Real value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!fmu_allowed(fmu, "fmi2SetRealInputDerivatives", SET_PHASES)) return fmi2Error;
+    if (fmu->model_exchange) {
+        LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: a Co-Simulation call, and this instance is Model Exchange");
+        return fmi2Error;
+    }
     if (nvr > 0 && (!vr || !order || !value)) {
         LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: NULL array");
         return fmi2Error;
@@ -510,6 +529,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     FmuInstance *fmu = (FmuInstance *)c;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!fmu_allowed(fmu, "fmi2DoStep", PHASE_STEP_COMPLETE)) return fmi2Error;
+    if (fmu->model_exchange) {
+        LOG_ERROR(fmu, "fmi2DoStep: this instance is Model Exchange (the importer's solver steps it)");
+        return fmi2Error;
+    }
     fmu->warned = 0;
     double t0 = fmu->s.time, h = communicationStepSize;
     if (!(h > 0.0) || !isfinite(h)) {

@@ -51,6 +51,7 @@ typedef struct FmuInstance {
      * kept outside the snapshot, so FMU states stay small; released with fmu_set_model_data. */
     void *model_data;
     void (*free_model_data)(struct FmuInstance *fmu, void *data);
+    int model_exchange;                    /* instantiated as fmi2ModelExchange (fmi2_me.c) */
     int n_real_outputs;                    /* the Real outputs, checked finite after every step */
     int real_outputs[VR_COUNT];
 } FmuInstance;
@@ -71,6 +72,21 @@ void model_compute_outputs(FmuInstance *fmu);
 /* The derivative of the given order (1..MODEL_MAX_OUTPUT_DERIVATIVE_ORDER) of output `vr` with
  * respect to time at fmu->s.time (fmi2GetRealOutputDerivatives). */
 double model_output_derivative(FmuInstance *fmu, int vr, int order);
+#endif
+
+#if MODEL_MODEL_EXCHANGE
+/* Model Exchange (fmi2_me.c). Why these parameters cannot run as Model Exchange (e.g. a part
+ * with events the model does not give as event indicators), or NULL if they can. */
+const char *model_exchange_refusal(const FmuInstance *fmu);
+/* dx/dt at fmu->s.time and fmu->s.x, the inputs as set; 0, or -1 where the model cannot evaluate them. */
+int model_derivatives(FmuInstance *fmu, double *dxdt);
+/* After an integrator's step is accepted: the checks a Co-Simulation step makes at its end
+ * (warnings logged; fmi2Error stops the run). */
+fmi2Status model_completed_integrator_step(FmuInstance *fmu);
+#if MODEL_TIME_EVENTS
+/* The next time after fmu->s.time at which the model changes discontinuously (INFINITY: none). */
+double model_next_time_event(FmuInstance *fmu);
+#endif
 #endif
 
 /* ---- services of the layer for models ---- */

@@ -83,6 +83,18 @@ typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's valu
 #define MODEL_MAX_OUTPUT_DERIVATIVE_ORDER 0
 #endif
 
+/* Model Exchange (fmi2_me.c): a model that can give its states' derivatives as it stands sets
+ * MODEL_MODEL_EXCHANGE 1 and implements the hooks of fmu_common.h; its continuous states and their
+ * derivatives are variables of their own after the table's (ode.x[k] and der(ode.x[k])). */
+#ifndef MODEL_MODEL_EXCHANGE
+#define MODEL_MODEL_EXCHANGE 0
+#endif
+#ifndef MODEL_TIME_EVENTS
+#define MODEL_TIME_EVENTS 0
+#endif
+#define FMU_STATE_VR(k) (VR_COUNT + (k))
+#define FMU_DERIVATIVE_VR(k) (VR_COUNT + MODEL_N_STATES + (k))
+
 typedef enum { FMU_REAL, FMU_INTEGER, FMU_BOOLEAN, FMU_STRING } FmuType;
 typedef enum { FMU_PARAMETER, FMU_INPUT, FMU_OUTPUT, FMU_LOCAL } FmuCausality;
 typedef enum { FMU_FIXED, FMU_TUNABLE, FMU_DISCRETE, FMU_CONTINUOUS } FmuVariability;

@@ -151,7 +151,45 @@ static void put_log_categories(FILE *f) {
                "  </LogCategories>\n");
 }
 
-static int write_model_description(const char *path, int n_sources, char **sources) {
+/* The interface element (CoSimulation, or ModelExchange) with the sources it is built from. */
+static void put_interface(FILE *f, int me, int n_sources, char **sources) {
+    if (me)
+        fprintf(f, "  <ModelExchange modelIdentifier=\"%s\" completedIntegratorStepNotNeeded=\"false\"\n"
+                   "    canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\">\n",
+                MODEL_IDENTIFIER_STRING);
+    else
+        fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
+                   "    canInterpolateInputs=\"true\" maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUstate=\"true\"\n"
+                   "    canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\">\n",
+                MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
+    fprintf(f, "    <SourceFiles>\n");
+    for (int i = 0; i < n_sources; i++) {
+        const char *base = strrchr(sources[i], '/');
+        base = base ? base + 1 : sources[i];
+        if (strlen(base) > 2 && strcmp(base + strlen(base) - 2, ".c") == 0)
+            fprintf(f, "      <File name=\"%s\"/>\n", base);
+    }
+    fprintf(f, "    </SourceFiles>\n  </%s>\n", me ? "ModelExchange" : "CoSimulation");
+}
+
+/* Model Exchange's continuous states and their derivatives (fmi2_me.c): ode.x[k] at value
+ * reference FMU_STATE_VR(k), der(ode.x[k]) at FMU_DERIVATIVE_VR(k), after the table's variables. */
+static void put_states(FILE *f) {
+    for (int k = 0; k < MODEL_N_STATES; k++)
+        fprintf(f, "    <!-- %d --><ScalarVariable name=\"ode.x[%d]\" valueReference=\"%d\" causality=\"local\" "
+                   "variability=\"continuous\" initial=\"calculated\"\n      description=\"The model's continuous state "
+                   "%d (as its Co-Simulation integrates it)\">\n      <Real/>\n    </ScalarVariable>\n",
+                FMU_STATE_VR(k), k + 1, FMU_STATE_VR(k), k + 1);
+    for (int k = 0; k < MODEL_N_STATES; k++)
+        fprintf(f, "    <!-- %d --><ScalarVariable name=\"der(ode.x[%d])\" valueReference=\"%d\" causality=\"local\" "
+                   "variability=\"continuous\" initial=\"calculated\"\n      description=\"Its time derivative\">\n"
+                   "      <Real derivative=\"%d\"/>\n    </ScalarVariable>\n",
+                FMU_DERIVATIVE_VR(k), k + 1, FMU_DERIVATIVE_VR(k), FMU_STATE_VR(k));
+}
+
+/* FMI 2.0's modelDescription.xml: Co-Simulation, or (me) Model Exchange, in which the outputs
+ * follow the states too (no dependencies given: on everything) and the states are variables. */
+static int write_model_description(const char *path, int me, int n_sources, char **sources) {
     FILE *f = fopen(path, "w");
     if (!f) { perror(path); return 1; }
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -162,19 +200,7 @@ static int write_model_description(const char *path, int n_sources, char **sourc
     fprintf(f, "\"\n  version=\"%s\" generationTool=\"stewart-cosim fmu/common/model_description.c\"\n"
                "  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n",
             MODEL_VERSION);
-    fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
-               "    canInterpolateInputs=\"true\" maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUstate=\"true\"\n"
-               "    canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\">\n",
-            MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
-    fprintf(f, "    <SourceFiles>\n");
-    for (int i = 0; i < n_sources; i++) {
-        const char *base = strrchr(sources[i], '/');
-        base = base ? base + 1 : sources[i];
-        if (strlen(base) > 2 && strcmp(base + strlen(base) - 2, ".c") == 0)
-            fprintf(f, "      <File name=\"%s\"/>\n", base);
-    }
-    fprintf(f, "    </SourceFiles>\n  </CoSimulation>\n");
-
+    put_interface(f, me, n_sources, sources);
     put_units(f);
     put_log_categories(f);
     fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%g\" stepSize=\"%g\"/>\n", MODEL_STOP_TIME,
@@ -194,12 +220,24 @@ static int write_model_description(const char *path, int n_sources, char **sourc
         if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
         fprintf(f, "/>\n    </ScalarVariable>\n");
     }
+    if (me) put_states(f);
     fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
     for (int vr = 1; vr < VR_COUNT; vr++)
-        if (fmu_variables[vr].causality == FMU_OUTPUT) put_output_unknown(f, vr);
-    fprintf(f, "    </Outputs>\n    <InitialUnknowns>\n");
+        if (fmu_variables[vr].causality == FMU_OUTPUT) {
+            if (me) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
+            else put_output_unknown(f, vr);
+        }
+    fprintf(f, "    </Outputs>\n");
+    if (me && MODEL_N_STATES > 0) {
+        fprintf(f, "    <Derivatives>\n");
+        for (int k = 0; k < MODEL_N_STATES; k++) fprintf(f, "      <Unknown index=\"%d\"/>\n", FMU_DERIVATIVE_VR(k));
+        fprintf(f, "    </Derivatives>\n");
+    }
+    fprintf(f, "    <InitialUnknowns>\n");
     for (int vr = 1; vr < VR_COUNT; vr++)
         if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
+    for (int k = 0; me && k < MODEL_N_STATES; k++) fprintf(f, "      <Unknown index=\"%d\"/>\n", FMU_STATE_VR(k));
+    for (int k = 0; me && k < MODEL_N_STATES; k++) fprintf(f, "      <Unknown index=\"%d\"/>\n", FMU_DERIVATIVE_VR(k));
     fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
     return fclose(f) != 0;
 }
@@ -341,13 +379,15 @@ static int write_documentation(const char *path, const char *fragment_path) {
 int main(int argc, char **argv) {
     const int fmi3 = argc > 1 && strcmp(argv[1], "--fmi3") == 0;
     argc -= fmi3, argv += fmi3;
+    const int me = argc > 1 && strcmp(argv[1], "--me") == 0;
+    argc -= me, argv += me;
     if (argc < 3) {
-        fprintf(stderr, "usage: model_description [--fmi3] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n");
+        fprintf(stderr, "usage: model_description [--fmi3 | --me] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n");
         return 2;
     }
     char path[4096];
     snprintf(path, sizeof path, "%s/modelDescription.xml", argv[1]);
-    if (fmi3 ? write_model_description3(path) : write_model_description(path, argc - 3, argv + 3)) return 1;
+    if (fmi3 ? write_model_description3(path) : write_model_description(path, me, argc - 3, argv + 3)) return 1;
     if (fmi3) {
         snprintf(path, sizeof path, "%s/sources/buildDescription.xml", argv[1]);
         if (write_build_description(path, argc - 3, argv + 3)) return 1;

@@ -27,4 +27,10 @@ void *fmu_value_address(FmuInstance *fmu, int vr);
  * master gets one from the FMU itself. */
 void fmu_extrapolate_inputs(FmuInstance *fmu, double t0);
 
+#if MODEL_MODEL_EXCHANGE
+/* Model Exchange's state and derivative variables (fmi2_me.c): 1 and the value if vr is one of
+ * them, 0 otherwise. */
+int fmu_me_value(FmuInstance *fmu, unsigned vr, double *value);
+#endif
+
 #endif

@@ -143,6 +143,18 @@ static int rhs_linear(void *ctx, double t, const double *x, double *dxdt) {
     return s.voltage == s.voltage_raw;
 }
 
+/* Warns once per excursion of the force command past the continuous force, at t. */
+static void check_continuous_force(FmuInstance *fmu, double t) {
+    Signals s;
+    evaluate(fmu, t, fmu->s.x, &s);
+    const int over = fabs(s.force_command) > fmu->s.v.motor_continuous_force;
+    if (over && !fmu->s.internal.over_continuous_force)
+        fmu_log(fmu, fmi2Warning, "logStatusWarning",
+                "t = %.6f s: force command %.1f N exceeds the continuous force %.0f N (Table 4.2)",
+                t, s.force_command, fmu->s.v.motor_continuous_force);
+    fmu->s.internal.over_continuous_force = over;
+}
+
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     const OdeProblem problem = {MODEL_N_STATES, rhs, 0, NULL, NULL, N_STIFF, NULL};
     double A[N_STIFF * N_STIFF];
@@ -150,14 +162,24 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
     if ((fmu->s.v.solver_exponential ? fmu_integrate_exponential(fmu, &problem, rhs_linear, A, h)
                                      : fmu_integrate(fmu, &problem, fmu, h, 0.0)) != fmi2OK)
         return fmi2Error;
-    Signals s;
-    evaluate(fmu, fmu->s.time + h, fmu->s.x, &s);
-    const int over = fabs(s.force_command) > fmu->s.v.motor_continuous_force;
-    if (over && !fmu->s.internal.over_continuous_force)
-        fmu_log(fmu, fmi2Warning, "logStatusWarning",
-                "t = %.6f s: force command %.1f N exceeds the continuous force %.0f N (Table 4.2)",
-                fmu->s.time + h, s.force_command, fmu->s.v.motor_continuous_force);
-    fmu->s.internal.over_continuous_force = over;
+    check_continuous_force(fmu, fmu->s.time + h);
+    return fmi2OK;
+}
+
+/* ---- Model Exchange (fmi2_me.c): the same right-hand side, the same check after each step ---- */
+
+const char *model_exchange_refusal(const FmuInstance *fmu) {
+    (void)fmu;
+    return NULL;
+}
+
+int model_derivatives(FmuInstance *fmu, double *dxdt) {
+    rhs(fmu, fmu->s.time, fmu->s.x, dxdt);
+    return 0;
+}
+
+fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
+    check_continuous_force(fmu, fmu->s.time);
     return fmi2OK;
 }
 

@@ -14,6 +14,8 @@
 /* current, position-loop integral, current-loop integral, energy accounts (electrical, copper,
  * electromagnetic work, friction and damping, ripple) */
 #define MODEL_N_STATES 8
+/* Model Exchange too (fmi2_me.c): the importer's solver integrates these states. */
+#define MODEL_MODEL_EXCHANGE 1
 
 typedef struct {
     int over_continuous_force; /* reported, so a warning is logged once per excursion */

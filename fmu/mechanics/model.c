@@ -145,6 +145,22 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
     return check_limits(fmu, &fmu->s.internal, fmu->s.x, fmu->s.time + h);
 }
 
+/* ---- Model Exchange (fmi2_me.c): the same right-hand side, the same checks after each step ---- */
+
+const char *model_exchange_refusal(const FmuInstance *fmu) {
+    (void)fmu;
+    return NULL;
+}
+
+int model_derivatives(FmuInstance *fmu, double *dxdt) {
+    rhs(fmu, fmu->s.time, fmu->s.x, dxdt);
+    return isnan(dxdt[0]) ? -1 : 0;
+}
+
+fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
+    return check_limits(fmu, &fmu->s.internal, fmu->s.x, fmu->s.time);
+}
+
 /* The platform of the parameters with its neutral leg axes; -1 if the layout is impossible. */
 static int build_internal(const ModelVariables *v, ModelInternal *in) {
     memset(in, 0, sizeof *in);

@@ -16,6 +16,8 @@
 /* pose and twist (13, see platform.h) and the energy accounts: drive, transmission loss,
  * friction loss, load (4) */
 #define MODEL_N_STATES 17
+/* Model Exchange too (fmi2_me.c): the importer's solver integrates these states. */
+#define MODEL_MODEL_EXCHANGE 1
 
 typedef struct {
     Platform platform;                 /* geometry and mass properties, set at initialization */

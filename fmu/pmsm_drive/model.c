@@ -325,6 +325,25 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
     return fmu_integrate(fmu, &problem, fmu, h, switching ? fmu->s.v.inverter_max_step : 0.0);
 }
 
+/* ---- Model Exchange (fmi2_me.c): the same right-hand side ---- */
+
+const char *model_exchange_refusal(const FmuInstance *fmu) {
+    return fmu->s.v.inverter_model == INVERTER_SWITCHING
+               ? "inverter.model = 3 (switching) has the hysteresis comparators' events, which this FMU does not give "
+                 "as event indicators: take 1 (ideal) or 2 (averaged), or Co-Simulation"
+               : NULL;
+}
+
+int model_derivatives(FmuInstance *fmu, double *dxdt) {
+    rhs(fmu, fmu->s.time, fmu->s.x, dxdt);
+    return 0;
+}
+
+fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
+    (void)fmu;
+    return fmi2OK;
+}
+
 void model_initialize(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     const double i_q0 = v->initial_current_q, u_q0 = v->motor_resistance * i_q0; /* at rest */

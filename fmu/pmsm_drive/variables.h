@@ -15,6 +15,8 @@
 /* Internal ODE state: stator currents, averaged-inverter voltages, controller integrators and
  * energy accounts (index names in model.c). */
 #define MODEL_N_STATES 12
+/* Model Exchange too (fmi2_me.c), but for the switching inverter (its hysteresis events). */
+#define MODEL_MODEL_EXCHANGE 1
 
 typedef struct {
     int switch_state[3]; /* switching inverter: upper switch of phase a, b, c closed */

@@ -127,6 +127,38 @@ fmi2Status model_validate(FmuInstance *fmu) {
 
 void model_initialize(FmuInstance *fmu) { (void)fmu; }
 
+/* ---- Model Exchange (fmi2_me.c): no states; each load pulse's start and end a time event ---- */
+
+const char *model_exchange_refusal(const FmuInstance *fmu) {
+    (void)fmu;
+    return NULL;
+}
+
+int model_derivatives(FmuInstance *fmu, double *dxdt) {
+    (void)fmu, (void)dxdt;
+    return 0;
+}
+
+fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
+    (void)fmu;
+    return fmi2OK;
+}
+
+double model_next_time_event(FmuInstance *fmu) {
+    const double t = fmu->s.time;
+    double next = INFINITY;
+    for (int c = 0; c < 6; c++)
+        for (int k = 0; k < 2; k++) {
+            const int *pulse = WRENCH[c].pulse[k];
+            if (*fmu_real(fmu, pulse[0]) == 0.0) continue;
+            for (int edge = 1; edge <= 2; edge++) {
+                const double at = *fmu_real(fmu, pulse[edge]);
+                if (at > t + edge_tolerance(t) && at < next) next = at;
+            }
+        }
+    return next;
+}
+
 fmi2Status model_do_step(FmuInstance *fmu, double h) {
     (void)fmu; (void)h; /* the outputs are functions of time; the layer advances it */
     return fmi2OK;

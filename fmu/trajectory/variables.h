@@ -12,6 +12,9 @@
 #define MODEL_STOP_TIME 10.0
 #define MODEL_COMMUNICATION_STEP 1e-3
 #define MODEL_N_STATES 0
+/* Model Exchange too (fmi2_me.c): no states; the load pulses' edges are its time events. */
+#define MODEL_MODEL_EXCHANGE 1
+#define MODEL_TIME_EVENTS 1
 #define MODEL_MAX_OUTPUT_DERIVATIVE_ORDER 2
 
 /* Neutral height of the Meng 2010 platform (../shared/params/meng2010.toml), the default z offset. */

@@ -1,0 +1,333 @@
+"""A system of Model Exchange FMUs integrated as one ODE by one solver (SUNDIALS CVODE, BDF with a
+dense Jacobian, through fmpy): no coupling, so no coupling error: the reference a co-simulation of
+the same models is measured against, and the answer a tool with a monolithic solver gives
+(OMSimulator's strongly coupled master, Dymola, fmpy).
+
+The state is every FMU's continuous states end to end. At each evaluation of the right-hand side
+the time and states are set, then the connections carry each output to its input, sweep after
+sweep in the structure's order until no input changes (a system without algebraic loops settles
+in as many sweeps as its longest chain), then each FMU gives its derivatives. Time events (an FMU's
+next event time, from fmi2NewDiscreteStates) end an integration interval; the solver restarts
+after each. Results are recorded on the output grid (the plan's interval, else the experiment's
+step), each FMU told of the completed step there.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+from .errors import UsageError
+from .fmi import LogMessage, loaded
+from .outcome import Outcome
+from .structure import SystemStructure
+
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+_STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
+RELATIVE_TOLERANCE = 1e-8  # CVODE's, the absolute one per state as much of its size (at least 1)
+
+
+class Stopped(RuntimeError):
+    """An FMU refused a call or the solver failed: the results up to then stand."""
+
+
+@dataclass
+class _Member:
+    name: str
+    fmu: FMU2Model
+    references: dict[str, int]
+    types: dict[str, str]
+    states: slice
+
+
+class MonolithicSystem:
+    """The structure's FMUs instantiated as Model Exchange, initialized with their parameters and
+    connections; time, states, derivatives and outputs of the whole."""
+
+    def __init__(self, structure: SystemStructure):
+        self.structure = structure
+        self.messages: list[tuple[str, LogMessage]] = []
+        self.members: dict[str, _Member] = {}
+        self.fmi_seconds = 0.0
+        self._callbacks = []
+        self.time = structure.experiment.start
+        offset = 0
+        try:
+            for component in structure.components:
+                description = read_model_description(str(component.fmu))
+                if description.modelExchange is None:
+                    raise UsageError(f"{component.name}: {component.fmu.name} is not a Model Exchange FMU (a run as "
+                                     "one system needs every FMU as Model Exchange)")
+                n = description.numberOfContinuousStates
+                fmu = FMU2Model(guid=description.guid, unzipDirectory=str(loaded(component.fmu)[1]),
+                                modelIdentifier=description.modelExchange.modelIdentifier, instanceName=component.name)
+                fmu.instantiate(callbacks=self._callbacks_for(component.name))
+                variables = description.modelVariables
+                self.members[component.name] = _Member(component.name, fmu, {v.name: v.valueReference for v in variables},
+                                                       {v.name: v.type for v in variables}, slice(offset, offset + n))
+                offset += n
+            self.size = offset
+            self._connections = self._grouped()
+            self._initialize()
+        except BaseException:
+            self.free()
+            raise
+
+    # -- set-up ------------------------------------------------------------------------------
+
+    def _callbacks_for(self, name: str) -> fmi2CallbackFunctions:
+        def log(env, instance, status, category, message):
+            self.messages.append((name, LogMessage(_STATUS[status] if 0 <= status < 6 else str(status),
+                                                   (category or b"").decode(), (message or b"").decode(), self.time)))
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+        self._callbacks.append(callbacks)  # kept alive with the system
+        return callbacks
+
+    def _grouped(self) -> list[tuple[_Member, list[int], _Member, list[int]]]:
+        """The connections, per (source, target) pair of FMUs in the structure's order."""
+        pairs: dict[tuple[str, str], tuple[list[int], list[int]]] = {}
+        for c in self.structure.connections:
+            source, target = self.members[c.source[0]], self.members[c.target[0]]
+            outputs, inputs = pairs.setdefault((source.name, target.name), ([], []))
+            outputs.append(source.references[c.source[1]])
+            inputs.append(target.references[c.target[1]])
+        return [(self.members[s], o, self.members[t], i) for (s, t), (o, i) in pairs.items()]
+
+    def _set(self, member: _Member, values: dict) -> None:
+        for name, value in values.items():
+            kind, reference = member.types[name], [member.references[name]]
+            if kind == "Real":
+                member.fmu.setReal(reference, [float(value)])
+            elif kind in ("Integer", "Enumeration"):
+                member.fmu.setInteger(reference, [int(value)])
+            elif kind == "Boolean":
+                member.fmu.setBoolean(reference, [bool(value)])
+            else:
+                member.fmu.setString(reference, [str(value)])
+
+    def _initialize(self) -> None:
+        start = self.structure.experiment.start
+        for component in self.structure.components:
+            member = self.members[component.name]
+            self._call(member, "fmi2SetupExperiment", member.fmu.setupExperiment, startTime=start)
+            self._call(member, "set parameters", self._set, member, component.parameters)
+            self._call(member, "fmi2EnterInitializationMode", member.fmu.enterInitializationMode)
+        self.propagate()
+        for member in self.members.values():
+            self._call(member, "fmi2ExitInitializationMode", member.fmu.exitInitializationMode)
+        self.event(enter=False)
+
+    def _call(self, member: _Member, what: str, function, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return function(*args, **kwargs)
+        except FMICallException:
+            said = "; ".join(m.text for n, m in self.messages if n == member.name and m.status in ("error", "fatal"))
+            raise Stopped(f"{member.name}: {what} failed at t = {self.time:.9g} s: {said or 'the FMU gave no reason'}")
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
+
+    # -- the whole as one ODE ----------------------------------------------------------------
+
+    def propagate(self, sweeps: int = 10) -> None:
+        """Every connection's output to its input, until no input changes."""
+        start, last = time.perf_counter(), None
+        try:
+            for _ in range(sweeps):
+                carried = []
+                for source, outputs, target, inputs in self._connections:
+                    values = source.fmu.getReal(outputs)
+                    target.fmu.setReal(inputs, values)
+                    carried.extend(values)
+                if carried == last:
+                    return
+                last = carried
+        except FMICallException:
+            raise Stopped(f"the connections could not be carried at t = {self.time:.9g} s: "
+                          + ("; ".join(m.text for _, m in self.messages if m.status in ("error", "fatal"))
+                             or "an FMU gave no reason")) from None
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
+
+    def set_time(self, t: float) -> None:
+        self.time = t
+        for member in self.members.values():
+            self._call(member, "fmi2SetTime", member.fmu.setTime, t)
+
+    @staticmethod
+    def _pointer(values: np.ndarray):
+        return values.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+    def set_states(self, x: np.ndarray) -> None:
+        x = np.ascontiguousarray(x, dtype=float)
+        for member in self.members.values():
+            n = member.states.stop - member.states.start
+            if n:
+                part = np.ascontiguousarray(x[member.states])
+                self._call(member, "fmi2SetContinuousStates", member.fmu.setContinuousStates, self._pointer(part), n)
+        self.propagate()
+
+    def states(self) -> np.ndarray:
+        x = np.zeros(self.size)
+        for member in self.members.values():
+            n = member.states.stop - member.states.start
+            if n:
+                part = np.empty(n)
+                self._call(member, "fmi2GetContinuousStates", member.fmu.getContinuousStates, self._pointer(part), n)
+                x[member.states] = part
+        return x
+
+    def derivatives(self) -> np.ndarray:
+        dx = np.zeros(self.size)
+        for member in self.members.values():
+            n = member.states.stop - member.states.start
+            if n:
+                part = np.empty(n)
+                self._call(member, "fmi2GetDerivatives", member.fmu.getDerivatives, self._pointer(part), n)
+                dx[member.states] = part
+        return dx
+
+    def event(self, enter: bool = True) -> float:
+        """Every FMU through Event Mode (entered unless it is there: after initialization); the
+        next time event of any (inf: none)."""
+        following = math.inf
+        for member in self.members.values():
+            fmu = member.fmu
+            if enter:
+                self._call(member, "fmi2EnterEventMode", fmu.enterEventMode)
+            needed = True
+            while needed:
+                needed, terminate, _, _, defined, at = self._call(member, "fmi2NewDiscreteStates",
+                                                                  fmu.newDiscreteStates)
+            if terminate:
+                raise Stopped(f"{member.name}: asked to terminate at t = {self.time:.9g} s")
+            if defined:
+                following = min(following, at)
+            self._call(member, "fmi2EnterContinuousTimeMode", fmu.enterContinuousTimeMode)
+        self.propagate()
+        return following
+
+    def completed_step(self) -> None:
+        for member in self.members.values():
+            _, terminate = self._call(member, "fmi2CompletedIntegratorStep", member.fmu.completedIntegratorStep)
+            if terminate:
+                raise Stopped(f"{member.name}: asked to terminate at t = {self.time:.9g} s")
+
+    def outputs(self, record: Sequence[tuple[str, str]]) -> list[float]:
+        start = time.perf_counter()
+        try:
+            return [self.members[c].fmu.getReal([self.members[c].references[v]])[0] for c, v in record]
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
+
+    def free(self) -> None:
+        for member in self.members.values():
+            try:
+                member.fmu.terminate()
+            except FMICallException:
+                pass
+            member.fmu.freeInstance()
+        self.members = {}
+
+
+def model_exchange_structure(structure: SystemStructure) -> SystemStructure:
+    """The structure with each FMU as Model Exchange: the FMU itself where it offers it, else its
+    twin built beside it (build/fmus_me/ for build/fmus/); UsageError naming the component that
+    has neither."""
+    from dataclasses import replace
+    from .artifacts import FMU_DIR, FMU_ME_DIR
+    components = []
+    for component in structure.components:
+        path = Path(component.fmu)
+        if read_model_description(str(path)).modelExchange is None:
+            twin = FMU_ME_DIR / path.name
+            if path.resolve().parent != FMU_DIR.resolve() or not twin.is_file():
+                raise UsageError(f"{component.name}: {path.name} is Co-Simulation only (no Model Exchange FMU of it): "
+                                 "this system runs as co-simulation")
+            path = twin
+        components.append(replace(component, fmu=path))
+    return replace(structure, components=components)
+
+
+def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tuple[str, str]],
+              names: Sequence[str] | None = None, output_interval: float | None = None,
+              relative_tolerance: float = RELATIVE_TOLERANCE) -> Outcome:
+    """The structure's FMUs as one ODE under CVODE from its start to stop_time, `record` on the
+    output grid (columns `names`, default component.variable). An FMU's refusal or the solver's
+    failure ends the results where they got (Outcome.failure)."""
+    from fmpy.sundials import CVodeSolver
+    from .execution import RunFailed
+    names = list(names) if names is not None else [f"{c}.{v}" for c, v in record]
+    interval = output_interval or structure.experiment.step
+    start = time.perf_counter()
+    system = MonolithicSystem(structure)
+    rows, failure = [], None
+    try:
+        t = structure.experiment.start
+        next_event = system.event(enter=False)
+        x = system.states()
+        holder = np.ascontiguousarray(x) if system.size else np.zeros(1)
+
+        def get_x(pointer, n):
+            np.ctypeslib.as_array(pointer, (n,))[:] = system.states()
+
+        def set_x(pointer, n):
+            system.set_states(np.ctypeslib.as_array(pointer, (n,)).copy())
+
+        def get_dx(pointer, n):
+            np.ctypeslib.as_array(pointer, (n,))[:] = system.derivatives()
+
+        def nominals(pointer, n):
+            np.ctypeslib.as_array(pointer, (n,))[:] = np.maximum(np.abs(holder), 1.0)
+
+        class _NoInput:
+            def apply(self, t):
+                pass
+
+        solver = CVodeSolver(system.size, 0, get_x, set_x, get_dx, lambda pointer, n: None, nominals,
+                             system.set_time, _NoInput(), t, relativeTolerance=relative_tolerance,
+                             maxNumSteps=100000)
+        rows.append([t, *system.outputs(record)])
+        grid = 1
+        while t < stop_time - 1e-12 * max(1.0, abs(stop_time)):
+            target = min(structure.experiment.start + grid * interval, stop_time)
+            goal = min(target, next_event)
+            try:
+                _, _, t = solver.step(t, goal)
+            except RuntimeError as error:
+                raise Stopped(f"the solver failed at t = {system.time:.9g} s: {error}") from None
+            system.set_time(t)
+            system.set_states(system.states())
+            system.completed_step()
+            if t >= next_event - 1e-12 * max(1.0, abs(t)):
+                next_event = system.event()
+                solver.reset(t)
+            if t >= target - 1e-12 * max(1.0, abs(t)):
+                rows.append([t, *system.outputs(record)])
+                grid += 1
+    except Stopped as stopped:
+        failure = RunFailed(stopped, None)
+    finally:
+        system.free()
+    wall = time.perf_counter() - start
+    result = np.array([tuple(r) for r in rows], dtype=[("time", float)] + [(n, float) for n in names])
+    if failure is not None:
+        failure = RunFailed(failure.error, result)
+    return Outcome(structure.name, result, np.zeros(len(result)), np.diff(result["time"]) if len(result) > 1 else
+                   np.zeros(0), 0, wall, system.fmi_seconds, "cvode", system.messages, failure=failure)

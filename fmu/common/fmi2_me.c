@@ -1,0 +1,168 @@
+/* The FMI 2.0 Model Exchange API (after the Reference-FMUs, which build one model for both
+ * interfaces): the importer's solver integrates the model's continuous states, fmu->s.x, through
+ * its derivatives (the model's model_derivatives, the right-hand side its Co-Simulation integrates
+ * itself). The same instance life cycle, variables, FMU states and checks as fmi2_layer.c's;
+ * after initialization an instance is in Event Mode or Continuous-Time Mode, both the layer's
+ * PHASE_STEP_COMPLETE (the calls allowed in them differ only in what Model Exchange adds here).
+ * The shipped models have no state events as Model Exchange (a part with them, such as the PMSM
+ * drive's switching inverter, is refused at initialization with its reason): zero event
+ * indicators; a model with time events (MODEL_TIME_EVENTS: the trajectory's load pulses) gives
+ * the next in fmi2NewDiscreteStates.
+ */
+#include "runtime.h"
+
+#include <math.h>
+#include <string.h>
+
+#if MODEL_MODEL_EXCHANGE
+
+#define ME_PHASES (PHASE_STEP_COMPLETE)
+
+/* A Model Exchange call on this instance, now? Logs why not. */
+static int me_allowed(FmuInstance *fmu, const char *call, int phases) {
+    if (!fmu_allowed(fmu, call, phases)) return 0;
+    if (!fmu->model_exchange) {
+        LOG_ERROR(fmu, "%s: this instance is Co-Simulation (fmi2Instantiate with fmi2ModelExchange for Model "
+                  "Exchange)", call);
+        return 0;
+    }
+    return 1;
+}
+
+static int array_fits(FmuInstance *fmu, const char *call, const void *array, size_t n, size_t expected) {
+    if (n != expected) {
+        LOG_ERROR(fmu, "%s: %zu values, and the model has %zu", call, n, expected);
+        return 0;
+    }
+    if (n > 0 && !array) {
+        LOG_ERROR(fmu, "%s: NULL array", call);
+        return 0;
+    }
+    return 1;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2SetTime", PHASE_INITIALIZATION | ME_PHASES)) return fmi2Error;
+    if (!isfinite(time)) {
+        LOG_ERROR(fmu, "fmi2SetTime: time %g is not finite", time);
+        return fmi2Error;
+    }
+    fmu->s.time = time;
+    fmu->s.input_time = time;
+    fmu->outputs_stale = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2SetContinuousStates", ME_PHASES)) return fmi2Error;
+    if (!array_fits(fmu, "fmi2SetContinuousStates", x, nx, MODEL_N_STATES)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++)
+        if (!isfinite(x[k])) {
+            LOG_ERROR(fmu, "fmi2SetContinuousStates: state %zu is not finite (%g)", k + 1, x[k]);
+            return fmi2Error;
+        }
+    for (size_t k = 0; k < nx; k++) fmu->s.x[k] = x[k];
+    fmu->outputs_stale = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2GetContinuousStates", AFTER_INITIALIZATION)) return fmi2Error;
+    if (!array_fits(fmu, "fmi2GetContinuousStates", x, nx, MODEL_N_STATES)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++) x[k] = fmu->s.x[k];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2GetNominalsOfContinuousStates", ANY_LIVE_PHASE)) return fmi2Error;
+    if (!array_fits(fmu, "fmi2GetNominalsOfContinuousStates", x_nominal, nx, MODEL_N_STATES)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++) x_nominal[k] = 1.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2GetDerivatives", ME_PHASES | PHASE_TERMINATED)) return fmi2Error;
+    if (!array_fits(fmu, "fmi2GetDerivatives", derivatives, nx, MODEL_N_STATES)) return fmi2Error;
+    if (nx == 0) return fmi2OK;
+    double dxdt[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1];
+    if (model_derivatives(fmu, dxdt) != 0) {
+        LOG_ERROR(fmu, "fmi2GetDerivatives: the model cannot evaluate its derivatives at t = %.9g s for these states",
+                  fmu->s.time);
+        return fmi2Error;
+    }
+    for (size_t k = 0; k < nx; k++) {
+        if (!isfinite(dxdt[k])) {
+            LOG_ERROR(fmu, "fmi2GetDerivatives: derivative %zu is not finite at t = %.9g s", k + 1, fmu->s.time);
+            return fmi2Error;
+        }
+        derivatives[k] = dxdt[k];
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2GetEventIndicators", PHASE_INITIALIZATION | AFTER_INITIALIZATION)) return fmi2Error;
+    return array_fits(fmu, "fmi2GetEventIndicators", eventIndicators, ni, 0) ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    return me_allowed((FmuInstance *)c, "fmi2EnterEventMode", ME_PHASES) ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2NewDiscreteStates", ME_PHASES)) return fmi2Error;
+    if (!info) {
+        LOG_ERROR(fmu, "fmi2NewDiscreteStates: NULL event info");
+        return fmi2Error;
+    }
+    memset(info, 0, sizeof *info); /* no new discrete states, nothing changed */
+#if MODEL_TIME_EVENTS
+    const double next = model_next_time_event(fmu);
+    if (isfinite(next)) info->nextEventTimeDefined = fmi2True, info->nextEventTime = next;
+#endif
+    fmu->outputs_stale = 1; /* what the event changed (a pulse's edge) shows in the outputs */
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    return me_allowed((FmuInstance *)c, "fmi2EnterContinuousTimeMode", ME_PHASES) ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    FmuInstance *fmu = (FmuInstance *)c;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!me_allowed(fmu, "fmi2CompletedIntegratorStep", ME_PHASES)) return fmi2Error;
+    if (!enterEventMode || !terminateSimulation) {
+        LOG_ERROR(fmu, "fmi2CompletedIntegratorStep: NULL argument");
+        return fmi2Error;
+    }
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    const fmi2Status status = model_completed_integrator_step(fmu);
+    if (status == fmi2Error) {
+        *terminateSimulation = fmi2True;
+        fmu->s.phase = PHASE_ERROR;
+    }
+    return status;
+}
+
+int fmu_me_value(FmuInstance *fmu, unsigned vr, double *value) {
+    if (vr < (unsigned)FMU_STATE_VR(0) || vr >= (unsigned)FMU_DERIVATIVE_VR(MODEL_N_STATES)) return 0;
+    if (vr < (unsigned)FMU_DERIVATIVE_VR(0)) {
+        *value = fmu->s.x[vr - FMU_STATE_VR(0)];
+        return 1;
+    }
+    double dxdt[MODEL_N_STATES > 0 ? MODEL_N_STATES : 1];
+    *value = model_derivatives(fmu, dxdt) == 0 ? dxdt[vr - FMU_DERIVATIVE_VR(0)] : NAN;
+    return 1;
+}
+
+#endif

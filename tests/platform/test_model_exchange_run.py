@@ -1,0 +1,54 @@
+"""A scene as one system of Model Exchange FMUs under one solver (`cosim run --me`,
+cosim.engine.monolithic): no coupling, so it agrees with the scene's co-simulation converged (at a
+16th of its step) within the oracle's windows: the pose to 1e-5 m and rad, the drive torques to 2 %
+of their own change through the start-up; a scene with an FMU that has no Model Exchange twin (the
+cueing), an SSP system, or Model Exchange in real time are one line each."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cosim
+from cosim.cli import main
+from cosim.engine.artifacts import ROOT
+from cosim.engine.errors import UsageError
+from cosim.platform.ports import LEGS, POSE
+from cosim.platform.scene import load_scene
+
+DURATION = 0.25  # the start-up, where the drives' and the platform's transients are largest (fixed here)
+
+
+@pytest.fixture(scope="module")
+def runs():
+    scene = load_scene("meng_eq35").changed({"scene.duration": DURATION})
+    converged = scene.changed({"scene.step": scene.step / 16, "coupling.startup_step": scene.control.startup_step / 16})
+    return cosim.simulate(scene, model_exchange=True), cosim.simulate(converged)
+
+
+def test_the_monolithic_run_agrees_with_the_converged_co_simulation(runs):
+    me, cs = runs
+    times = me["time"]
+    assert times[-1] == pytest.approx(DURATION)
+    for dof in POSE:
+        reference = np.interp(times, cs["time"], cs[f"pose.{dof}"])
+        assert np.abs(me[f"pose.{dof}"] - reference).max() < 1e-5, dof
+    for leg in LEGS:
+        reference = np.interp(times, cs["time"], cs[f"torque[{leg}]"])
+        change = np.ptp(reference)
+        assert np.abs(me[f"torque[{leg}]"] - reference).max() < 0.02 * change, leg
+    assert any("Model Exchange" in remark for remark in me.report.remarks)
+
+
+def test_what_cannot_run_as_model_exchange_is_one_line(tmp_path, capsys):
+    car = tmp_path / "car.toml"
+    car.write_text((ROOT / "examples/vehicle/car_drive.toml").read_text().replace(
+        'vehicle = "drive.csv"', f'vehicle = "{ROOT / "examples/vehicle/drive.csv"}"'))
+    assert main(["run", str(car), "--me", "--no-plots", "--out", str(tmp_path / "out")]) == 2
+    said = capsys.readouterr().err.strip().splitlines()
+    assert said == ["error: cueing: cueing.fmu is Co-Simulation only (no Model Exchange FMU of it): this system runs "
+                    "as co-simulation"]
+    with pytest.raises(UsageError, match="not with real_time"):
+        cosim.simulate("meng_eq35", model_exchange=True, real_time=1.0)
+    assert main(["run", str(tmp_path / "x.ssp"), "--me"]) == 2
+    assert "--me: for a scene" in capsys.readouterr().err
