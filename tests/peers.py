@@ -15,6 +15,7 @@ import pytest
 from cosim.engine.artifacts import BUILD_DIR, ROOT
 
 PEERS = ROOT.parent / "shared" / "peers"
+STRONGLY_COUPLED = "model_exchange"  # cosim.engine.ssp.StronglyCoupled.name: an export --me system's inner system
 
 
 def omsimulator() -> Path:
@@ -43,7 +44,7 @@ def run_omsimulator(archive: Path, signals: list[str], stop: float, folder: Path
     lines = [f'model, status = oms_importFile("{archive}")',
              f'oms_setResultFile(model, "{result}", 1000)',
              'oms_removeSignalsFromResults(model, ".*")',
-             *[f'oms_addSignalsToResults(model, "^[^.]+\\\\.[^.]+\\\\.{_escaped(s)}$")' for s in signals],
+             *[f'oms_addSignalsToResults(model, "^[^.]+\\\\.[^.]+\\\\.([^.]+\\\\.)?{_escaped(s)}$")' for s in signals],
              f"oms_setStopTime(model, {stop!r})",
              "oms_instantiate(model)", "oms_initialize(model)", "oms_simulate(model)", "oms_terminate(model)",
              "oms_delete(model)"]
@@ -54,8 +55,9 @@ def run_omsimulator(archive: Path, signals: list[str], stop: float, folder: Path
     assert done.returncode == 0 and "error:" not in log, log[-3000:]
     from pyarrow import csv
     table = csv.read_csv(result)
-    columns = {name.split(".", 2)[2] if name != "time" else name: table[name].to_numpy().astype(float)
-               for name in table.column_names}
+    inner = f"{STRONGLY_COUPLED}."  # a strongly coupled system's components sit one level deeper
+    columns = {name.split(".", 2)[2].removeprefix(inner) if name != "time" else name:
+               table[name].to_numpy().astype(float) for name in table.column_names}
     time = columns["time"]
     last = np.r_[np.diff(time) > 0, True]  # it writes a point twice (before and after its events): the later one
     return {name: values[last] for name, values in columns.items()}

@@ -26,6 +26,8 @@ def add(commands) -> argparse.ArgumentParser:
     export.add_argument("--warnings-as-ok", action="store_true", help="the default (kept for old command lines)")
     export.add_argument("--fmi", type=int, choices=(2, 3), help="our FMUs as FMI 2.0 (the default) or FMI 3.0 in the "
                         "archive (scene.fmi)")
+    export.add_argument("--me", action="store_true", help="the FMUs as Model Exchange in one strongly coupled system "
+                        "(OMSimulator's oms-sc integrates them as one by CVODE): with --ssp alone")
     return export
 
 
@@ -40,7 +42,15 @@ def main(args: argparse.Namespace) -> int:
         if folder is not None and (problem := unwritable(folder)):
             raise UsageError(f"{option} {folder}: {problem}")
     scene = load_scene(args.scene, {"scene.fmi": args.fmi} if args.fmi is not None else None)
-    exported = export_scene(scene, args.ssp, args.osp, measure=not args.scene_step, fmi2_warnings=args.fmi2_warnings)
+    if args.me:
+        if args.osp is not None or args.ssp is None or args.fmi == 3 or args.scene_step:
+            raise UsageError("export --me: an SSP archive alone (--ssp), FMI 2.0, no step to measure (libcosim and Ecos "
+                             "run no Model Exchange)")
+        from ..platform.run.portable import export_model_exchange
+        exported = export_model_exchange(scene, args.ssp, fmi2_warnings=args.fmi2_warnings)
+    else:
+        exported = export_scene(scene, args.ssp, args.osp, measure=not args.scene_step,
+                                fmi2_warnings=args.fmi2_warnings)
     print("\n".join(exported.lines))
     for path in exported.files:
         if path.suffix == ".ssp":

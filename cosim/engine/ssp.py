@@ -20,6 +20,7 @@ import math
 import tempfile
 import zipfile
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
@@ -256,9 +257,43 @@ def write_tool_steps(path: Path, tool_steps: Sequence[ToolStepped], default_step
     return path
 
 
-def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped] = ()) -> Path:
+@dataclass(frozen=True)
+class StronglyCoupled:
+    """A system of Model Exchange FMUs integrated as one by a variable-step solver: how OMSimulator's
+    strongly coupled master (oms-sc, CVODE) takes it, its output every `output_step`."""
+    relative_tolerance: float
+    maximum_step: float
+    output_step: float
+    name: str = "model_exchange"
+
+
+def strongly_coupled(root: etree._Element, coupled: StronglyCoupled) -> None:
+    """The SSD's system made OMSimulator's strongly coupled system: its components and connections
+    moved into a system of their own (`coupled.name`) whose annotation names CVODE and its
+    tolerance, inside the top system that OMSimulator's fixed-step master runs at the output step
+    (its stepSize, set by set_tool_steps)."""
+    top = root.find("ssd:System", NS)
+    inner = etree.Element(_q(SSD, "System"), name=coupled.name)
+    for tag in ("Elements", "Connections"):
+        part = top.find(f"ssd:{tag}", NS)
+        if part is not None:
+            inner.append(part)
+    annotation = etree.SubElement(etree.SubElement(inner, _q(SSD, "Annotations")), _q(SSC, "Annotation"),
+                                  type=OMS_ANNOTATION)
+    information = etree.SubElement(etree.SubElement(annotation, _q(OMS, "Annotations")), _q(OMS, "SimulationInformation"))
+    etree.SubElement(information, _q(OMS, "VariableStepSolver"), description="cvode",
+                     relativeTolerance=_decimal(coupled.relative_tolerance), minimumStepSize="1e-12",
+                     maximumStepSize=_decimal(coupled.maximum_step), initialStepSize="1e-06")
+    elements = etree.Element(_q(SSD, "Elements"))
+    elements.append(inner)
+    top.insert(0, elements)
+
+
+def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped] = (),
+              coupled: StronglyCoupled | None = None) -> Path:
     """Writes `structure` as an SSP 1.0 archive at `path` (each FMU file once under resources/);
-    the SSD and every SSV are validated against the schemas first. tool_steps: as to_xml's."""
+    the SSD and every SSV are validated against the schemas first. tool_steps: as to_xml's;
+    coupled: the system as OMSimulator's strongly coupled one (its FMUs Model Exchange)."""
     sources, files = {}, {}
     for component in structure.components:
         inner = f"resources/{component.fmu.name}"
@@ -266,6 +301,9 @@ def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolS
             raise SspError(f"two different FMUs named {component.fmu.name}")
         files[inner], sources[component.name] = component.fmu, inner
     root, parameter_sets = to_xml(structure, sources, tool_steps)
+    if coupled is not None:
+        strongly_coupled(root, coupled)
+        set_tool_steps(root, [("OMSimulator", coupled.output_step, True)], coupled.output_step)
     validate(root, "SystemStructureDescription.xsd", "SystemStructure.ssd")
     for name, tree in parameter_sets.items():
         validate(tree, "SystemStructureParameterValues.xsd", f"resources/{name}.ssv")
@@ -466,7 +504,8 @@ def _read_ssd(ssd: Path, where: str, folder: Path) -> SystemStructure:
     validate(root, "SystemStructureDescription.xsd", where)
     system = root.find("ssd:System", NS)
     if system.find("ssd:Elements/ssd:System", NS) is not None:
-        raise SspError(f"{where}: nested systems are not supported")
+        raise SspError(f"{where}: nested systems are not supported (an export of Model Exchange FMUs as OMSimulator's "
+                       "strongly coupled system runs here from its scene: cosim run SCENE --me)")
     components = []
     for element in system.findall("ssd:Elements/ssd:Component", NS):
         source = folder / element.get("source")

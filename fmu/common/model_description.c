@@ -47,11 +47,14 @@ static const Feedthrough FEEDTHROUGH[] = {MODEL_FEEDTHROUGH(FMU_X_FEEDTHROUGH){0
 
 /* An output's Unknown element: its dependencies are the inputs of its feed-through row, or none
  * (an empty list: it follows the state alone, not any input at the same communication point). */
-static void put_output_unknown(FILE *f, int vr) {
+static void put_output_unknown(FILE *f, int vr, int me) {
     fprintf(f, "      <Unknown index=\"%d\" dependencies=\"", vr);
+    int listed = 0;
     for (const Feedthrough *row = FEEDTHROUGH; row->inputs; row++)
         if (row->output == vr)
-            for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", k ? " " : "", row->inputs[k]);
+            for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", listed++ ? " " : "", row->inputs[k]);
+    for (int k = 0; me && k < MODEL_N_STATES; k++) /* Model Exchange: the states too */
+        fprintf(f, "%s%d", listed++ ? " " : "", FMU_STATE_VR(k));
     fputs("\"/>\n", f);
 }
 
@@ -187,8 +190,9 @@ static void put_states(FILE *f) {
                 FMU_DERIVATIVE_VR(k), k + 1, FMU_DERIVATIVE_VR(k), FMU_STATE_VR(k));
 }
 
-/* FMI 2.0's modelDescription.xml: Co-Simulation, or (me) Model Exchange, in which the outputs
- * follow the states too (no dependencies given: on everything) and the states are variables. */
+/* FMI 2.0's modelDescription.xml: Co-Simulation, or (me) Model Exchange, in which the states are
+ * variables and the outputs depend on them besides their feed-through inputs (the derivatives on
+ * everything: no dependencies given). */
 static int write_model_description(const char *path, int me, int n_sources, char **sources) {
     FILE *f = fopen(path, "w");
     if (!f) { perror(path); return 1; }
@@ -223,10 +227,7 @@ static int write_model_description(const char *path, int me, int n_sources, char
     if (me) put_states(f);
     fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
     for (int vr = 1; vr < VR_COUNT; vr++)
-        if (fmu_variables[vr].causality == FMU_OUTPUT) {
-            if (me) fprintf(f, "      <Unknown index=\"%d\"/>\n", vr);
-            else put_output_unknown(f, vr);
-        }
+        if (fmu_variables[vr].causality == FMU_OUTPUT) put_output_unknown(f, vr, me);
     fprintf(f, "    </Outputs>\n");
     if (me && MODEL_N_STATES > 0) {
         fprintf(f, "    <Derivatives>\n");

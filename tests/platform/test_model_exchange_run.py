@@ -52,3 +52,29 @@ def test_what_cannot_run_as_model_exchange_is_one_line(tmp_path, capsys):
         cosim.simulate("meng_eq35", model_exchange=True, real_time=1.0)
     assert main(["run", str(tmp_path / "x.ssp"), "--me"]) == 2
     assert "--me: for a scene" in capsys.readouterr().err
+
+
+def test_the_model_exchange_export_is_one_strongly_coupled_system(tmp_path, capsys):
+    """`cosim export SCENE --ssp FILE --me`: a schema-valid archive (write_ssp validates it) whose
+    FMUs are the Model Exchange ones inside one system annotated for OMSimulator's CVODE master;
+    our engine names what it does not read back, and the options that do not apply are one line."""
+    import zipfile
+
+    from lxml import etree
+
+    from cosim.engine.ssp import NS
+    archive = tmp_path / "meng.ssp"
+    assert main(["export", "meng_eq35", "--ssp", str(archive), "--me"]) == 0
+    with zipfile.ZipFile(archive) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+        inner = root.find("ssd:System/ssd:Elements/ssd:System", NS)
+        assert inner is not None and inner.find(".//oms:VariableStepSolver", NS).get("description") == "cvode"
+        assert len(inner.findall("ssd:Elements/ssd:Component", NS)) == 8
+        for component in inner.iterfind("ssd:Elements/ssd:Component", NS):
+            with z.open(component.get("source")) as fmu, zipfile.ZipFile(fmu) as f:
+                assert b"<ModelExchange" in f.read("modelDescription.xml")
+    capsys.readouterr()
+    assert main(["run", str(archive), "--no-plots", "--out", str(tmp_path / "out")]) == 2
+    assert "nested systems are not supported (an export of Model Exchange FMUs" in capsys.readouterr().err
+    assert main(["export", "meng_eq35", "--osp", str(tmp_path / "osp"), "--me"]) == 2
+    assert "export --me: an SSP archive alone" in capsys.readouterr().err
