@@ -107,8 +107,9 @@ class Report:
         return list(self.remarks)
 
     def text(self) -> str:
-        steps = f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} rejected)"
-                                                     if self.step_control != "fixed" else "")
+        steps = (f"{self.macro_steps} output points of one solver (CVODE), no macro step" if self.step_control == "cvode"
+                 else f"{self.macro_steps} macro steps" + (f" ({self.step_control} step control, {self.rejected_steps} "
+                                                           "rejected)" if self.step_control != "fixed" else ""))
         lines = [f"{self.name}: {self.simulated:g} s simulated in {self.wall:.2f} s wall, {steps}, "
                  f"real-time factor {self.real_time_factor:.1f}, " + (
                      f"{100 * self.busy / self.wall:.0f} % of the wall time stepping (the rest waiting for deadlines), "
