@@ -153,32 +153,6 @@ function(add_fmu name)
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu_file}")
 
-  # The Model Exchange FMU of a model that offers it (MODEL_MODEL_EXCHANGE 1 in its variables.h):
-  # build/fmus_me/<name>.fmu, the same binaries (they carry both interfaces, fmi2_me.c), the
-  # modelDescription.xml of Model Exchange, the Co-Simulation FMU unchanged.
-  file(STRINGS "${model_dir}/variables.h" model_exchange REGEX "^#define MODEL_MODEL_EXCHANGE 1")
-  if(model_exchange AND NOT ARG_OUTPUT_DIR)
-    set(stage_me "${CMAKE_BINARY_DIR}/stage_me/${name}")
-    set(fmu_me_file "${CMAKE_BINARY_DIR}/fmus_me/${name}.fmu")
-    string(REPLACE "${stage}" "${stage_me}" win64_commands_me "${win64_commands}")
-    add_custom_command(
-      OUTPUT "${fmu_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage_me}"
-      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage_me}/binaries/${FMU_PLATFORM}" "${stage_me}/sources"
-              "${stage_me}/documentation" "${CMAKE_BINARY_DIR}/fmus_me"
-      COMMAND $<TARGET_FILE:${name}_model_description> --me "${stage_me}" "${model_dir}/doc.html" ${shipped_sources}
-      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage_me}/binaries/${FMU_PLATFORM}/"
-      ${win64_commands_me}
-      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage_me}/sources/"
-      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E chdir "${stage_me}" ${CMAKE_COMMAND} -E tar cf "${fmu_me_file}" --format=zip
-              modelDescription.xml binaries sources documentation
-      DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files} ${win64_depends}
-      COMMENT "Packaging ${fmu_me_file}"
-      VERBATIM)
-    add_custom_target(${name}_fmu_me ALL DEPENDS "${fmu_me_file}")
-    set_property(GLOBAL APPEND PROPERTY COSIM_ME_MODELS ${name})
-  endif()
 
   # The FMI 3.0 FMU: build/fmus3/<name>.fmu, binaries/x86_64-linux (and x86_64-windows from the cross build)
   if(fmi3)
@@ -210,5 +184,54 @@ function(add_fmu name)
       COMMENT "Packaging ${fmu3_file}"
       VERBATIM)
     add_custom_target(${name}_fmu3 ALL DEPENDS "${fmu3_file}")
+  endif()
+
+  # The Model Exchange FMU of a model that offers it (MODEL_MODEL_EXCHANGE 1 in its variables.h):
+  # build/fmus_me/<name>.fmu, the same binaries (they carry both interfaces, fmi2_me.c), the
+  # modelDescription.xml of Model Exchange, the Co-Simulation FMU unchanged.
+  file(STRINGS "${model_dir}/variables.h" model_exchange REGEX "^#define MODEL_MODEL_EXCHANGE 1")
+  if(model_exchange AND NOT ARG_OUTPUT_DIR)
+    set(stage_me "${CMAKE_BINARY_DIR}/stage_me/${name}")
+    set(fmu_me_file "${CMAKE_BINARY_DIR}/fmus_me/${name}.fmu")
+    string(REPLACE "${stage}" "${stage_me}" win64_commands_me "${win64_commands}")
+    add_custom_command(
+      OUTPUT "${fmu_me_file}"
+      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage_me}"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage_me}/binaries/${FMU_PLATFORM}" "${stage_me}/sources"
+              "${stage_me}/documentation" "${CMAKE_BINARY_DIR}/fmus_me"
+      COMMAND $<TARGET_FILE:${name}_model_description> --me "${stage_me}" "${model_dir}/doc.html" ${shipped_sources}
+      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage_me}/binaries/${FMU_PLATFORM}/"
+      ${win64_commands_me}
+      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage_me}/sources/"
+      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_me_file}"
+      COMMAND ${CMAKE_COMMAND} -E chdir "${stage_me}" ${CMAKE_COMMAND} -E tar cf "${fmu_me_file}" --format=zip
+              modelDescription.xml binaries sources documentation
+      DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files} ${win64_depends}
+      COMMENT "Packaging ${fmu_me_file}"
+      VERBATIM)
+    add_custom_target(${name}_fmu_me ALL DEPENDS "${fmu_me_file}")
+    set_property(GLOBAL APPEND PROPERTY COSIM_ME_MODELS ${name})
+    # and FMI 3.0's: build/fmus3_me/<name>.fmu, the FMI 3.0 binaries
+    set(stage3_me "${CMAKE_BINARY_DIR}/stage3_me/${name}")
+    set(fmu3_me_file "${CMAKE_BINARY_DIR}/fmus3_me/${name}.fmu")
+    string(REPLACE "${stage3}" "${stage3_me}" win64_commands3_me "${win64_commands3}")
+    add_custom_command(
+      OUTPUT "${fmu3_me_file}"
+      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage3_me}"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3_me}/binaries/x86_64-linux" "${stage3_me}/sources"
+              "${stage3_me}/documentation" "${CMAKE_BINARY_DIR}/fmus3_me"
+      COMMAND $<TARGET_FILE:${name}_model_description> --fmi3 --me "${stage3_me}" "${model_dir}/doc.html"
+              ${shipped_sources} "${FMU_COMMON_DIR}/fmi3_layer.c"
+      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}_fmi3> "${stage3_me}/binaries/x86_64-linux/"
+      ${win64_commands3_me}
+      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${FMU_COMMON_DIR}/fmi3_layer.c" "${stage3_me}/sources/"
+      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu3_me_file}"
+      COMMAND ${CMAKE_COMMAND} -E chdir "${stage3_me}" ${CMAKE_COMMAND} -E tar cf "${fmu3_me_file}" --format=zip
+              modelDescription.xml binaries sources documentation
+      DEPENDS ${name}_fmi3 ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
+              "${FMU_COMMON_DIR}/fmi3_layer.c" ${win64_depends3}
+      COMMENT "Packaging ${fmu3_me_file}"
+      VERBATIM)
+    add_custom_target(${name}_fmu3_me ALL DEPENDS "${fmu3_me_file}")
   endif()
 endfunction()

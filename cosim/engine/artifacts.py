@@ -2,9 +2,9 @@
 
 - installed from a wheel (`pip install stewart-cosim`, or `pip install <checkout>`, which builds
   one with scikit-build-core): everything inside the package, `cosim/_data/`: fmus/ (the FMUs),
-  fmus3/ (the same as FMI 3.0), fmus_me/ (Model Exchange), lib/ (the engine's step kernel, the mechanics' dynamics core), params/, scenes/, sweeps/;
+  fmus3/ (the same as FMI 3.0), fmus_me/ and fmus3_me/ (Model Exchange), lib/ (the engine's step kernel, the mechanics' dynamics core), params/, scenes/, sweeps/;
 - a checkout (`bash scripts/setup.sh`: CMake into build/, the Python package installed editable
-  without it): build/fmus/, build/fmus3/, build/fmus_me/, build/test_fmus/, build/lib/ and the checkout's params/, scenes/,
+  without it): build/fmus/, build/fmus3/, build/fmus_me/, build/fmus3_me/, build/test_fmus/, build/lib/ and the checkout's params/, scenes/,
   sweeps/. COSIM_BUILD_DIR points at another build folder.
 
 The package never builds anything at run time. A missing artifact, or a checkout's build older
@@ -26,6 +26,7 @@ BUILD_DIR = PACKAGE_DATA if INSTALLED else Path(os.environ.get("COSIM_BUILD_DIR"
 FMU_DIR = BUILD_DIR / "fmus"
 FMU3_DIR = BUILD_DIR / "fmus3"  # the same models as FMI 3.0 Co-Simulation FMUs
 FMU_ME_DIR = BUILD_DIR / "fmus_me"  # the models that offer it as FMI 2.0 Model Exchange FMUs
+FMU3_ME_DIR = BUILD_DIR / "fmus3_me"  # and as FMI 3.0 Model Exchange FMUs
 TEST_FMU_DIR = BUILD_DIR / "test_fmus"
 LIB_DIR = BUILD_DIR / "lib"
 # Touched by scripts/setup.sh after every successful build: the build is current when it is newer
@@ -83,8 +84,10 @@ def data_dir(name: str) -> Path:
 
 def fmu_path(name: str, test: bool = False, fmi: int = 2, model_exchange: bool = False) -> Path:
     """Path of build/fmus/<name>.fmu (build/test_fmus/ for a test-only FMU; build/fmus3/ for the
-    FMI 3.0 one, fmi=3; build/fmus_me/ for the FMI 2.0 Model Exchange one)."""
+    FMI 3.0 one, fmi=3; build/fmus_me/ and build/fmus3_me/ for the Model Exchange ones)."""
     if fmi == 3:
+        if model_exchange:
+            return _check(FMU3_ME_DIR / f"{name}.fmu", f"FMI 3.0 Model Exchange FMU '{name}'")
         return _check(FMU3_DIR / f"{name}.fmu", f"FMI 3.0 FMU '{name}'")
     if model_exchange:
         return _check(FMU_ME_DIR / f"{name}.fmu", f"Model Exchange FMU '{name}'")

@@ -105,11 +105,20 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage) {
-    (void)instanceName, (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn;
-    if (logMessage)
-        logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                   "fmi3InstantiateModelExchange: this FMU is for Co-Simulation only");
-    return NULL;
+    if (!MODEL_MODEL_EXCHANGE) {
+        if (logMessage)
+            logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                       "fmi3InstantiateModelExchange: this FMU is for Co-Simulation only");
+        return NULL;
+    }
+    Logger *logger = (Logger *)calloc(1, sizeof(Logger));
+    if (!logger) return NULL;
+    logger->log = logMessage, logger->environment = instanceEnvironment;
+    const fmi2CallbackFunctions callbacks = {log_through, calloc, free, NULL, logger};
+    fmi2Component c = fmi2Instantiate(instanceName, fmi2ModelExchange, instantiationToken, resourcePath, &callbacks,
+                                      visible, loggingOn);
+    if (!c) free(logger);
+    return c;
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -145,6 +154,9 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
+#if MODEL_MODEL_EXCHANGE
+    if (instance && fmu_of(instance)->model_exchange) return (fmi3Status)fmi2EnterEventMode(instance);
+#endif
     return refuse(instance, "fmi3EnterEventMode: this FMU has no event mode (hasEventMode = false)");
 }
 
@@ -470,6 +482,77 @@ fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
     return refuse(instance, "fmi3EvaluateDiscreteStates: this FMU has no event mode");
 }
 
+#if MODEL_MODEL_EXCHANGE
+/* ---- Model Exchange: the FMI 2.0 layer's (fmi2_me.c), FMI 3.0's names ---- */
+
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                    fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
+                                    fmi3Float64 *nextEventTime) {
+    fmi2EventInfo info;
+    const fmi2Status status = fmi2NewDiscreteStates(instance, &info);
+    if (status > fmi2Warning) return (fmi3Status)status;
+    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = info.newDiscreteStatesNeeded;
+    if (terminateSimulation) *terminateSimulation = info.terminateSimulation;
+    if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = info.nominalsOfContinuousStatesChanged;
+    if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = info.valuesOfContinuousStatesChanged;
+    if (nextEventTimeDefined) *nextEventTimeDefined = info.nextEventTimeDefined;
+    if (nextEventTime) *nextEventTime = info.nextEventTime;
+    return (fmi3Status)status;
+}
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
+    return (fmi3Status)fmi2EnterContinuousTimeMode(instance);
+}
+
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation) {
+    fmi2Boolean enter = fmi2False, terminate = fmi2False;
+    const fmi2Status status = fmi2CompletedIntegratorStep(instance, noSetFMUStatePriorToCurrentPoint, &enter, &terminate);
+    if (enterEventMode) *enterEventMode = enter;
+    if (terminateSimulation) *terminateSimulation = terminate;
+    return (fmi3Status)status;
+}
+
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) { return (fmi3Status)fmi2SetTime(instance, time); }
+
+fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
+                                   size_t nContinuousStates) {
+    return (fmi3Status)fmi2SetContinuousStates(instance, continuousStates, nContinuousStates);
+}
+
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
+                                             size_t nContinuousStates) {
+    return (fmi3Status)fmi2GetDerivatives(instance, derivatives, nContinuousStates);
+}
+
+fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
+    return (fmi3Status)fmi2GetEventIndicators(instance, eventIndicators, nEventIndicators);
+}
+
+fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
+    return (fmi3Status)fmi2GetContinuousStates(instance, continuousStates, nContinuousStates);
+}
+
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nContinuousStates) {
+    return (fmi3Status)fmi2GetNominalsOfContinuousStates(instance, nominals, nContinuousStates);
+}
+
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
+    if (!instance || !nEventIndicators || !fmu_of(instance)->model_exchange)
+        return refuse(instance, "fmi3GetNumberOfEventIndicators: for a Model Exchange instance, with its count's address");
+    *nEventIndicators = 0;
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
+    if (!instance || !nContinuousStates || !fmu_of(instance)->model_exchange)
+        return refuse(instance, "fmi3GetNumberOfContinuousStates: for a Model Exchange instance, with its count's address");
+    *nContinuousStates = MODEL_N_STATES;
+    return fmi3OK;
+}
+
+#else
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
                                     fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
                                     fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
@@ -532,6 +615,7 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
     (void)nContinuousStates;
     return refuse(instance, NOT_ME(GetNumberOfContinuousStates));
 }
+#endif
 
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
                                       fmi3Float64 activationTime) {

@@ -249,7 +249,42 @@ static const char *type_element3(FmuType t) {
     return t == FMU_REAL ? "Float64" : t == FMU_INTEGER ? "Int32" : t == FMU_BOOLEAN ? "Boolean" : "String";
 }
 
-static int write_model_description3(const char *path) {
+/* FMI 3.0 Model Exchange's states and their derivatives (fmi2_me.c), after the table's variables. */
+static void put_states3(FILE *f) {
+    for (int k = 0; k < MODEL_N_STATES; k++) /* Model Exchange's states and derivatives (fmi2_me.c) */
+        fprintf(f, "    <Float64 name=\"ode.x[%d]\" valueReference=\"%d\" causality=\"local\" variability=\"continuous\" "
+                   "initial=\"calculated\"\n      description=\"The model's continuous state %d\"/>\n",
+                k + 1, FMU_STATE_VR(k), k + 1);
+    for (int k = 0; k < MODEL_N_STATES; k++)
+        fprintf(f, "    <Float64 name=\"der(ode.x[%d])\" valueReference=\"%d\" causality=\"local\" "
+                   "variability=\"continuous\" initial=\"calculated\" derivative=\"%d\"\n      description=\"Its time "
+                   "derivative\"/>\n", k + 1, FMU_DERIVATIVE_VR(k), FMU_STATE_VR(k));
+}
+
+/* FMI 3.0's ModelStructure: the outputs with their dependencies (value references, which equal the
+ * indices here; Model Exchange's on the states too), the state derivatives, the initial unknowns. */
+static void put_model_structure3(FILE *f, int me) {
+    for (int vr = 1; vr < VR_COUNT; vr++) { /* dependencies: value references in FMI 3.0 (ours equal the indices) */
+        if (fmu_variables[vr].causality != FMU_OUTPUT) continue;
+        fprintf(f, "    <Output valueReference=\"%d\" dependencies=\"", vr);
+        int listed = 0;
+        for (const Feedthrough *row = FEEDTHROUGH; row->inputs; row++)
+            if (row->output == vr)
+                for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", listed++ ? " " : "", row->inputs[k]);
+        for (int k = 0; me && k < MODEL_N_STATES; k++) fprintf(f, "%s%d", listed++ ? " " : "", FMU_STATE_VR(k));
+        fputs("\"/>\n", f);
+    }
+    for (int k = 0; me && k < MODEL_N_STATES; k++)
+        fprintf(f, "    <ContinuousStateDerivative valueReference=\"%d\"/>\n", FMU_DERIVATIVE_VR(k));
+    for (int vr = 1; vr < VR_COUNT; vr++)
+        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "    <InitialUnknown valueReference=\"%d\"/>\n", vr);
+    for (int k = 0; me && k < MODEL_N_STATES; k++)
+        fprintf(f, "    <InitialUnknown valueReference=\"%d\"/>\n", FMU_STATE_VR(k));
+    for (int k = 0; me && k < MODEL_N_STATES; k++)
+        fprintf(f, "    <InitialUnknown valueReference=\"%d\"/>\n", FMU_DERIVATIVE_VR(k));
+}
+
+static int write_model_description3(const char *path, int me) {
     FILE *f = fopen(path, "w");
     if (!f) { perror(path); return 1; }
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -259,12 +294,18 @@ static int write_model_description3(const char *path) {
     put_escaped(f, MODEL_DESCRIPTION);
     fprintf(f, "\"\n  version=\"%s\" generationTool=\"stewart-cosim fmu/common/model_description.c\"\n"
                "  variableNamingConvention=\"structured\">\n", MODEL_VERSION);
-    fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
-               "    maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"\n"
-               "    providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\"\n"
-               "    hasEventMode=\"false\" providesIntermediateUpdate=\"false\"\n"
-               "    canReturnEarlyAfterIntermediateUpdate=\"false\"/>\n",
-            MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
+    if (me)
+        fprintf(f, "  <ModelExchange modelIdentifier=\"%s\" needsCompletedIntegratorStep=\"true\"\n"
+                   "    canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"\n"
+                   "    providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\"/>\n",
+                MODEL_IDENTIFIER_STRING);
+    else
+        fprintf(f, "  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
+                   "    maxOutputDerivativeOrder=\"%d\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"\n"
+                   "    providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\"\n"
+                   "    hasEventMode=\"false\" providesIntermediateUpdate=\"false\"\n"
+                   "    canReturnEarlyAfterIntermediateUpdate=\"false\"/>\n",
+                MODEL_IDENTIFIER_STRING, MODEL_MAX_OUTPUT_DERIVATIVE_ORDER);
     put_units(f);
     put_log_categories(f);
     fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%g\" stepSize=\"%g\"/>\n", MODEL_STOP_TIME,
@@ -287,7 +328,8 @@ static int write_model_description3(const char *path) {
         if (has_start(v)) { fputs(" start=\"", f); put_number(f, v->type, v->start); fputc('"', f); }
         fprintf(f, "/>\n");
     }
-    for (int vr = 1; vr < VR_COUNT; vr++) { /* each Real input's rate and curvature (FMU_INPUT_DERIVATIVE_VR) */
+    if (me) put_states3(f);
+    for (int vr = 1; !me && vr < VR_COUNT; vr++) { /* each Real input's rate and curvature (FMU_INPUT_DERIVATIVE_VR) */
         const FmuVariable *v = &fmu_variables[vr];
         if (v->causality != FMU_INPUT || v->type != FMU_REAL) continue;
         for (int order = 1; order <= 2; order++)
@@ -299,16 +341,7 @@ static int write_model_description3(const char *path) {
                     FMU_INPUT_DERIVATIVE_VR(vr, order), order == 1 ? "first" : "second", v->name);
     }
     fprintf(f, "  </ModelVariables>\n  <ModelStructure>\n");
-    for (int vr = 1; vr < VR_COUNT; vr++) { /* dependencies: value references in FMI 3.0 (ours equal the indices) */
-        if (fmu_variables[vr].causality != FMU_OUTPUT) continue;
-        fprintf(f, "    <Output valueReference=\"%d\" dependencies=\"", vr);
-        for (const Feedthrough *row = FEEDTHROUGH; row->inputs; row++)
-            if (row->output == vr)
-                for (int k = 0; k < row->count; k++) fprintf(f, "%s%d", k ? " " : "", row->inputs[k]);
-        fputs("\"/>\n", f);
-    }
-    for (int vr = 1; vr < VR_COUNT; vr++)
-        if (fmu_variables[vr].causality == FMU_OUTPUT) fprintf(f, "    <InitialUnknown valueReference=\"%d\"/>\n", vr);
+    put_model_structure3(f, me);
     fprintf(f, "  </ModelStructure>\n</fmiModelDescription>\n");
     return fclose(f) != 0;
 }
@@ -383,12 +416,12 @@ int main(int argc, char **argv) {
     const int me = argc > 1 && strcmp(argv[1], "--me") == 0;
     argc -= me, argv += me;
     if (argc < 3) {
-        fprintf(stderr, "usage: model_description [--fmi3 | --me] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n");
+        fprintf(stderr, "usage: model_description [--fmi3] [--me] OUT_DIR DOC_FRAGMENT.html SOURCE_FILE...\n");
         return 2;
     }
     char path[4096];
     snprintf(path, sizeof path, "%s/modelDescription.xml", argv[1]);
-    if (fmi3 ? write_model_description3(path) : write_model_description(path, me, argc - 3, argv + 3)) return 1;
+    if (fmi3 ? write_model_description3(path, me) : write_model_description(path, me, argc - 3, argv + 3)) return 1;
     if (fmi3) {
         snprintf(path, sizeof path, "%s/sources/buildDescription.xml", argv[1]);
         if (write_build_description(path, argc - 3, argv + 3)) return 1;

@@ -28,8 +28,12 @@ static void run_sequence(int max_calls) {
         if (fmi3InstantiateCoSimulation("fuzz", "{not the token}", "", fmi3False, fmi3False, fmi3False, fmi3False,
                                         NULL, 0, NULL, log_message, NULL))
             violation("fmi3InstantiateCoSimulation", "accepted a wrong instantiation token");
-        if (fmi3InstantiateModelExchange("fuzz", MODEL_GUID, "", fmi3False, fmi3False, NULL, log_message))
+        fmi3Instance me = fmi3InstantiateModelExchange("fuzz", MODEL_GUID, "", fmi3False, fmi3False, NULL, log_message);
+        if (me && !MODEL_MODEL_EXCHANGE)
             violation("fmi3InstantiateModelExchange", "a Co-Simulation FMU gave a Model Exchange instance");
+        if (!me && MODEL_MODEL_EXCHANGE)
+            violation("fmi3InstantiateModelExchange", "a Model Exchange FMU refused a valid token");
+        fmi3FreeInstance(me);
     }
     possible = S_INSTANTIATED;
     fmi3FMUState states[3] = {NULL, NULL, NULL};
