@@ -183,25 +183,22 @@ class MonolithicSystem:
                 self._call(member, "fmi2SetContinuousStates", member.fmu.setContinuousStates, self._pointer(part), n)
         self.propagate()
 
-    def states(self) -> np.ndarray:
-        x = np.zeros(self.size)
+    def _gathered(self, call: str, name: str) -> np.ndarray:
+        """Every FMU's states (or their derivatives: `name` the fmpy method) end to end."""
+        out = np.zeros(self.size)
         for member in self.members.values():
             n = member.states.stop - member.states.start
             if n:
                 part = np.empty(n)
-                self._call(member, "fmi2GetContinuousStates", member.fmu.getContinuousStates, self._pointer(part), n)
-                x[member.states] = part
-        return x
+                self._call(member, call, getattr(member.fmu, name), self._pointer(part), n)
+                out[member.states] = part
+        return out
+
+    def states(self) -> np.ndarray:
+        return self._gathered("fmi2GetContinuousStates", "getContinuousStates")
 
     def derivatives(self) -> np.ndarray:
-        dx = np.zeros(self.size)
-        for member in self.members.values():
-            n = member.states.stop - member.states.start
-            if n:
-                part = np.empty(n)
-                self._call(member, "fmi2GetDerivatives", member.fmu.getDerivatives, self._pointer(part), n)
-                dx[member.states] = part
-        return dx
+        return self._gathered("fmi2GetDerivatives", "getDerivatives")
 
     def event(self, enter: bool = True) -> float:
         """Every FMU through Event Mode (entered unless it is there: after initialization); the
