@@ -560,7 +560,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         return fmi2Error;
     }
     fmu->s.time = t0 + h;
-#if MODEL_N_STATES > 0
+#if MODEL_SHARED_SOLVER
     fmu->s.v.solver_steps = fmu->s.solver.steps < INT_MAX ? (int)fmu->s.solver.steps : INT_MAX;
     fmu->s.v.solver_rejected = fmu->s.solver.rejected < INT_MAX ? (int)fmu->s.solver.rejected : INT_MAX;
 #endif

@@ -6,8 +6,8 @@
  * PHASE_STEP_COMPLETE (the calls allowed in them differ only in what Model Exchange adds here).
  * The shipped models have no state events as Model Exchange (a part with them, such as the PMSM
  * drive's switching inverter, is refused at initialization with its reason): zero event
- * indicators; a model with time events (MODEL_TIME_EVENTS: the trajectory's load pulses) gives
- * the next in fmi2NewDiscreteStates.
+ * indicators; a model with time events (MODEL_TIME_EVENTS: the trajectory's load pulses, the
+ * MPC cueing's solves) updates its discrete state and gives the next in fmi2NewDiscreteStates.
  */
 #include "runtime.h"
 
@@ -124,10 +124,11 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     }
     memset(info, 0, sizeof *info); /* no new discrete states, nothing changed */
 #if MODEL_TIME_EVENTS
+    model_time_event(fmu);
     const double next = model_next_time_event(fmu);
     if (isfinite(next)) info->nextEventTimeDefined = fmi2True, info->nextEventTime = next;
 #endif
-    fmu->outputs_stale = 1; /* what the event changed (a pulse's edge) shows in the outputs */
+    fmu->outputs_stale = 1; /* what the event changed (a pulse's edge, a new solve) shows in the outputs */
     return fmi2OK;
 }
 

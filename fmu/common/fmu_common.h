@@ -86,6 +86,9 @@ fmi2Status model_completed_integrator_step(FmuInstance *fmu);
 #if MODEL_TIME_EVENTS
 /* The next time after fmu->s.time at which the model changes discontinuously (INFINITY: none). */
 double model_next_time_event(FmuInstance *fmu);
+/* At an event (fmi2NewDiscreteStates), before the next is asked for: the model's discrete state
+ * updated for fmu->s.time (a sampled controller's new output). */
+void model_time_event(FmuInstance *fmu);
 #endif
 #endif
 

@@ -114,6 +114,8 @@ static int snapshot_valid(FmuInstance *fmu, const char *call) {
             LOG_ERROR(fmu, "%s: the state's internal state %d is not finite", call, k);
             return 0;
         }
+#endif
+#if MODEL_SHARED_SOLVER
     const OdeSolver *solver = &s->solver;
     if (!(solver->h_next >= 0.0 && solver->h_next <= 1.0) || !(solver->steps >= 0.0) || !(solver->rejected >= 0.0)) {
         LOG_ERROR(fmu, "%s: the state's solver memory is invalid", call);

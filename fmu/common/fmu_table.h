@@ -92,6 +92,12 @@ typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's valu
 #ifndef MODEL_TIME_EVENTS
 #define MODEL_TIME_EVENTS 0
 #endif
+/* A model with continuous states integrates them in Co-Simulation by the shared solvers (ode.h,
+ * FMU_SOLVER_VARIABLES in its table) unless it sets MODEL_SHARED_SOLVER 0 (it steps them itself:
+ * the cueing's filters, discretised exactly). */
+#ifndef MODEL_SHARED_SOLVER
+#define MODEL_SHARED_SOLVER (MODEL_N_STATES > 0)
+#endif
 #define FMU_STATE_VR(k) (VR_COUNT + (k))
 #define FMU_DERIVATIVE_VR(k) (VR_COUNT + MODEL_N_STATES + (k))
 

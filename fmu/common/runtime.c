@@ -173,7 +173,7 @@ int *fmu_integer(FmuInstance *fmu, int vr) { return (int *)fmu_value_address(fmu
 
 int fmu_input_has_derivative(const FmuInstance *fmu, int vr) { return fmu->s.input_derivative_given[vr]; }
 
-#if MODEL_N_STATES > 0
+#if MODEL_SHARED_SOLVER
 fmi2Status fmu_integrate(FmuInstance *fmu, const OdeProblem *problem, void *ctx, double h, double max_step) {
     OdeSolver *solver = &fmu->s.solver;
     solver->method = fmu->s.v.solver_method;

@@ -27,6 +27,10 @@
  * The motion is the inputs', or a recorded one's from vehicle.file (linear between its rows).
  *
  * algorithm = 2 takes the model-predictive cueing of mpc.c instead of these filters.
+ *
+ * As Model Exchange (the end of this file) the same states (fmu->s.x, laid out in variables.h) go
+ * to the importer's solver with their derivatives x' = A x + B u; the tilt's rate limit acts
+ * continuously (tilt_rate), and the MPC's solves are time events.
  */
 #include "fmu_common.h"
 #include "mpc.h"
@@ -132,9 +136,7 @@ static double clip(double value, double limit) { return value > limit ? limit : 
 
 /* Channel c's filter from the parameters. */
 static Filter filter(FmuInstance *fmu, int c) {
-    Filter f;
-    memset(&f, 0, sizeof f);
-    f.first = FIRST[c];
+    Filter f = {0, FIRST[c], {0.0}, {0.0}};
     if (c < N_TRANSLATION) { /* states z, p, v */
         const int *k = TRANSLATION[c];
         const double w = *fmu_real(fmu, k[2]), zeta = *fmu_real(fmu, k[3]), wb = *fmu_real(fmu, k[4]);
@@ -229,7 +231,7 @@ static const double *phi_of(FmuInstance *fmu, double h, int c) {
 /* Target angle and its first three derivatives of tilt axis j (0: pitch from x, 1: roll from y). */
 static void tilt_target(FmuInstance *fmu, int j, double t, double out[4]) {
     const ModelVariables *v = &fmu->s.v;
-    const double *x = fmu->s.internal.x + FIRST[N_TRANSLATION + N_ROTATION + j];
+    const double *x = fmu->s.x + FIRST[N_TRANSLATION + N_ROTATION + j];
     const double w = v->tilt_frequency, zeta = v->tilt_damping, g = v->gravity;
     const double u = channel_input(fmu, N_TRANSLATION + N_ROTATION + j, t);
     const double top = sin(v->tilt_limit), sign = j == 0 ? -1.0 : 1.0;
@@ -254,28 +256,54 @@ static void tilt_target(FmuInstance *fmu, int j, double t, double out[4]) {
  * about a single axis. */
 static void tilt_follow(FmuInstance *fmu, double t, double h) {
     const double limit = fmu->s.v.tilt_rate_limit;
-    double target[N_TILT][4], gap[N_TILT], *tilt[N_TILT];
+    double target[N_TILT][4], gap[N_TILT], *tilt[N_TILT], *angle[N_TILT];
     for (int j = 0; j < N_TILT; j++) {
         tilt_target(fmu, j, t, target[j]);
-        tilt[j] = fmu->s.internal.tilt[1 - j]; /* tilt[0] roll, tilt[1] pitch */
-        gap[j] = target[j][0] - tilt[j][0];
+        tilt[j] = fmu->s.internal.tilt[1 - j]; /* internal.tilt[0] roll, [1] pitch */
+        angle[j] = fmu->s.x + CUEING_TILT_STATE + 1 - j;
+        gap[j] = target[j][0] - *angle[j];
     }
     const double distance = sqrt(gap[0] * gap[0] + gap[1] * gap[1]); /* (not hypot: glibc 2.35 versions it anew) */
     if (h == 0.0 || distance <= limit * h) { /* on its target, turning at most at the limit */
         const double speed = sqrt(target[0][1] * target[0][1] + target[1][1] * target[1][1]);
         const int within = speed < limit;
         for (int j = 0; j < N_TILT; j++) {
-            tilt[j][0] = target[j][0];
+            *angle[j] = target[j][0];
             tilt[j][1] = within ? target[j][1] : target[j][1] * (limit / speed);
             tilt[j][2] = within ? target[j][2] : 0.0;
             tilt[j][3] = within ? target[j][3] : 0.0;
         }
     } else { /* towards it along the gap, at the limit */
         for (int j = 0; j < N_TILT; j++) {
-            tilt[j][0] += limit * h * gap[j] / distance;
+            *angle[j] += limit * h * gap[j] / distance;
             tilt[j][1] = limit * gap[j] / distance;
             tilt[j][2] = tilt[j][3] = 0.0;
         }
+    }
+}
+
+/* Model Exchange's tilt (its angles states of the importer's solver): the rate limit in continuous
+ * time. Co-Simulation's tilt snaps onto its target once within a step's reach; this one closes
+ * the gap within TILT_CATCH_UP: its rate is the target's plus gap / TILT_CATCH_UP, the tilt
+ * vector's rate at most tilt.rate_limit. The rates (roll, pitch) into rate where given, and into
+ * internal.tilt[.][1] (the higher derivatives 0). */
+static const double TILT_CATCH_UP = 1e-4;
+
+static void tilt_rate(FmuInstance *fmu, double *rate) {
+    const double limit = fmu->s.v.tilt_rate_limit;
+    double *tilt[N_TILT] = {fmu->s.internal.tilt[0], fmu->s.internal.tilt[1]}, speed = 0.0;
+    for (int j = 0; j < N_TILT; j++) { /* target j: 0 pitch from x, 1 roll from y */
+        double target[4];
+        tilt_target(fmu, j, fmu->s.time, target);
+        const int k = 1 - j;
+        tilt[k][1] = target[1] + (target[0] - fmu->s.x[CUEING_TILT_STATE + k]) / TILT_CATCH_UP;
+        tilt[k][2] = tilt[k][3] = 0.0;
+        speed += tilt[k][1] * tilt[k][1];
+    }
+    speed = sqrt(speed);
+    for (int k = 0; k < N_TILT; k++) {
+        if (speed > limit) tilt[k][1] *= limit / speed;
+        if (rate) rate[k] = tilt[k][1];
     }
 }
 
@@ -322,8 +350,8 @@ void model_initialize(FmuInstance *fmu) {
         mpc_initialize(fmu, mpc_of(fmu));
         return;
     }
-    double *x = fmu->s.internal.x;
-    memset(x, 0, sizeof fmu->s.internal.x);
+    double *x = fmu->s.x;
+    memset(x, 0, sizeof fmu->s.x);
     for (int c = 0; c < N_CHANNELS; c++) {
         const Filter f = filter(fmu, c);
         const double u = channel_input(fmu, c, fmu->s.time);
@@ -353,7 +381,7 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
             return fmi2Error;
         }
         const double u0 = channel_input(fmu, c, t), u1 = (channel_input(fmu, c, t + h) - u0) / h; /* the chord */
-        double *x = fmu->s.internal.x + f.first, next[MAX_ORDER];
+        double *x = fmu->s.x + f.first, next[MAX_ORDER];
         for (int i = 0; i < n; i++) {
             next[i] = 0.0;
             for (int j = 0; j < n; j++)
@@ -375,7 +403,7 @@ static void state_rate(const Filter *f, const double *x, double u, double out[MA
 
 /* The classical washout's pose (from neutral) with its first three derivatives. */
 static void classical_pose(FmuInstance *fmu, double pose[6][4]) {
-    const double t = fmu->s.time, *x = fmu->s.internal.x;
+    const double t = fmu->s.time, *x = fmu->s.x;
     for (int c = 0; c < N_TRANSLATION + N_ROTATION; c++) { /* each channel's output, its second state, */
         const Filter f = filter(fmu, c);                     /* and that state's first three derivatives */
         const double *s = x + f.first, u = channel_input(fmu, c, t), du = channel_input_rate(fmu, c, t);
@@ -385,6 +413,7 @@ static void classical_pose(FmuInstance *fmu, double pose[6][4]) {
         state_rate(&f, curvature, 0.0, jerk);
         pose[c][0] = s[1], pose[c][1] = rate[1], pose[c][2] = curvature[1], pose[c][3] = jerk[1];
     }
+    for (int k = 0; k < N_TILT; k++) fmu->s.internal.tilt[k][0] = fmu->s.x[CUEING_TILT_STATE + k];
     for (int k = 0; k < 4; k++) { /* tilt onto roll (3) and pitch (4) */
         pose[3][k] += fmu->s.internal.tilt[0][k];
         pose[4][k] += fmu->s.internal.tilt[1][k];
@@ -397,10 +426,13 @@ void model_compute_outputs(FmuInstance *fmu) {
     if (mpc_of(fmu)) { /* the MPC does not split its roll and pitch: the tilt is all of them */
         mpc_pose(fmu, pose);
         for (int k = 0; k < 4; k++) fmu->s.internal.tilt[0][k] = pose[3][k], fmu->s.internal.tilt[1][k] = pose[4][k];
-        for (int c = 0; c < 6; c++) *fmu_real(fmu, VR_mpc_perceived_error_specific_force_x + c) = fmu->s.internal.mpc.perceived[c];
+        double perceived[6];
+        mpc_perceived_error(fmu, mpc_of(fmu), perceived);
+        for (int c = 0; c < 6; c++) *fmu_real(fmu, VR_mpc_perceived_error_specific_force_x + c) = perceived[c];
         fmu->s.v.mpc_iterations = fmu->s.internal.mpc.iterations;
         fmu->s.v.mpc_softened = fmu->s.internal.mpc.softened;
     } else {
+        if (fmu->model_exchange) tilt_rate(fmu, NULL);
         classical_pose(fmu, pose);
     }
     for (int d = 0; d < 6; d++) {
@@ -423,3 +455,37 @@ double model_output_derivative(FmuInstance *fmu, int vr, int order) {
     if (vr == VR_tilt_pitch) return fmu->s.internal.tilt[1][order];
     return 0.0;
 }
+
+/* ---- Model Exchange (fmi2_me.c): the filters' own equations; the MPC's solves time events ---- */
+
+const char *model_exchange_refusal(const FmuInstance *fmu) {
+    (void)fmu;
+    return NULL;
+}
+
+int model_derivatives(FmuInstance *fmu, double *dxdt) {
+    memset(dxdt, 0, MODEL_N_STATES * sizeof *dxdt);
+    if (mpc_of(fmu)) {
+        mpc_derivatives(fmu, mpc_of(fmu), dxdt);
+        return 0;
+    }
+    for (int c = 0; c < N_CHANNELS; c++) { /* x' = A x + B u */
+        const Filter f = filter(fmu, c);
+        double rate[MAX_ORDER];
+        state_rate(&f, fmu->s.x + f.first, channel_input(fmu, c, fmu->s.time), rate);
+        memcpy(dxdt + f.first, rate, (size_t)f.n * sizeof *rate);
+    }
+    tilt_rate(fmu, dxdt + CUEING_TILT_STATE);
+    return 0;
+}
+
+fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
+    (void)fmu;
+    return fmi2OK;
+}
+
+void model_time_event(FmuInstance *fmu) {
+    if (mpc_of(fmu)) mpc_time_event(fmu, mpc_of(fmu));
+}
+
+double model_next_time_event(FmuInstance *fmu) { return mpc_of(fmu) ? mpc_next_solve(fmu) : INFINITY; }

@@ -87,9 +87,12 @@ static Organ canal(void) {
 
 /* ---- the data: prediction, QP, solver ---- */
 
+/* The motion the MPC commands and its perception: the model's continuous state, fmu->s.x, as it
+ * lies there (variables.h). */
 typedef struct {
     double q[DOF], v[DOF], xi[XI];
 } Motion;
+typedef char motion_is_the_state[sizeof(Motion) == MODEL_N_STATES * sizeof(double) ? 1 : -1];
 
 struct MpcData {
     Platform platform;
@@ -337,10 +340,11 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
     const ModelVariables *v = &fmu->s.v;
     MpcState *state = &fmu->s.internal.mpc;
     const double g = gravity_of(fmu), zero[DOF] = {0};
-    Motion x;
-    memcpy(x.q, state->q, sizeof x.q), memcpy(x.v, state->v, sizeof x.v), memcpy(x.xi, state->xi, sizeof x.xi);
+    Motion now, x;
+    memcpy(&now, fmu->s.x, sizeof now);
+    x = now;
     double envelope[ENVELOPE_VALUES], J[ENVELOPE_VALUES * DOF];
-    envelope_linearised(m, state->q, envelope, J);
+    envelope_linearised(m, now.q, envelope, J);
     const double *length = envelope;
     const double sideways = sin(fmin(v->limit_joint_angle, PI / 2.0)) * cos(PI / 8.0); /* the joints' octagons */
     const double low = v->limit_leg_length_min + v->limit_stroke_margin;
@@ -357,7 +361,7 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
             for (int j = 0; j < Z; j++) m->f[j] += wy * m->sy[k][d][j] + wq * m->sq[k][d][j] + wv * m->sv[k][d][j];
         }
         double moved[DOF];
-        for (int d = 0; d < DOF; d++) moved[d] = x.q[d] - state->q[d];
+        for (int d = 0; d < DOF; d++) moved[d] = x.q[d] - now.q[d];
         for (int i = 0; i < PLATFORM_LEGS; i++) {
             const double *row = J + i * DOF;
             constrain(m, k * ROWS + i, row, m->sq[k], moved, low - length[i], high - length[i]);
@@ -397,12 +401,13 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
         status = result.exitflag;
     }
     state->since = 0.0;
+    state->solved_at = t;
     if (status < 0) { /* no answer: brake to rest at the largest acceleration */
         fmu_log(fmu, fmi2Warning, "logStatusWarning", "MPC at t = %g s: the QP solver gave no answer (DAQP exit %d); "
                 "braking", t, status);
         for (int d = 0; d < DOF; d++) {
             const double limit = d >= 3 ? v->mpc_angular_acceleration_limit : v->mpc_acceleration_limit;
-            state->a[d] = fmax(-limit, fmin(limit, -state->v[d] / m->h[0]));
+            state->a[d] = fmax(-limit, fmin(limit, -now.v[d] / m->h[0]));
         }
         state->iterations = 0;
         return;
@@ -417,13 +422,15 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
 void mpc_initialize(FmuInstance *fmu, MpcData *m) {
     MpcState *state = &fmu->s.internal.mpc;
     memset(state, 0, sizeof *state);
+    Motion x; /* at neutral, at rest */
+    memset(&x, 0, sizeof x);
     double r[DOF];
     vehicle_error_reference(fmu, fmu->s.time, fmu->s.time, r);
     for (int c = 0; c < DOF; c++) { /* settled for the error now: x = -A^-1 B e = (e / a_0, 0, ...) */
         const Organ *o = &m->organ[c < 3 ? 0 : 1];
-        state->xi[XI_FIRST[c]] = -r[c] / -o->a[(o->n - 1) * o->n];
-        state->perceived[c] = (o->c[0] / -o->a[(o->n - 1) * o->n] + o->d) * -r[c];
+        x.xi[XI_FIRST[c]] = -r[c] / -o->a[(o->n - 1) * o->n];
     }
+    memcpy(fmu->s.x, &x, sizeof x);
     solve(fmu, m, fmu->s.time);
 }
 
@@ -434,19 +441,70 @@ fmi2Status mpc_do_step(FmuInstance *fmu, MpcData *m, double h) {
         phi_slot(m, STEP_SLOT, h);
         m->step = h;
     }
-    double r0[DOF], r1[DOF];
+    double r0[DOF], r1[DOF], y[DOF];
     for (int k = 0; k < DOF; k++) r0[k] = cueing_vehicle(fmu, k, t, &r1[k]);
     r0[2] -= gravity_of(fmu);
     Motion x;
-    memcpy(x.q, state->q, sizeof x.q), memcpy(x.v, state->v, sizeof x.v), memcpy(x.xi, state->xi, sizeof x.xi);
-    advance(m, STEP_SLOT, h, gravity_of(fmu), &x, state->a, r0, r1, state->perceived);
-    memcpy(state->q, x.q, sizeof x.q), memcpy(state->v, x.v, sizeof x.v), memcpy(state->xi, x.xi, sizeof x.xi);
+    memcpy(&x, fmu->s.x, sizeof x);
+    advance(m, STEP_SLOT, h, gravity_of(fmu), &x, state->a, r0, r1, y);
+    memcpy(fmu->s.x, &x, sizeof x);
     state->since += h;
     if (state->since >= fmu->s.v.mpc_period * (1.0 - 1e-9)) solve(fmu, m, t + h);
     return fmi2OK;
 }
 
+/* The error each organ takes now (the platform's felt motion less the vehicle's), as advance's e_0. */
+static void error_now(FmuInstance *fmu, const Motion *x, const double a[DOF], double e[DOF]) {
+    const double g = gravity_of(fmu);
+    double r[DOF];
+    for (int k = 0; k < DOF; k++) r[k] = cueing_vehicle(fmu, k, fmu->s.time, NULL);
+    r[2] -= g;
+    e[0] = a[0] - g * x->q[4] - r[0];
+    e[1] = a[1] + g * x->q[3] - r[1];
+    e[2] = a[2] - r[2];
+    for (int c = 3; c < DOF; c++) e[c] = x->v[c] - r[c];
+}
+
+void mpc_perceived_error(FmuInstance *fmu, const MpcData *m, double y[DOF]) {
+    Motion x;
+    double e[DOF];
+    memcpy(&x, fmu->s.x, sizeof x);
+    error_now(fmu, &x, fmu->s.internal.mpc.a, e);
+    for (int c = 0; c < DOF; c++) { /* y = C xi + D e */
+        const Organ *o = &m->organ[c < 3 ? 0 : 1];
+        y[c] = o->d * e[c];
+        for (int i = 0; i < o->n; i++) y[c] += o->c[i] * x.xi[XI_FIRST[c] + i];
+    }
+}
+
+void mpc_derivatives(FmuInstance *fmu, const MpcData *m, double *dxdt) {
+    const double *a = fmu->s.internal.mpc.a;
+    Motion x, rate;
+    double e[DOF];
+    memcpy(&x, fmu->s.x, sizeof x);
+    error_now(fmu, &x, a, e);
+    for (int d = 0; d < DOF; d++) rate.q[d] = x.v[d], rate.v[d] = a[d];
+    for (int c = 0; c < DOF; c++) { /* xi' = A xi + e_n e */
+        const Organ *o = &m->organ[c < 3 ? 0 : 1];
+        const double *xi = x.xi + XI_FIRST[c];
+        for (int i = 0; i < o->n; i++) {
+            double *out = rate.xi + XI_FIRST[c] + i;
+            *out = i == o->n - 1 ? e[c] : 0.0;
+            for (int j = 0; j < o->n; j++) *out += o->a[i * o->n + j] * xi[j];
+        }
+    }
+    memcpy(dxdt, &rate, sizeof rate);
+}
+
+void mpc_time_event(FmuInstance *fmu, MpcData *m) {
+    if (fmu->s.time >= mpc_next_solve(fmu) - 1e-9 * fmu->s.v.mpc_period) solve(fmu, m, fmu->s.time);
+}
+
+double mpc_next_solve(const FmuInstance *fmu) { return fmu->s.internal.mpc.solved_at + fmu->s.v.mpc_period; }
+
 void mpc_pose(const FmuInstance *fmu, double pose[6][4]) {
     const MpcState *state = &fmu->s.internal.mpc;
-    for (int d = 0; d < DOF; d++) pose[d][0] = state->q[d], pose[d][1] = state->v[d], pose[d][2] = state->a[d], pose[d][3] = 0.0;
+    Motion x;
+    memcpy(&x, fmu->s.x, sizeof x);
+    for (int d = 0; d < DOF; d++) pose[d][0] = x.q[d], pose[d][1] = x.v[d], pose[d][2] = state->a[d], pose[d][3] = 0.0;
 }

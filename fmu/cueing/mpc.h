@@ -22,6 +22,14 @@ void mpc_free(FmuInstance *fmu, MpcData *data);
 void mpc_initialize(FmuInstance *fmu, MpcData *data);
 /* One communication step of h: the motion and the perception advanced, a solve where one is due. */
 fmi2Status mpc_do_step(FmuInstance *fmu, MpcData *data, double h);
+/* The perceived error (the platform's felt motion less the vehicle's through the otoliths and
+ * canals: specific force x, y, z, angular rate roll, pitch, yaw) now. */
+void mpc_perceived_error(FmuInstance *fmu, const MpcData *data, double y[6]);
+/* Model Exchange: the state's derivatives under the accelerations held since the last solve; at an
+ * event, a solve where one is due; the time the next is. */
+void mpc_derivatives(FmuInstance *fmu, const MpcData *data, double *dxdt);
+void mpc_time_event(FmuInstance *fmu, MpcData *data);
+double mpc_next_solve(const FmuInstance *fmu);
 /* The pose reference (value and first three derivatives per DOF, from neutral) into pose. */
 void mpc_pose(const FmuInstance *fmu, double pose[6][4]);
 

@@ -16,28 +16,33 @@
 #define MODEL_COMMUNICATION_STEP 1e-3
 #define MODEL_MAX_OUTPUT_DERIVATIVE_ORDER 2
 
-/* No state for the shared solvers: the filters are discretised exactly (model.c), their states in
- * ModelInternal. */
-#define MODEL_N_STATES 0
+/* The continuous state, fmu->s.x, by algorithm (Co-Simulation steps it itself, exactly: no shared
+ * solver; Model Exchange gives its derivatives):
+ *   classical: [0, 19) the filters' states, each channel's in a row: per translational axis x, y, z
+ *     (3: the break filter's state, position, velocity), per rotational axis roll, pitch, yaw (2),
+ *     per tilt axis pitch from x, roll from y (2: the low-passed specific force and its rate);
+ *     [19, 21) the tilt's roll and pitch;
+ *   MPC (mpc.c): [0, 6) the pose from neutral [m, rad], [6, 12) its rate, [12, 27) the perceived
+ *     error's filter states (otoliths x, y, z: 2 each; canals roll, pitch, yaw: 3 each). */
+#define MODEL_N_STATES 27
+#define MODEL_SHARED_SOLVER 0
+#define CUEING_TILT_STATE 19
+/* Model Exchange too (fmi2_me.c), the MPC's solves its time events. */
+#define MODEL_MODEL_EXCHANGE 1
+#define MODEL_TIME_EVENTS 1
 
 /* Meng 2010's neutral height (../shared/params/meng2010.toml), the default neutral.z. */
 #define CUEING_NEUTRAL_HEIGHT 1.689527733348906
 
-/* The model-predictive cueing's state (algorithm 2, mpc.c): the platform's motion it commands and
- * the perceived error's filter states. */
+/* The model-predictive cueing's discrete state (algorithm 2, mpc.c); its motion is fmu->s.x. */
 typedef struct {
-    double q[6], v[6], a[6]; /* the pose from neutral [m, rad], its rate, its acceleration until the next solve */
-    double xi[15];           /* perception of the error: otoliths x, y, z (2 states each), canals roll, pitch, yaw (3) */
-    double since;            /* [s] since the last solve */
-    double perceived[6];     /* the perceived error at the communication point */
+    double a[6];             /* the pose's acceleration until the next solve */
+    double since;            /* [s] since the last solve (Co-Simulation) */
+    double solved_at;        /* [s] the time of the last solve (Model Exchange: the next is a period on) */
     int iterations, softened;
 } MpcState;
 
 typedef struct {
-    /* the filters' states, each channel's in a row: per translational axis x, y, z (3: the break
-     * filter's state, position, velocity), per rotational axis roll, pitch, yaw (2), per tilt axis
-     * pitch from x, roll from y (2: the low-passed specific force and its rate) */
-    double x[19];
     double tilt[2][4];   /* roll and pitch of the tilt coordination: angle and its first three derivatives */
     double pose[6][4];   /* the pose's value and first three derivatives at the communication point */
     MpcState mpc;

@@ -144,6 +144,8 @@ fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
     return fmi2OK;
 }
 
+void model_time_event(FmuInstance *fmu) { (void)fmu; } /* the pulses are functions of time alone */
+
 double model_next_time_event(FmuInstance *fmu) {
     const double t = fmu->s.time;
     double next = INFINITY;

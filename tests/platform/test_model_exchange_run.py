@@ -1,8 +1,9 @@
 """A scene as one system of Model Exchange FMUs under one solver (`cosim run --me`,
 cosim.engine.monolithic): no coupling, so it agrees with the scene's co-simulation converged (at a
 16th of its step) within the oracle's windows: the pose to 1e-5 m and rad, the drive torques to 2 %
-of their own change through the start-up; a scene with an FMU that has no Model Exchange twin (the
-cueing), an SSP system, or Model Exchange in real time are one line each."""
+of their own change through the start-up, and so a vehicle's drive through the cueing; an SSP
+system or Model Exchange in real time are one line each (a user's FMU without Model Exchange:
+tests/platform/test_user_drives.py)."""
 
 from __future__ import annotations
 
@@ -40,14 +41,23 @@ def test_the_monolithic_run_agrees_with_the_converged_co_simulation(runs):
     assert any("Model Exchange" in remark for remark in me.report.remarks)
 
 
+def test_a_vehicles_drive_runs_as_one_system_too():
+    """The car drive's first 3 s (cruise into braking: the washout's tilt at its rate limit) with the
+    cueing as a Model Exchange FMU in the one system: the pose (the cue the platform gives) and the
+    torques as the converged co-simulation's, by the bounds above."""
+    scene = load_scene(ROOT / "examples/vehicle/car_drive.toml").changed({"scene.duration": 3.0})
+    converged = scene.changed({"scene.step": scene.step / 16, "coupling.startup_step": scene.control.startup_step / 16})
+    me, cs = cosim.simulate(scene, model_exchange=True), cosim.simulate(converged)
+    times = me["time"]
+    assert np.ptp(me["pose.pitch"]) > 0.04  # the braking's tilt is under way
+    for dof in POSE:
+        assert np.abs(me[f"pose.{dof}"] - np.interp(times, cs["time"], cs[f"pose.{dof}"])).max() < 1e-5, dof
+    for leg in LEGS:
+        reference = np.interp(times, cs["time"], cs[f"torque[{leg}]"])
+        assert np.abs(me[f"torque[{leg}]"] - reference).max() < 0.02 * np.ptp(reference), leg
+
+
 def test_what_cannot_run_as_model_exchange_is_one_line(tmp_path, capsys):
-    car = tmp_path / "car.toml"
-    car.write_text((ROOT / "examples/vehicle/car_drive.toml").read_text().replace(
-        'vehicle = "drive.csv"', f'vehicle = "{ROOT / "examples/vehicle/drive.csv"}"'))
-    assert main(["run", str(car), "--me", "--no-plots", "--out", str(tmp_path / "out")]) == 2
-    said = capsys.readouterr().err.strip().splitlines()
-    assert said == ["error: cueing: cueing.fmu is Co-Simulation only (no Model Exchange FMU of it): this system runs "
-                    "as co-simulation"]
     with pytest.raises(UsageError, match="not with real_time"):
         cosim.simulate("meng_eq35", model_exchange=True, real_time=1.0)
     assert main(["run", str(tmp_path / "x.ssp"), "--me"]) == 2

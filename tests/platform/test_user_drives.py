@@ -148,6 +148,18 @@ def test_a_users_servo_tracks_eq35_and_mixes_with_ours(fmus, tmp_path):
     assert "on legs 3" in report.text() and "sizing not checked for legs 3" in report.text()
 
 
+def test_a_users_co_simulation_fmu_is_one_line_for_a_model_exchange_run(fmus, tmp_path, capsys):
+    """`cosim run --me` needs every FMU as Model Exchange: a user's Co-Simulation servo is named in
+    one line, exit 2."""
+    (tmp_path / "rotary_servo.fmu").write_bytes(fmus["rotary_servo"].read_bytes())
+    drive = '[drive]\nkind = "pmsm"\n[drive.leg.3]\nfmu = "rotary_servo.fmu"'
+    scene = scene_file(tmp_path, drive, duration=0.1)
+    assert main(["run", str(scene), "--me", "--no-plots", "--out", str(tmp_path / "out")]) == 2
+    said = capsys.readouterr().err.strip().splitlines()
+    assert said == ["error: pmsm3: rotary_servo.fmu is Co-Simulation only (no Model Exchange FMU of it): this system "
+                    "runs as co-simulation"]
+
+
 def test_the_ssp_export_carries_the_users_fmu_and_runs_bit_for_bit(fmus, tmp_path, capsys):
     scene = load_scene(scene_file(tmp_path, drive_section(fmus["rotary_servo"], tmp_path, "pmsm"), motion=True,
                                   duration=0.5))

@@ -197,7 +197,7 @@ def scene_algorithm(scene: Scene) -> Algorithm:
 def model_exchange_plan(compiled: CompiledScene) -> tuple[Plan, str]:
     """The compiled scene's plan as one system of Model Exchange FMUs under one solver (`cosim run
     --me`): no coupling, the reference a co-simulation is judged against; a component without a
-    Model Exchange FMU (the cueing) is one line (UsageError)."""
+    Model Exchange FMU (a user's drive) is one line (UsageError)."""
     from ...engine.monolithic import RELATIVE_TOLERANCE, model_exchange_structure
     structure = model_exchange_structure(compiled.plan.structure)
     return (replace(compiled.plan, structure=structure, model_exchange=True),

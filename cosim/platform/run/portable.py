@@ -154,7 +154,7 @@ SC_RELATIVE_TOLERANCE = 1e-6
 def export_model_exchange(scene: Scene, ssp: Path, fmi2_warnings: bool = False) -> Exported:
     """The scene's system of Model Exchange FMUs as OMSimulator's strongly coupled system (its
     master integrates them as one by CVODE; no coupling, no step to measure), the outputs every
-    scene step. UsageError for a component without a Model Exchange FMU (the cueing)."""
+    scene step. UsageError for a component without a Model Exchange FMU (a user's drive)."""
     from ...engine import ParameterError
     from ...engine.monolithic import model_exchange_structure
     from ...engine.ssp import StronglyCoupled, write_ssp
