@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The FMUs under hostile use: builds the fuzz harnesses (FMI 2.0 and, through the FMI 3.0 layer,
-# FMI 3.0) and the thread test of every FMU (tests/fuzz/) under AddressSanitizer + UBSan and
-# ThreadSanitizer in build-fuzz/, then runs them.
+# The FMUs under hostile use: builds the fuzz harnesses (FMI 2.0, Co-Simulation and Model Exchange,
+# and, through the FMI 3.0 layer, FMI 3.0) and the thread test of every FMU (tests/fuzz/) under
+# AddressSanitizer + UBSan and ThreadSanitizer in build-fuzz/, then runs them.
 #   bash scripts/fuzz.sh          CI: seeds 1 and 2 (2 x 1000 sequences per FMU) and one new seed
 #                                 (1000 more, printed so a failure can be replayed)
 #   bash scripts/fuzz.sh long     100 000 sequences per FMU (seed 1)

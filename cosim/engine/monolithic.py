@@ -64,6 +64,7 @@ class MonolithicSystem:
         self.fmi_seconds = 0.0
         self._callbacks = []
         self.time = structure.experiment.start
+        self.first_event = math.inf  # the first time event after the start (set by the initial event iteration)
         offset = 0
         try:
             for component in structure.components:
@@ -131,7 +132,7 @@ class MonolithicSystem:
         self.propagate()
         for member in self.members.values():
             self._call(member, "fmi2ExitInitializationMode", member.fmu.exitInitializationMode)
-        self.event(enter=False)
+        self.first_event = self.event(enter=False)  # the initial event's iteration (each FMU in Event Mode)
 
     def _call(self, member: _Member, what: str, function, *args, **kwargs):
         start = time.perf_counter()
@@ -277,7 +278,7 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
     rows, failure = [], None
     try:
         t = structure.experiment.start
-        next_event = system.event(enter=False)
+        next_event = system.first_event
         x = system.states()
         holder = np.ascontiguousarray(x) if system.size else np.zeros(1)
 

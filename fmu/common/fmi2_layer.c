@@ -57,6 +57,12 @@ static int check_settable(FmuInstance *fmu, const char *call, int vr, double val
                       call, var->name);
             return 0;
         }
+        if (fmu->model_exchange && fmu->continuous_time_mode &&
+            !(var->causality == FMU_INPUT && var->variability == FMU_CONTINUOUS)) {
+            LOG_ERROR(fmu, "%s: '%s' is not a continuous input; it can be set in Event Mode, not in Continuous-Time "
+                      "Mode (fmi2EnterEventMode first)", call, var->name);
+            return 0;
+        }
     } else if (!(fmu->s.phase & (PHASE_INSTANTIATED | PHASE_INITIALIZATION))) {
         LOG_ERROR(fmu, "%s: illegal call sequence: '%s' cannot be set in state '%s'", call, var->name,
                   fmu_phase_name(fmu->s.phase));
@@ -254,7 +260,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
 #endif
     model_initialize(fmu);
     fmu->s.input_previous_valid = 0; /* the FMU's own extrapolation starts with the first step */
-    fmu->s.phase = PHASE_STEP_COMPLETE;
+    fmu->s.phase = PHASE_STEP_COMPLETE; /* Model Exchange: in Event Mode */
+    fmu->continuous_time_mode = 0;
     model_compute_outputs(fmu);
     fmu->outputs_stale = 0;
     if (!outputs_finite(fmu, "fmi2ExitInitializationMode")) {
@@ -412,14 +419,20 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* ------------------------------------------------------------------------------------------ */
 /* Co-simulation                                                                               */
 
+/* A Co-Simulation call on this instance, now? Logs why not (a Model Exchange instance has none). */
+static int cs_allowed(FmuInstance *fmu, const char *call, int phases) {
+    if (!fmu_allowed(fmu, call, phases)) return 0;
+    if (fmu->model_exchange) {
+        LOG_ERROR(fmu, "%s: a Co-Simulation call, and this instance is Model Exchange", call);
+        return 0;
+    }
+    return 1;
+}
+
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!fmu_allowed(fmu, "fmi2SetRealInputDerivatives", SET_PHASES)) return fmi2Error;
-    if (fmu->model_exchange) {
-        LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: a Co-Simulation call, and this instance is Model Exchange");
-        return fmi2Error;
-    }
+    if (!cs_allowed(fmu, "fmi2SetRealInputDerivatives", SET_PHASES)) return fmi2Error;
     if (nvr > 0 && (!vr || !order || !value)) {
         LOG_ERROR(fmu, "fmi2SetRealInputDerivatives: NULL array");
         return fmi2Error;
@@ -455,7 +468,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!fmu_allowed(fmu, "fmi2GetRealOutputDerivatives", PHASE_STEP_COMPLETE | PHASE_STEP_FAILED)) return fmi2Error;
+    if (!cs_allowed(fmu, "fmi2GetRealOutputDerivatives", PHASE_STEP_COMPLETE | PHASE_STEP_FAILED)) return fmi2Error;
 #if MODEL_MAX_OUTPUT_DERIVATIVE_ORDER > 0
     if (nvr > 0 && (!vr || !order || !value)) {
         LOG_ERROR(fmu, "fmi2GetRealOutputDerivatives: NULL array");
@@ -596,7 +609,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!fmu_allowed(fmu, "fmi2GetRealStatus", STATUS_PHASES)) return fmi2Error;
+    if (!cs_allowed(fmu, "fmi2GetRealStatus", STATUS_PHASES)) return fmi2Error;
     if (!value) { LOG_ERROR(fmu, "fmi2GetRealStatus: NULL value"); return fmi2Error; }
     if (s == fmi2LastSuccessfulTime) { *value = fmu->s.time; return fmi2OK; }
     LOG_ERROR(fmu, "fmi2GetRealStatus: status kind %d not provided", (int)s);
@@ -611,7 +624,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!fmu_allowed(fmu, "fmi2GetBooleanStatus", STATUS_PHASES)) return fmi2Error;
+    if (!cs_allowed(fmu, "fmi2GetBooleanStatus", STATUS_PHASES)) return fmi2Error;
     if (!value) { LOG_ERROR(fmu, "fmi2GetBooleanStatus: NULL value"); return fmi2Error; }
     if (s == fmi2Terminated) { *value = fmi2False; return fmi2OK; }
     LOG_ERROR(fmu, "fmi2GetBooleanStatus: status kind %d not provided", (int)s);

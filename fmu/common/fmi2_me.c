@@ -3,7 +3,8 @@
  * its derivatives (the model's model_derivatives, the right-hand side its Co-Simulation integrates
  * itself). The same instance life cycle, variables, FMU states and checks as fmi2_layer.c's;
  * after initialization an instance is in Event Mode or Continuous-Time Mode, both the layer's
- * PHASE_STEP_COMPLETE (the calls allowed in them differ only in what Model Exchange adds here).
+ * PHASE_STEP_COMPLETE, told apart by fmu->continuous_time_mode: the calls Model Exchange adds are
+ * allowed in the modes of the standard's state machine (FMI 2.0, section 3.2.3).
  * The shipped models have no state events as Model Exchange (a part with them, such as the PMSM
  * drive's switching inverter, is refused at initialization with its reason): zero event
  * indicators; a model with time events (MODEL_TIME_EVENTS: the trajectory's load pulses, the
@@ -17,16 +18,29 @@
 #if MODEL_MODEL_EXCHANGE
 
 #define ME_PHASES (PHASE_STEP_COMPLETE)
+enum { EVENT_MODE = 1, CONTINUOUS_TIME_MODE = 2, EITHER_MODE = 3 };
 
-/* A Model Exchange call on this instance, now? Logs why not. */
-static int me_allowed(FmuInstance *fmu, const char *call, int phases) {
+/* A Model Exchange call on this instance, now: in one of `phases`, and where that is after
+ * initialization, in one of `modes`? Logs why not. */
+static int me_allowed_in(FmuInstance *fmu, const char *call, int phases, int modes) {
     if (!fmu_allowed(fmu, call, phases)) return 0;
     if (!fmu->model_exchange) {
         LOG_ERROR(fmu, "%s: this instance is Co-Simulation (fmi2Instantiate with fmi2ModelExchange for Model "
                   "Exchange)", call);
         return 0;
     }
+    const int mode = fmu->continuous_time_mode ? CONTINUOUS_TIME_MODE : EVENT_MODE;
+    if (fmu->s.phase == PHASE_STEP_COMPLETE && !(modes & mode)) {
+        LOG_ERROR(fmu, "%s: not allowed in %s (FMI 2.0's Model Exchange state machine)", call,
+                  mode == EVENT_MODE ? "Event Mode (fmi2EnterContinuousTimeMode first)"
+                                     : "Continuous-Time Mode (fmi2EnterEventMode first)");
+        return 0;
+    }
     return 1;
+}
+
+static int me_allowed(FmuInstance *fmu, const char *call, int phases) {
+    return me_allowed_in(fmu, call, phases, EITHER_MODE);
 }
 
 static int array_fits(FmuInstance *fmu, const char *call, const void *array, size_t n, size_t expected) {
@@ -43,7 +57,7 @@ static int array_fits(FmuInstance *fmu, const char *call, const void *array, siz
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!me_allowed(fmu, "fmi2SetTime", PHASE_INITIALIZATION | ME_PHASES)) return fmi2Error;
+    if (!me_allowed(fmu, "fmi2SetTime", ME_PHASES)) return fmi2Error;
     if (!isfinite(time)) {
         LOG_ERROR(fmu, "fmi2SetTime: time %g is not finite", time);
         return fmi2Error;
@@ -56,7 +70,7 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!me_allowed(fmu, "fmi2SetContinuousStates", ME_PHASES)) return fmi2Error;
+    if (!me_allowed_in(fmu, "fmi2SetContinuousStates", ME_PHASES, CONTINUOUS_TIME_MODE)) return fmi2Error;
     if (!array_fits(fmu, "fmi2SetContinuousStates", x, nx, MODEL_N_STATES)) return fmi2Error;
     for (size_t k = 0; k < nx; k++)
         if (!isfinite(x[k])) {
@@ -78,7 +92,8 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!me_allowed(fmu, "fmi2GetNominalsOfContinuousStates", ANY_LIVE_PHASE)) return fmi2Error;
+    if (!me_allowed(fmu, "fmi2GetNominalsOfContinuousStates", PHASE_INSTANTIATED | ME_PHASES | PHASE_TERMINATED | PHASE_ERROR))
+        return fmi2Error;
     if (!array_fits(fmu, "fmi2GetNominalsOfContinuousStates", x_nominal, nx, MODEL_N_STATES)) return fmi2Error;
     for (size_t k = 0; k < nx; k++) x_nominal[k] = 1.0;
     return fmi2OK;
@@ -112,12 +127,15 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
 }
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
-    return me_allowed((FmuInstance *)c, "fmi2EnterEventMode", ME_PHASES) ? fmi2OK : fmi2Error;
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed(fmu, "fmi2EnterEventMode", ME_PHASES)) return fmi2Error;
+    fmu->continuous_time_mode = 0;
+    return fmi2OK;
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     FmuInstance *fmu = (FmuInstance *)c;
-    if (!me_allowed(fmu, "fmi2NewDiscreteStates", ME_PHASES)) return fmi2Error;
+    if (!me_allowed_in(fmu, "fmi2NewDiscreteStates", ME_PHASES, EVENT_MODE)) return fmi2Error;
     if (!info) {
         LOG_ERROR(fmu, "fmi2NewDiscreteStates: NULL event info");
         return fmi2Error;
@@ -133,14 +151,17 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    return me_allowed((FmuInstance *)c, "fmi2EnterContinuousTimeMode", ME_PHASES) ? fmi2OK : fmi2Error;
+    FmuInstance *fmu = (FmuInstance *)c;
+    if (!me_allowed_in(fmu, "fmi2EnterContinuousTimeMode", ME_PHASES, EVENT_MODE)) return fmi2Error;
+    fmu->continuous_time_mode = 1;
+    return fmi2OK;
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
     FmuInstance *fmu = (FmuInstance *)c;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!me_allowed(fmu, "fmi2CompletedIntegratorStep", ME_PHASES)) return fmi2Error;
+    if (!me_allowed_in(fmu, "fmi2CompletedIntegratorStep", ME_PHASES, CONTINUOUS_TIME_MODE)) return fmi2Error;
     if (!enterEventMode || !terminateSimulation) {
         LOG_ERROR(fmu, "fmi2CompletedIntegratorStep: NULL argument");
         return fmi2Error;

@@ -52,6 +52,7 @@ typedef struct FmuInstance {
     void *model_data;
     void (*free_model_data)(struct FmuInstance *fmu, void *data);
     int model_exchange;                    /* instantiated as fmi2ModelExchange (fmi2_me.c) */
+    int continuous_time_mode;              /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event Mode */
     int n_real_outputs;                    /* the Real outputs, checked finite after every step */
     int real_outputs[VR_COUNT];
 } FmuInstance;

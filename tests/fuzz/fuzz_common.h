@@ -8,8 +8,8 @@
  * Each sequence instantiates the model and makes up to M calls chosen at random, with hostile
  * arguments: value references in and out of range, NaN, infinities, huge and tiny numbers, NULL
  * arrays, step sizes of every sign and size, FMU states of its own, altered serialized bytes.
- * Every result is judged by an oracle built from the standard's Co-Simulation state machine (the set
- * of states the instance may be in after each call): a call the standard does not allow that returns
+ * Every result is judged by an oracle built from the standard's Co-Simulation and Model Exchange
+ * state machines (the set of states the instance may be in after each call): a call the standard does not allow that returns
  * OK, a Real output read as NaN or infinite with fmi2OK, or a call that takes longer than
  * HANG_SECONDS (an alarm re-armed after every call) is a violation, reported with the seed and the
  * sequence index, which replay it
@@ -68,11 +68,14 @@ static unsigned random_vr(void) {
     return pick(10) == 0 ? (unsigned)(pick(3) == 0 ? 0 : VR_COUNT + pick(100)) : (unsigned)(1 + pick(VR_COUNT - 1));
 }
 
-/* ---- the oracle: FMI 2.0 Co-Simulation states (a set: after an error the instance may be anywhere) ---- */
-enum { S_INSTANTIATED = 1, S_INIT = 2, S_STEP_COMPLETE = 4, S_STEP_FAILED = 8, S_TERMINATED = 16, S_ERROR = 32 };
-#define S_ANY (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
-#define S_GET (S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
-#define S_SET (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE)
+/* ---- the oracle: FMI 2.0 Co-Simulation and Model Exchange states (a set: after an error the
+ * instance may be anywhere); after initialization Co-Simulation is in Step Complete (or Failed),
+ * Model Exchange in Event Mode or Continuous-Time Mode ---- */
+enum { S_INSTANTIATED = 1, S_INIT = 2, S_STEP_COMPLETE = 4, S_STEP_FAILED = 8, S_TERMINATED = 16, S_ERROR = 32,
+       S_EVENT = 64, S_CONTINUOUS = 128 };
+#define S_ANY (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR | S_EVENT | S_CONTINUOUS)
+#define S_GET (S_INIT | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR | S_EVENT | S_CONTINUOUS)
+#define S_SET (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE | S_EVENT | S_CONTINUOUS)
 #define S_STATUS (S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED)
 
 static int possible;              /* the states the instance may be in */

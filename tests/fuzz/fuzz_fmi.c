@@ -1,8 +1,90 @@
 /* Random FMI 2.0 call sequences against one model (tests/fuzz/fuzz_common.h says how they are
  * judged and run): every FMI 2.0 Co-Simulation function with hostile arguments: value references in
  * and out of range, NaN, infinities, huge and tiny numbers, NULL arrays, step sizes of every sign
- * and size, FMU states of its own, altered serialized bytes. */
+ * and size, FMU states of its own, altered serialized bytes. A model with Model Exchange
+ * (MODEL_MODEL_EXCHANGE) is instantiated as that in half the sequences, which then make Model
+ * Exchange's calls (times, states of every size, event and continuous-time modes) in place of
+ * steps; each interface's own calls on the other's instance are never allowed. */
 #include "fuzz_common.h"
+
+static int model_exchange; /* this sequence's instance is Model Exchange */
+
+/* The states in which a call of one interface is allowed on this sequence's instance: none for
+ * the other interface's. */
+static int for_cs(int states) { return model_exchange ? 0 : states; }
+static int for_me(int states) { return model_exchange ? states : 0; }
+
+/* One of Model Exchange's calls (on a Co-Simulation instance: each is refused), by the FMI 2.0
+ * Model Exchange state machine; x: states to set, altered at random. */
+static void model_exchange_call(fmi2Component c, double *time) {
+#if !MODEL_MODEL_EXCHANGE /* a Co-Simulation-only model's binary has none of them */
+    (void)c, (void)time;
+#else
+    enum { N = MODEL_N_STATES > 0 ? MODEL_N_STATES : 1 };
+    double x[N], dx[N];
+    const size_t n = pick(10) ? (size_t)MODEL_N_STATES : (size_t)pick(N + 2); /* the wrong size now and then */
+    fmi2Status status;
+    switch (pick(10)) {
+    case 0:
+        *time += pick(8) ? 1e-3 * uniform() : hostile_real();
+        status = fmi2SetTime(c, *time);
+        judge("fmi2SetTime", status, for_me(S_EVENT | S_CONTINUOUS));
+        after(status, 0);
+        break;
+    case 1: {
+        for (int k = 0; k < N; k++) x[k] = 0.0;
+        fmi2GetContinuousStates(c, x, MODEL_N_STATES);
+        for (int k = 0; k < N; k++) x[k] = pick(4) ? x[k] * (1.0 + 1e-3 * (uniform() - 0.5)) : hostile_real();
+        status = fmi2SetContinuousStates(c, n <= (size_t)N ? x : NULL, n);
+        judge("fmi2SetContinuousStates", status, for_me(S_CONTINUOUS));
+        after(status, 0);
+        break;
+    }
+    case 2:
+        status = fmi2GetContinuousStates(c, pick(20) ? x : NULL, n <= (size_t)N ? n : (size_t)N);
+        judge("fmi2GetContinuousStates", status, for_me(S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR | S_INIT));
+        break;
+    case 3:
+        status = fmi2GetDerivatives(c, pick(20) ? dx : NULL, n <= (size_t)N ? n : (size_t)N);
+        judge("fmi2GetDerivatives", status, for_me(S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR));
+        if (status == fmi2OK)
+            for (size_t k = 0; k < n && k < (size_t)N; k++)
+                if (!isfinite(dx[k])) violation("fmi2GetDerivatives", "a derivative returned with fmi2OK is not finite");
+        break;
+    case 4:
+        status = pick(2) ? fmi2GetEventIndicators(c, dx, (size_t)pick(2))
+                         : fmi2GetNominalsOfContinuousStates(c, dx, n <= (size_t)N ? n : (size_t)N);
+        judge("fmi2GetEventIndicators/NominalsOfContinuousStates", status,
+              for_me(S_INSTANTIATED | S_INIT | S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR));
+        break;
+    case 5:
+        status = fmi2EnterEventMode(c);
+        judge("fmi2EnterEventMode", status, for_me(S_EVENT | S_CONTINUOUS));
+        after(status, S_EVENT);
+        break;
+    case 6: case 7: {
+        fmi2EventInfo info;
+        status = fmi2NewDiscreteStates(c, pick(20) ? &info : NULL);
+        judge("fmi2NewDiscreteStates", status, for_me(S_EVENT));
+        if (status == fmi2OK && info.nextEventTimeDefined && !(info.nextEventTime > *time))
+            violation("fmi2NewDiscreteStates", "the next time event is not after the time now");
+        after(status, 0);
+        break;
+    }
+    case 8:
+        status = fmi2EnterContinuousTimeMode(c);
+        judge("fmi2EnterContinuousTimeMode", status, for_me(S_EVENT));
+        after(status, S_CONTINUOUS);
+        break;
+    default: {
+        fmi2Boolean enter, terminate;
+        status = fmi2CompletedIntegratorStep(c, fmi2True, pick(20) ? &enter : NULL, &terminate);
+        judge("fmi2CompletedIntegratorStep", status, for_me(S_CONTINUOUS));
+        after(status, 0);
+    }
+    }
+#endif
+}
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {
@@ -10,11 +92,22 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     if (verbose) fprintf(stderr, "    log: %s\n", message);
 }
 
+/* Where setting these references may succeed: Model Exchange's Continuous-Time Mode takes
+ * continuous inputs only (its other variables in Event Mode). */
+static int settable_states(const fmi2ValueReference *vrs, size_t nvr) {
+    for (size_t i = 0; i < nvr; i++)
+        if (vrs[i] >= 1 && vrs[i] < VR_COUNT &&
+            !(fmu_variables[vrs[i]].causality == FMU_INPUT && fmu_variables[vrs[i]].variability == FMU_CONTINUOUS))
+            return S_SET & ~S_CONTINUOUS;
+    return S_SET;
+}
+
 /* ---- one sequence ---- */
 static void run_sequence(int max_calls) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-    fmi2Component c = fmi2Instantiate("fuzz", fmi2CoSimulation, MODEL_GUID, "", &callbacks, fmi2False,
-                                      pick(2) ? fmi2True : fmi2False);
+    model_exchange = MODEL_MODEL_EXCHANGE && pick(2);
+    fmi2Component c = fmi2Instantiate("fuzz", model_exchange ? fmi2ModelExchange : fmi2CoSimulation, MODEL_GUID, "",
+                                      &callbacks, fmi2False, pick(2) ? fmi2True : fmi2False);
     if (!c) { violation("fmi2Instantiate", "returned NULL for a valid GUID"); return; }
     possible = S_INSTANTIATED;
     fmi2FMUstate states[3] = {NULL, NULL, NULL};
@@ -41,12 +134,16 @@ static void run_sequence(int max_calls) {
         case 1: status = fmi2EnterInitializationMode(c); judge("fmi2EnterInitializationMode", status, S_INSTANTIATED);
             after(status, S_INIT); break;
         case 2: case 3: status = fmi2ExitInitializationMode(c); judge("fmi2ExitInitializationMode", status, S_INIT);
-            after(status, S_STEP_COMPLETE); time = 0.0; break;
+            after(status, model_exchange ? S_EVENT : S_STEP_COMPLETE); time = 0.0; break;
         case 4: case 5: case 6: {
+            if (model_exchange || pick(8) == 0) { /* Model Exchange's calls (on Co-Simulation: refused) */
+                model_exchange_call(c, &time);
+                break;
+            }
             const double h = pick(4) ? 1e-3 * (1 + pick(5)) : hostile_real();
             const double t = pick(8) ? time : hostile_real();
             status = fmi2DoStep(c, t, h, fmi2False);
-            judge("fmi2DoStep", status, S_STEP_COMPLETE);
+            judge("fmi2DoStep", status, for_cs(S_STEP_COMPLETE));
             if (status <= fmi2Warning) time += h;
             after(status, 0);
             break;
@@ -54,7 +151,7 @@ static void run_sequence(int max_calls) {
         case 7: case 8: {
             for (size_t i = 0; i < nvr; i++) reals[i] = (vrs[i] >= 1 && vrs[i] < VR_COUNT) ? value_for((int)vrs[i]) : hostile_real();
             status = fmi2SetReal(c, pick(20) ? vrs : NULL, nvr, pick(20) ? reals : NULL);
-            judge("fmi2SetReal", status, S_SET);
+            judge("fmi2SetReal", status, settable_states(vrs, nvr));
             after(status, 0);
             break;
         }
@@ -94,7 +191,7 @@ static void run_sequence(int max_calls) {
             fmi2Integer order[4];
             for (size_t i = 0; i < nvr; i++) { order[i] = 1 + pick(3) - (pick(10) == 0); reals[i] = hostile_real(); }
             status = fmi2SetRealInputDerivatives(c, pick(20) ? vrs : NULL, nvr, pick(20) ? order : NULL, reals);
-            judge("fmi2SetRealInputDerivatives", status, S_SET);
+            judge("fmi2SetRealInputDerivatives", status, for_cs(S_SET));
             after(status, 0);
             break;
         }
@@ -103,7 +200,7 @@ static void run_sequence(int max_calls) {
             fmi2Real out[4];
             for (size_t i = 0; i < nvr; i++) order[i] = pick(4);
             status = fmi2GetRealOutputDerivatives(c, vrs, nvr, order, out);
-            judge("fmi2GetRealOutputDerivatives", status, S_GET);
+            judge("fmi2GetRealOutputDerivatives", status, for_cs(S_GET));
             after(status, 0);
             break;
         }
@@ -155,12 +252,12 @@ static void run_sequence(int max_calls) {
             fmi2Boolean b;
             status = pick(2) ? fmi2GetRealStatus(c, fmi2LastSuccessfulTime, pick(10) ? &r : NULL)
                              : fmi2GetBooleanStatus(c, fmi2Terminated, pick(10) ? &b : NULL);
-            judge("fmi2GetReal/BooleanStatus", status, S_STATUS);
+            judge("fmi2GetReal/BooleanStatus", status, for_cs(S_STATUS));
             break;
         }
         default: {
             const int which = pick(4);
-            if (which == 0) { status = fmi2Terminate(c); judge("fmi2Terminate", status, S_STEP_COMPLETE | S_STEP_FAILED);
+            if (which == 0) { status = fmi2Terminate(c); judge("fmi2Terminate", status, S_STEP_COMPLETE | S_STEP_FAILED | S_EVENT | S_CONTINUOUS);
                 after(status, S_TERMINATED); }
             else if (which == 1) { status = fmi2Reset(c); judge("fmi2Reset", status, S_ANY); after(status, S_INSTANTIATED); }
             else {

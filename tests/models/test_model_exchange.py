@@ -160,6 +160,46 @@ def test_the_interfaces_refuse_each_others_calls(capsys):
     me.terminate(), me.freeInstance(), cs.terminate(), cs.freeInstance()
 
 
+def test_each_mode_takes_the_calls_the_standard_allows_in_it(capsys):
+    """FMI 2.0's Model Exchange state machine (section 3.2.3): after initialization an instance is
+    in Event Mode, where states are not set and no integrator step is completed; in Continuous-Time
+    Mode no discrete states are updated; the time is set in neither before initialization. Each
+    call out of its mode is fmi2Error with its reason, and the instance goes on in its mode."""
+    from fmpy.fmi1 import FMICallException
+    fmu, _ = instantiated("cueing", True)
+    x = np.zeros(27)
+    pointer, n = x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(x)
+    fmu.setupExperiment(startTime=0.0)
+    with pytest.raises(FMICallException):
+        fmu.setTime(0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.getContinuousStates(pointer, n)
+    event_mode = [lambda: fmu.setContinuousStates(pointer, n), fmu.completedIntegratorStep]
+    continuous_time_mode = [fmu.newDiscreteStates, fmu.enterContinuousTimeMode]
+    for call in event_mode:
+        with pytest.raises(FMICallException):
+            call()
+    fmu.enterEventMode()  # allowed in either mode
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    for call in continuous_time_mode:
+        with pytest.raises(FMICallException):
+            call()
+    fmu.setTime(1e-3)
+    fmu.setContinuousStates(pointer, n)
+    fmu.completedIntegratorStep()
+    fmu.enterEventMode()
+    fmu.newDiscreteStates()
+    log = capsys.readouterr().out
+    assert "fmi2SetTime: illegal call sequence: not allowed in state 'instantiated'" in log
+    assert "fmi2SetContinuousStates: not allowed in Event Mode (fmi2EnterContinuousTimeMode first)" in log
+    assert "fmi2CompletedIntegratorStep: not allowed in Event Mode" in log
+    assert "fmi2NewDiscreteStates: not allowed in Continuous-Time Mode (fmi2EnterEventMode first)" in log
+    assert "fmi2EnterContinuousTimeMode: not allowed in Continuous-Time Mode" in log
+    fmu.terminate(), fmu.freeInstance()
+
+
 def test_the_switching_inverter_is_refused_with_its_reason(capsys):
     from fmpy.fmi1 import FMICallException
     drive, vrs = instantiated("pmsm_drive", True)
