@@ -119,13 +119,36 @@ static int outputs_finite(FmuInstance *fmu, const char *call) {
     return 1;
 }
 
+/* The outputs computed for the state and inputs now; the lazy ones (MODEL_LAZY_OUTPUTS) wait for
+ * their first read. */
+static void outputs_computed(FmuInstance *fmu) {
+    model_compute_outputs(fmu);
+    fmu->outputs_stale = 0;
+    fmu->lazy_outputs_stale = 1;
+}
+
 /* Outputs recomputed if inputs or parameters changed; 0 (logged) when one is not finite. */
 static int refresh_outputs(FmuInstance *fmu, const char *call) {
     if (!fmu->outputs_stale) return 1;
     if (fmu->s.phase & PHASE_INITIALIZATION) model_initialize(fmu);
-    if (fmu->s.phase & (PHASE_INITIALIZATION | AFTER_INITIALIZATION)) model_compute_outputs(fmu);
+    if (fmu->s.phase & (PHASE_INITIALIZATION | AFTER_INITIALIZATION)) outputs_computed(fmu);
     fmu->outputs_stale = 0;
     return outputs_finite(fmu, call);
+}
+
+/* The lazy outputs computed where one of `vr` is among them and they are stale. */
+static void refresh_lazy_outputs(FmuInstance *fmu, const fmi2ValueReference vr[], size_t nvr) {
+#if MODEL_LAZY_OUTPUTS
+    if (!fmu->lazy_outputs_stale || !(fmu->s.phase & (PHASE_INITIALIZATION | AFTER_INITIALIZATION))) return;
+    for (size_t i = 0; i < nvr; i++)
+        if (vr[i] < VR_COUNT && model_output_is_lazy((int)vr[i])) {
+            model_compute_lazy_outputs(fmu);
+            fmu->lazy_outputs_stale = 0;
+            return;
+        }
+#else
+    (void)fmu, (void)vr, (void)nvr;
+#endif
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -262,8 +285,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     fmu->s.input_previous_valid = 0; /* the FMU's own extrapolation starts with the first step */
     fmu->s.phase = PHASE_STEP_COMPLETE; /* Model Exchange: in Event Mode */
     fmu->continuous_time_mode = 0;
-    model_compute_outputs(fmu);
-    fmu->outputs_stale = 0;
+    outputs_computed(fmu);
     if (!outputs_finite(fmu, "fmi2ExitInitializationMode")) {
         fmu->s.phase = PHASE_ERROR;
         return fmi2Error;
@@ -297,6 +319,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (!fmu_allowed(fmu, "fmi2GetReal", GET_PHASES)) return fmi2Error;
     if (nvr > 0 && (!vr || !value)) { LOG_ERROR(fmu, "fmi2GetReal: NULL array"); return fmi2Error; }
     if (!refresh_outputs(fmu, "fmi2GetReal")) return fmi2Error;
+    refresh_lazy_outputs(fmu, vr, nvr);
     int all_finite = 1;
     for (size_t i = 0; i < nvr; i++) {
 #if MODEL_MODEL_EXCHANGE
@@ -577,8 +600,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     fmu->s.v.solver_steps = fmu->s.solver.steps < INT_MAX ? (int)fmu->s.solver.steps : INT_MAX;
     fmu->s.v.solver_rejected = fmu->s.solver.rejected < INT_MAX ? (int)fmu->s.solver.rejected : INT_MAX;
 #endif
-    model_compute_outputs(fmu);
-    fmu->outputs_stale = 0;
+    outputs_computed(fmu);
     for (int k = 0; k < fmu->n_real_outputs; k++) {
         const int vr = fmu->real_outputs[k];
         if (!isfinite(*(double *)fmu_value_address(fmu, vr))) {

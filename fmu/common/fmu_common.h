@@ -52,6 +52,7 @@ typedef struct FmuInstance {
     void *model_data;
     void (*free_model_data)(struct FmuInstance *fmu, void *data);
     int model_exchange;                    /* instantiated as fmi2ModelExchange (fmi2_me.c) */
+    int lazy_outputs_stale;                /* MODEL_LAZY_OUTPUTS: not computed since the outputs were */
     int continuous_time_mode;              /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event Mode */
     int n_real_outputs;                    /* the Real outputs, checked finite after every step */
     int real_outputs[VR_COUNT];
@@ -73,6 +74,13 @@ void model_compute_outputs(FmuInstance *fmu);
 /* The derivative of the given order (1..MODEL_MAX_OUTPUT_DERIVATIVE_ORDER) of output `vr` with
  * respect to time at fmu->s.time (fmi2GetRealOutputDerivatives). */
 double model_output_derivative(FmuInstance *fmu, int vr, int order);
+#endif
+
+#if MODEL_LAZY_OUTPUTS
+/* Outputs computed when read (fmu_table.h): is vr one of them; compute them all for the state and
+ * inputs now (after model_compute_outputs). */
+int model_output_is_lazy(int vr);
+void model_compute_lazy_outputs(FmuInstance *fmu);
 #endif
 
 #if MODEL_MODEL_EXCHANGE

@@ -153,8 +153,10 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
         model_validate(fmu); /* model data back to the instance's own */
         return fmi2Error;
     }
-    /* the outputs are the snapshot's own: exactly what they were when the state was taken */
+    /* the outputs are the snapshot's own: exactly what they were when the state was taken (the
+     * lazy ones recomputed at their next read: the snapshot's may be from before) */
     fmu->outputs_stale = stored->tag.outputs_stale;
+    fmu->lazy_outputs_stale = 1;
     return fmi2OK;
 }
 

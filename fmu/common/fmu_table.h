@@ -95,6 +95,12 @@ typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's valu
 /* A model with continuous states integrates them in Co-Simulation by the shared solvers (ode.h,
  * FMU_SOLVER_VARIABLES in its table) unless it sets MODEL_SHARED_SOLVER 0 (it steps them itself:
  * the cueing's filters, discretised exactly). */
+/* Outputs computed when read (MODEL_LAZY_OUTPUTS 1): costly outputs that a master seldom reads
+ * (the mechanics' energies and powers) are computed at their first read after a step, not at
+ * every step (the model's model_output_is_lazy and model_compute_lazy_outputs, fmu_common.h). */
+#ifndef MODEL_LAZY_OUTPUTS
+#define MODEL_LAZY_OUTPUTS 0
+#endif
 #ifndef MODEL_SHARED_SOLVER
 #define MODEL_SHARED_SOLVER (MODEL_N_STATES > 0)
 #endif

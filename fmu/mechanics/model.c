@@ -194,10 +194,9 @@ void model_compute_outputs(FmuInstance *fmu) {
     const Platform *p = &fmu->s.internal.platform;
     const double *x = fmu->s.x, t = fmu->s.time;
     LegGeometry legs[PLATFORM_LEGS];
-    double torque[6], force[6], wrench[6], dxdt[MODEL_N_STATES], pose_ref[6], length_ref[6], R[9], euler[3];
+    double torque[6], force[6], wrench[6], pose_ref[6], length_ref[6], R[9], euler[3];
     double pose_ref_rate[6], x_ref[PLATFORM_STATES];
     LegGeometry legs_ref[PLATFORM_LEGS];
-    PlatformDiagnostics d;
     platform_legs(p, x, legs);
     for (int i = 0; i < 6; i++) {
         pose_ref[i] = fmu_input_at(fmu, VR_POSE_REF[i], t);
@@ -224,23 +223,44 @@ void model_compute_outputs(FmuInstance *fmu) {
     v->twist_wx = x[10]; v->twist_wy = x[11]; v->twist_wz = x[12];
     PlatformDriveSlopes slopes;
     inputs_at(fmu, t, x, torque, force, &slopes, wrench);
+    ModelInternal *in = &fmu->s.internal;
+    memcpy(in->output_torque, torque, sizeof torque), memcpy(in->output_force, force, sizeof force);
+    memcpy(in->output_wrench, wrench, sizeof wrench), in->output_slopes = slopes;
     double torque_applied[PLATFORM_LEGS], force_applied[PLATFORM_LEGS];
     platform_applied_efforts(p, legs, torque, force, &slopes, torque_applied, force_applied);
     for (int i = 0; i < PLATFORM_LEGS; i++) {
         *fmu_real(fmu, VR_TORQUE_APPLIED[i]) = torque_applied[i];
         *fmu_real(fmu, VR_FORCE_APPLIED[i]) = force_applied[i];
     }
-    if (platform_derivatives(p, x, torque, force, &slopes, wrench, dxdt, &d) != 0) d.drive_power = NAN;
+    v->energy_drive = x[E_DRIVE];
+    v->energy_transmission_loss = x[E_TRANSMISSION];
+    v->energy_friction_loss = x[E_FRICTION];
+    v->energy_load = x[E_LOAD];
+}
+
+/* The energies and powers now: an evaluation of the dynamics of their own, so computed when read
+ * (MODEL_LAZY_OUTPUTS): a master that reads the pose and the legs every step does not pay for them.
+ * The inputs are those the other outputs were computed with (a step's input derivatives are spent
+ * by the time of the read). */
+int model_output_is_lazy(int vr) {
+    return vr == VR_energy_kinetic || vr == VR_energy_potential || vr == VR_power_drive ||
+           vr == VR_power_transmission_loss || vr == VR_power_friction_loss || vr == VR_power_load;
+}
+
+void model_compute_lazy_outputs(FmuInstance *fmu) {
+    ModelVariables *v = &fmu->s.v;
+    const ModelInternal *in = &fmu->s.internal;
+    double dxdt[MODEL_N_STATES];
+    PlatformDiagnostics d;
+    if (platform_derivatives(&in->platform, fmu->s.x, in->output_torque, in->output_force, &in->output_slopes,
+                             in->output_wrench, dxdt, &d) != 0)
+        d.drive_power = NAN;
     v->energy_kinetic = d.kinetic;
     v->energy_potential = d.potential;
     v->power_drive = d.drive_power;
     v->power_transmission_loss = d.transmission_loss;
     v->power_friction_loss = d.friction_loss;
     v->power_load = d.load_power;
-    v->energy_drive = x[E_DRIVE];
-    v->energy_transmission_loss = x[E_TRANSMISSION];
-    v->energy_friction_loss = x[E_FRICTION];
-    v->energy_load = x[E_LOAD];
 }
 
 fmi2Status model_validate(FmuInstance *fmu) {

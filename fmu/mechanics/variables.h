@@ -18,12 +18,18 @@
 #define MODEL_N_STATES 17
 /* Model Exchange too (fmi2_me.c): the importer's solver integrates these states. */
 #define MODEL_MODEL_EXCHANGE 1
+/* The energies and powers (an evaluation of the dynamics of their own) computed when read. */
+#define MODEL_LAZY_OUTPUTS 1
 
 typedef struct {
     Platform platform;                 /* geometry and mass properties, set at initialization */
     int out_of_stroke[PLATFORM_LEGS];  /* reported, so a warning is logged once per excursion */
     int past_joint_limit[PLATFORM_LEGS];
     double neutral_axis[PLATFORM_LEGS][3]; /* leg axes at the neutral pose, for joint angles */
+    /* the inputs as the outputs were computed with them (a step's extrapolated inputs at its end),
+     * which the energies and powers, computed when read, take too */
+    double output_torque[PLATFORM_LEGS], output_force[PLATFORM_LEGS], output_wrench[6];
+    PlatformDriveSlopes output_slopes;
 } ModelInternal;
 
 /* One leg's ports; i is the leg number 1..6. */

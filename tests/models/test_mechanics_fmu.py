@@ -203,6 +203,39 @@ def test_energy_balance_with_drives_friction_and_load(make_mechanics, dll):
     assert (e1 - e0) == pytest.approx(supplied, abs=1e-6 * max(flowed, abs(e1 - e0)))
 
 
+def test_the_energies_are_computed_when_read_as_if_every_step(make_mechanics, dll):
+    """The energies and powers (an evaluation of the dynamics of their own) are computed at their
+    first read after a step (MODEL_LAZY_OUTPUTS): an instance read every step and one read every
+    tenth agree bit for bit where both read, after inputs changed since the step, and after a state
+    restored from earlier; and a read after a step with input derivatives (spent by the step) sees
+    the inputs the other outputs saw: power.drive is the applied torques times the motor speeds."""
+    hold = hold_torques(dll, Core(dll).neutral_pose)
+    names = ["energy.kinetic", "energy.potential", "power.drive", "power.transmission_loss", "power.friction_loss",
+             "power.load"]
+    every, tenth = make_mechanics({}, name="every"), make_mechanics({}, name="tenth")
+    torques = [f"leg[{i}].torque" for i in range(1, 7)]
+    groups = [m.real_group(torques) for m in (every, tenth)]
+    for k in range(60):
+        phase = 2 * np.pi * 3 * k * 1e-3 + np.arange(6)
+        for m, group in zip((every, tenth), groups):
+            group.write(hold + 2.0 * np.sin(phase))
+            m.set_input_derivatives(torques, 2.0 * 2 * np.pi * 3 * np.cos(phase))
+        every.do_step(1e-3), tenth.do_step(1e-3)
+        seen = [every.get(n) for n in names]
+        applied = sum(every.get(f"leg[{i}].torque_applied") * every.get(f"leg[{i}].speed") for i in range(1, 7))
+        assert seen[2] == pytest.approx(applied, rel=1e-12, abs=1e-9), k
+        if k == 20:
+            state, then = tenth.get_state(), seen
+        if k % 10 == 9:
+            assert [tenth.get(n) for n in names] == seen, k
+    assert every.get("power.drive") != then[2]
+    for group in groups:
+        group.write(hold * 1.1)
+    assert [tenth.get(n) for n in names] == [every.get(n) for n in names]
+    tenth.set_state(state)
+    assert [tenth.get(n) for n in names] == then
+
+
 def test_round_trip_through_the_inverse_model(make_mechanics, dll):
     """Torques from the inverse model for a smooth 6-DOF trajectory (Eq 35 scaled to 1/10),
     fed to the FMU with their time derivatives (first-order hold), reproduce the trajectory: after
