@@ -20,6 +20,42 @@ endif()
 
 # add_fmu(<name> [SOURCE_DIR <dir>] [OUTPUT_DIR <dir>]): the model folder defaults to fmu/<name>,
 # the output folder to build/fmus (the shipped FMUs); test FMUs live elsewhere.
+# fmu_package(<target> <fmu_file> <stage> <platform> <binary_target> [FLAGS ...] [EXTRA_SOURCES ...]
+#             [WIN64_DLL <dll> WIN64_DIR <folder>]): one FMU archive of the model add_fmu builds
+# (its name, model_dir, shipped_sources, shipped_files and win64 from there): <stage> filled with the
+# description model_description.c writes (with FLAGS: --fmi3, --me), <binary_target>'s library under
+# binaries/<platform> (and the win64 DLL under binaries/<WIN64_DIR> where the cross build is on),
+# the sources it is built from, zipped into <fmu_file>; the target <target> builds it.
+function(fmu_package target fmu_file stage platform binary_target)
+  cmake_parse_arguments(PKG "" "WIN64_DLL;WIN64_DIR" "FLAGS;EXTRA_SOURCES" ${ARGN})
+  set(win64_commands "")
+  set(win64_depends "")
+  if(win64)
+    set(win64_commands COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/${PKG_WIN64_DIR}"
+                       COMMAND ${CMAKE_COMMAND} -E copy "${PKG_WIN64_DLL}" "${stage}/binaries/${PKG_WIN64_DIR}/")
+    set(win64_depends win64 "${PKG_WIN64_DLL}")
+  endif()
+  get_filename_component(folder "${fmu_file}" DIRECTORY)
+  add_custom_command(
+    OUTPUT "${fmu_file}"
+    COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage}"
+    COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/${platform}" "${stage}/sources"
+            "${stage}/documentation" "${folder}"
+    COMMAND $<TARGET_FILE:${name}_model_description> ${PKG_FLAGS} "${stage}" "${model_dir}/doc.html"
+            ${shipped_sources} ${PKG_EXTRA_SOURCES}
+    COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${binary_target}> "${stage}/binaries/${platform}/"
+    ${win64_commands}
+    COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} ${PKG_EXTRA_SOURCES} "${stage}/sources/"
+    COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_file}"
+    COMMAND ${CMAKE_COMMAND} -E chdir "${stage}" ${CMAKE_COMMAND} -E tar cf "${fmu_file}" --format=zip
+            modelDescription.xml binaries sources documentation
+    DEPENDS ${binary_target} ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
+            ${PKG_EXTRA_SOURCES} ${win64_depends}
+    COMMENT "Packaging ${fmu_file}"
+    VERBATIM)
+  add_custom_target(${target} ALL DEPENDS "${fmu_file}")
+endfunction()
+
 function(add_fmu name)
   cmake_parse_arguments(ARG "" "SOURCE_DIR;OUTPUT_DIR" "" ${ARGN})
   set(model_dir "${CMAKE_SOURCE_DIR}/fmu/${name}")
@@ -123,115 +159,36 @@ function(add_fmu name)
     target_link_libraries(${name}_model_description PRIVATE m)
   endif()
 
-  # The win64 binary of a shipped FMU, from the cross build (CMakeLists.txt: COSIM_WIN64).
-  set(win64_commands "")
-  set(win64_depends "")
-  if(TARGET win64 AND NOT ARG_OUTPUT_DIR)
-    set(win64_commands COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/win64"
-                       COMMAND ${CMAKE_COMMAND} -E copy "${WIN64_BINARY_DIR}/${name}.dll" "${stage}/binaries/win64/")
-    set(win64_depends win64 "${WIN64_BINARY_DIR}/${name}.dll")
-  endif()
-
   # What goes into sources/: everything the binary is compiled from, flat.
   set(shipped_sources ${model_sources} ${FMU_COMMON_SOURCES})
   set(shipped_files ${shipped_sources} ${model_headers} ${FMU_COMMON_HEADERS} "${generated_dir}/model_guid.h")
+  # The win64 binaries of a shipped FMU come from the cross build (CMakeLists.txt: COSIM_WIN64).
+  set(win64 OFF)
+  if(TARGET win64 AND NOT ARG_OUTPUT_DIR)
+    set(win64 ON)
+  endif()
 
-  add_custom_command(
-    OUTPUT "${fmu_file}"
-    COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage}"
-    COMMAND ${CMAKE_COMMAND} -E make_directory "${stage}/binaries/${FMU_PLATFORM}" "${stage}/sources"
-            "${stage}/documentation" "${output_dir}"
-    COMMAND $<TARGET_FILE:${name}_model_description> "${stage}" "${model_dir}/doc.html" ${shipped_sources}
-    COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage}/binaries/${FMU_PLATFORM}/"
-    ${win64_commands}
-    COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage}/sources/"
-    COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_file}"
-    COMMAND ${CMAKE_COMMAND} -E chdir "${stage}" ${CMAKE_COMMAND} -E tar cf "${fmu_file}" --format=zip
-            modelDescription.xml binaries sources documentation
-    DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files} ${win64_depends}
-    COMMENT "Packaging ${fmu_file}"
-    VERBATIM)
-  add_custom_target(${name}_fmu ALL DEPENDS "${fmu_file}")
-
+  # The Co-Simulation FMU (FMI 2.0)
+  fmu_package(${name}_fmu "${fmu_file}" "${stage}" ${FMU_PLATFORM} ${name}
+              WIN64_DLL "${WIN64_BINARY_DIR}/${name}.dll" WIN64_DIR win64)
 
   # The FMI 3.0 FMU: build/fmus3/<name>.fmu, binaries/x86_64-linux (and x86_64-windows from the cross build)
   if(fmi3)
-    set(stage3 "${CMAKE_BINARY_DIR}/stage3/${name}")
-    set(fmu3_file "${CMAKE_BINARY_DIR}/fmus3/${name}.fmu")
-    set(win64_commands3 "")
-    set(win64_depends3 "")
-    if(TARGET win64)
-      set(win64_commands3 COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3}/binaries/x86_64-windows"
-                          COMMAND ${CMAKE_COMMAND} -E copy "${WIN64_BINARY_DIR}/fmi3/${name}.dll"
-                                  "${stage3}/binaries/x86_64-windows/")
-      set(win64_depends3 win64 "${WIN64_BINARY_DIR}/fmi3/${name}.dll")
-    endif()
-    add_custom_command(
-      OUTPUT "${fmu3_file}"
-      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage3}"
-      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3}/binaries/x86_64-linux" "${stage3}/sources"
-              "${stage3}/documentation" "${CMAKE_BINARY_DIR}/fmus3"
-      COMMAND $<TARGET_FILE:${name}_model_description> --fmi3 "${stage3}" "${model_dir}/doc.html"
-              ${shipped_sources} "${FMU_COMMON_DIR}/fmi3_layer.c"
-      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}_fmi3> "${stage3}/binaries/x86_64-linux/"
-      ${win64_commands3}
-      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${FMU_COMMON_DIR}/fmi3_layer.c" "${stage3}/sources/"
-      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu3_file}"
-      COMMAND ${CMAKE_COMMAND} -E chdir "${stage3}" ${CMAKE_COMMAND} -E tar cf "${fmu3_file}" --format=zip
-              modelDescription.xml binaries sources documentation
-      DEPENDS ${name}_fmi3 ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
-              "${FMU_COMMON_DIR}/fmi3_layer.c" ${win64_depends3}
-      COMMENT "Packaging ${fmu3_file}"
-      VERBATIM)
-    add_custom_target(${name}_fmu3 ALL DEPENDS "${fmu3_file}")
+    fmu_package(${name}_fmu3 "${CMAKE_BINARY_DIR}/fmus3/${name}.fmu" "${CMAKE_BINARY_DIR}/stage3/${name}"
+                x86_64-linux ${name}_fmi3 FLAGS --fmi3 EXTRA_SOURCES "${FMU_COMMON_DIR}/fmi3_layer.c"
+                WIN64_DLL "${WIN64_BINARY_DIR}/fmi3/${name}.dll" WIN64_DIR x86_64-windows)
   endif()
 
-  # The Model Exchange FMU of a model that offers it (MODEL_MODEL_EXCHANGE 1 in its variables.h):
-  # build/fmus_me/<name>.fmu, the same binaries (they carry both interfaces, fmi2_me.c), the
-  # modelDescription.xml of Model Exchange, the Co-Simulation FMU unchanged.
+  # The Model Exchange FMUs of a model that offers it (MODEL_MODEL_EXCHANGE 1 in its variables.h):
+  # build/fmus_me/<name>.fmu and, FMI 3.0's, build/fmus3_me/<name>.fmu: the same binaries (they
+  # carry both interfaces, fmi2_me.c), the modelDescription.xml of Model Exchange.
   file(STRINGS "${model_dir}/variables.h" model_exchange REGEX "^#define MODEL_MODEL_EXCHANGE 1")
   if(model_exchange AND NOT ARG_OUTPUT_DIR)
-    set(stage_me "${CMAKE_BINARY_DIR}/stage_me/${name}")
-    set(fmu_me_file "${CMAKE_BINARY_DIR}/fmus_me/${name}.fmu")
-    string(REPLACE "${stage}" "${stage_me}" win64_commands_me "${win64_commands}")
-    add_custom_command(
-      OUTPUT "${fmu_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage_me}"
-      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage_me}/binaries/${FMU_PLATFORM}" "${stage_me}/sources"
-              "${stage_me}/documentation" "${CMAKE_BINARY_DIR}/fmus_me"
-      COMMAND $<TARGET_FILE:${name}_model_description> --me "${stage_me}" "${model_dir}/doc.html" ${shipped_sources}
-      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}> "${stage_me}/binaries/${FMU_PLATFORM}/"
-      ${win64_commands_me}
-      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${stage_me}/sources/"
-      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E chdir "${stage_me}" ${CMAKE_COMMAND} -E tar cf "${fmu_me_file}" --format=zip
-              modelDescription.xml binaries sources documentation
-      DEPENDS ${name} ${name}_model_description "${model_dir}/doc.html" ${shipped_files} ${win64_depends}
-      COMMENT "Packaging ${fmu_me_file}"
-      VERBATIM)
-    add_custom_target(${name}_fmu_me ALL DEPENDS "${fmu_me_file}")
+    fmu_package(${name}_fmu_me "${CMAKE_BINARY_DIR}/fmus_me/${name}.fmu" "${CMAKE_BINARY_DIR}/stage_me/${name}"
+                ${FMU_PLATFORM} ${name} FLAGS --me WIN64_DLL "${WIN64_BINARY_DIR}/${name}.dll" WIN64_DIR win64)
+    fmu_package(${name}_fmu3_me "${CMAKE_BINARY_DIR}/fmus3_me/${name}.fmu" "${CMAKE_BINARY_DIR}/stage3_me/${name}"
+                x86_64-linux ${name}_fmi3 FLAGS --fmi3 --me EXTRA_SOURCES "${FMU_COMMON_DIR}/fmi3_layer.c"
+                WIN64_DLL "${WIN64_BINARY_DIR}/fmi3/${name}.dll" WIN64_DIR x86_64-windows)
     set_property(GLOBAL APPEND PROPERTY COSIM_ME_MODELS ${name})
-    # and FMI 3.0's: build/fmus3_me/<name>.fmu, the FMI 3.0 binaries
-    set(stage3_me "${CMAKE_BINARY_DIR}/stage3_me/${name}")
-    set(fmu3_me_file "${CMAKE_BINARY_DIR}/fmus3_me/${name}.fmu")
-    string(REPLACE "${stage3}" "${stage3_me}" win64_commands3_me "${win64_commands3}")
-    add_custom_command(
-      OUTPUT "${fmu3_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E rm -rf "${stage3_me}"
-      COMMAND ${CMAKE_COMMAND} -E make_directory "${stage3_me}/binaries/x86_64-linux" "${stage3_me}/sources"
-              "${stage3_me}/documentation" "${CMAKE_BINARY_DIR}/fmus3_me"
-      COMMAND $<TARGET_FILE:${name}_model_description> --fmi3 --me "${stage3_me}" "${model_dir}/doc.html"
-              ${shipped_sources} "${FMU_COMMON_DIR}/fmi3_layer.c"
-      COMMAND ${CMAKE_COMMAND} -E copy $<TARGET_FILE:${name}_fmi3> "${stage3_me}/binaries/x86_64-linux/"
-      ${win64_commands3_me}
-      COMMAND ${CMAKE_COMMAND} -E copy ${shipped_files} "${FMU_COMMON_DIR}/fmi3_layer.c" "${stage3_me}/sources/"
-      COMMAND ${CMAKE_COMMAND} -E rm -f "${fmu3_me_file}"
-      COMMAND ${CMAKE_COMMAND} -E chdir "${stage3_me}" ${CMAKE_COMMAND} -E tar cf "${fmu3_me_file}" --format=zip
-              modelDescription.xml binaries sources documentation
-      DEPENDS ${name}_fmi3 ${name}_model_description "${model_dir}/doc.html" ${shipped_files}
-              "${FMU_COMMON_DIR}/fmi3_layer.c" ${win64_depends3}
-      COMMENT "Packaging ${fmu3_me_file}"
-      VERBATIM)
-    add_custom_target(${name}_fmu3_me ALL DEPENDS "${fmu3_me_file}")
   endif()
 endfunction()
