@@ -72,8 +72,19 @@ def loaded(fmu_path: str | Path) -> tuple[object, Path]:
     status = path.stat()
     key = (str(path), status.st_size, status.st_mtime_ns)
     if key not in _LOADED:
-        _LOADED[key] = (fmi2_kinds(read_model_description(str(path))), Path(extract(str(path))))
+        _LOADED[key] = (fmi2_kinds(read_model_description(str(path))), Path(extract(str(path), include=_runs)))
     return _LOADED[key]
+
+
+def _runs(member: str) -> bool:
+    """Whether an archive member is one an instance can use here: everything but the sources, the
+    documentation and other platforms' binaries (a third of an FMU's extraction time, whose binaries
+    for other platforms and sources are most of its bytes)."""
+    from fmpy import platform, platform_tuple
+    top, _, rest = member.partition("/")
+    if top in ("sources", "documentation"):
+        return False
+    return top != "binaries" or rest.split("/")[0] in ("", platform, platform_tuple)
 
 
 _FMI3_KINDS = {"Float64": "Real", "Float32": "Real", **{k: "Integer" for k in (

@@ -1,6 +1,7 @@
 """Results as files: the .mat writer (no scipy on the run's path) gives what scipy reads back bit
 for bit, one column vector per result column under a MATLAB-safe name; the CSV round-trips every
-value (17 significant digits)."""
+value (17 significant digits) and is, byte for byte, C's %.17g: the writer's own conversion
+(cosim/engine/kernel/csv.c) where it can go wrong too (next to powers of ten, ties, carries)."""
 
 from __future__ import annotations
 
@@ -49,3 +50,32 @@ def test_the_csv_is_printf_17g_row_by_row_whatever_the_threads(tmp_path):
         expected = "time,a,b\n" + "".join(",".join("nan" if np.isnan(v) else "%.17g" % v for v in row) + "\n"
                                             for row in r.tolist())
         assert (tmp_path / "r.csv").read_text() == expected, rows
+
+
+def _hard_values(rng: np.random.Generator) -> np.ndarray:
+    """Values where a 17-digit conversion can go wrong: one ulp either side of every power of ten in
+    its range and beyond, exact binary fractions (decimal ties), large integers, random bit patterns,
+    every decade from 1e-32 to 1e20, the smallest and largest doubles, signed zeros and infinities."""
+    powers = 10.0 ** np.arange(-32, 21)
+    return np.concatenate([
+        powers, np.nextafter(powers, np.inf), np.nextafter(powers, 0), np.nextafter(-powers, -np.inf),
+        rng.integers(-10**6, 10**6, 20000) / 2.0 ** rng.integers(1, 60, 20000),
+        rng.integers(-10**17, 10**17, 5000).astype(float),
+        rng.integers(0, 2**63, 20000, dtype=np.uint64).view(np.float64),
+        10 ** rng.uniform(-32, 20, 20000) * rng.choice([-1.0, 1.0], 20000),
+        [0.0, -0.0, np.inf, -np.inf, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, 0.1, 0.3, 2.5,
+         9.9999999999999998e16, 99999999999999984.0, 0.99999999999999994, 9.9999999999999995e-5]])
+
+
+def test_the_csv_conversion_is_printf_17g_where_it_can_go_wrong(tmp_path):
+    values = _hard_values(np.random.default_rng(11))
+    values = values[~np.isnan(values)]
+    r = np.zeros(len(values), dtype=[("time", float), ("value", float)])
+    r["time"], r["value"] = np.arange(len(values)), values
+    write_csv(r, tmp_path / "r.csv")
+    written = (tmp_path / "r.csv").read_text().splitlines()[1:]
+    expected = [f"{t:.17g},{v:.17g}" for t, v in r.tolist()]
+    wrong = [(e, w) for e, w in zip(expected, written) if e != w]
+    assert len(written) == len(values) and not wrong, wrong[:5]
+    finite = np.isfinite(values)
+    np.testing.assert_array_equal(np.array([float(w.split(",")[1]) for w in written])[finite], values[finite])
