@@ -10,6 +10,12 @@ set(FMU_COMMON_HEADERS "${FMU_COMMON_DIR}/fmu_common.h" "${FMU_COMMON_DIR}/fmu_t
                        "${FMU_COMMON_DIR}/ode.h" "${FMU_COMMON_DIR}/struct_layout.h"
                        "${FMU_COMMON_DIR}/table.h")
 
+# Link-time optimization where the toolchain has it: the common layer's small functions (an input
+# at a time, a variable's address) inlined into the models' steps; the same arithmetic, bit for bit
+# (tests/models/test_oracle.py), at about a tenth less time a step.
+include(CheckIPOSupported)
+check_ipo_supported(RESULT FMU_LINK_TIME_OPTIMIZATION LANGUAGES C)
+
 if(CMAKE_SYSTEM_NAME STREQUAL "Linux")
   set(FMU_PLATFORM linux64)
 elseif(CMAKE_SYSTEM_NAME STREQUAL "Darwin")
@@ -93,7 +99,7 @@ function(add_fmu name)
 
   add_library(${name} SHARED ${model_sources} ${FMU_COMMON_SOURCES})
   target_include_directories(${name} PRIVATE ${include_dirs})
-  set_target_properties(${name} PROPERTIES PREFIX "")
+  set_target_properties(${name} PROPERTIES PREFIX "" INTERPROCEDURAL_OPTIMIZATION ${FMU_LINK_TIME_OPTIMIZATION})
   if(NOT WIN32)
     target_link_libraries(${name} PRIVATE m)
   endif()
@@ -104,6 +110,7 @@ function(add_fmu name)
     add_library(${name}_fmi3 SHARED ${model_sources} ${FMU_COMMON_SOURCES} "${FMU_COMMON_DIR}/fmi3_layer.c")
     target_include_directories(${name}_fmi3 PRIVATE ${include_dirs})
     set_target_properties(${name}_fmi3 PROPERTIES PREFIX "" OUTPUT_NAME ${name}
+                          INTERPROCEDURAL_OPTIMIZATION ${FMU_LINK_TIME_OPTIMIZATION}
                           LIBRARY_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3"
                           RUNTIME_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3"
                           ARCHIVE_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/fmi3")  # a DLL's import library too

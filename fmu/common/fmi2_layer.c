@@ -227,9 +227,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     fmu->model_exchange = fmuType == fmi2ModelExchange;
     fmu->log_errors = 1; /* errors and returned warnings are always reported; the rest only with logging on */
     fmu->log_warnings = fmu->log_events = fmu->log_all = loggingOn;
-    for (int vr = 1; vr < VR_COUNT; vr++)
-        if (fmu_variables[vr].causality == FMU_OUTPUT && fmu_variables[vr].type == FMU_REAL)
-            fmu->real_outputs[fmu->n_real_outputs++] = vr;
+    for (int vr = 1; vr < VR_COUNT; vr++) {
+        if (fmu_variables[vr].type != FMU_REAL) continue;
+        if (fmu_variables[vr].causality == FMU_OUTPUT) fmu->real_outputs[fmu->n_real_outputs++] = vr;
+        if (fmu_variables[vr].causality == FMU_INPUT) fmu->real_inputs[fmu->n_real_inputs++] = vr;
+    }
     reset_to_start(fmu);
     return fmu;
 }
@@ -521,7 +523,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 }
 
 /* The part of the snapshot a step writes: its time, the variables, the ODE state, the solver's and
- * the model's memory. */
+ * the model's memory, and of the inputs (only Real inputs have derivatives) the derivatives and
+ * previous values its extrapolation writes, one entry per Real input (fmu->real_inputs). */
 typedef struct {
     double time, input_time;
     ModelVariables v;
@@ -535,9 +538,13 @@ typedef struct {
 static void backup_step(const FmuInstance *fmu, StepBackup *b) {
     b->time = fmu->s.time;
     b->input_time = fmu->s.input_time;
-    memcpy(b->input_derivative, fmu->s.input_derivative, sizeof b->input_derivative);
-    memcpy(b->input_derivative_given, fmu->s.input_derivative_given, sizeof b->input_derivative_given);
-    memcpy(b->input_previous, fmu->s.input_previous, sizeof b->input_previous);
+    for (int k = 0; k < fmu->n_real_inputs; k++) {
+        const int vr = fmu->real_inputs[k];
+        b->input_derivative[k][0] = fmu->s.input_derivative[vr][0];
+        b->input_derivative[k][1] = fmu->s.input_derivative[vr][1];
+        b->input_derivative_given[k] = fmu->s.input_derivative_given[vr];
+        b->input_previous[k] = fmu->s.input_previous[vr];
+    }
     b->input_previous_time = fmu->s.input_previous_time;
     b->input_previous_valid = fmu->s.input_previous_valid;
     b->v = fmu->s.v;
@@ -549,9 +556,13 @@ static void backup_step(const FmuInstance *fmu, StepBackup *b) {
 static void restore_step(FmuInstance *fmu, const StepBackup *b) {
     fmu->s.time = b->time;
     fmu->s.input_time = b->input_time;
-    memcpy(fmu->s.input_derivative, b->input_derivative, sizeof b->input_derivative);
-    memcpy(fmu->s.input_derivative_given, b->input_derivative_given, sizeof b->input_derivative_given);
-    memcpy(fmu->s.input_previous, b->input_previous, sizeof b->input_previous);
+    for (int k = 0; k < fmu->n_real_inputs; k++) {
+        const int vr = fmu->real_inputs[k];
+        fmu->s.input_derivative[vr][0] = b->input_derivative[k][0];
+        fmu->s.input_derivative[vr][1] = b->input_derivative[k][1];
+        fmu->s.input_derivative_given[vr] = b->input_derivative_given[k];
+        fmu->s.input_previous[vr] = b->input_previous[k];
+    }
     fmu->s.input_previous_time = b->input_previous_time;
     fmu->s.input_previous_valid = b->input_previous_valid;
     fmu->s.v = b->v;
@@ -611,7 +622,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
             return fmi2Error;
         }
     }
-    memset(fmu->s.input_derivative_given, 0, sizeof fmu->s.input_derivative_given); /* spent by the step */
+    for (int k = 0; k < fmu->n_real_inputs; k++) fmu->s.input_derivative_given[fmu->real_inputs[k]] = 0; /* spent */
     return fmu->warned && !fmu->s.v.fmi_warnings_as_ok ? fmi2Warning : fmi2OK;
 }
 

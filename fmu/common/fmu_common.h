@@ -56,6 +56,8 @@ typedef struct FmuInstance {
     int continuous_time_mode;              /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event Mode */
     int n_real_outputs;                    /* the Real outputs, checked finite after every step */
     int real_outputs[VR_COUNT];
+    int n_real_inputs;                     /* the Real inputs: a step extrapolates, keeps aside and */
+    int real_inputs[VR_COUNT];             /* clears only their derivatives */
 } FmuInstance;
 
 /* ---- hooks implemented by each model (model.c) ---- */

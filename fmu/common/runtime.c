@@ -123,8 +123,8 @@ void fmu_extrapolate_inputs(FmuInstance *fmu, double t0) {
     if (!s->v.fmi_extrapolate_inputs) return;
     const int history = s->input_previous_valid && t0 > s->input_previous_time;
     const double span = t0 - s->input_previous_time;
-    for (int vr = 1; vr < VR_COUNT; vr++) {
-        if (fmu_variables[vr].causality != FMU_INPUT || fmu_variables[vr].type != FMU_REAL) continue;
+    for (int k = 0; k < fmu->n_real_inputs; k++) {
+        const int vr = fmu->real_inputs[k];
         const double value = *(const double *)fmu_value_address(fmu, vr);
         if (s->input_derivative_given[vr] == 0 && !held_input(vr)) {
             const int rate = rate_input_of(vr);
