@@ -11,8 +11,9 @@ set(FMU_COMMON_HEADERS "${FMU_COMMON_DIR}/fmu_common.h" "${FMU_COMMON_DIR}/fmu_t
                        "${FMU_COMMON_DIR}/table.h")
 
 # Link-time optimization where the toolchain has it: the common layer's small functions (an input
-# at a time, a variable's address) inlined into the models' steps; the same arithmetic, bit for bit
-# (tests/models/test_oracle.py), at about a tenth less time a step.
+# at a time, a variable's address) inlined into the models' steps: the same IEEE operations in the
+# same order (no fused multiply-add on the x86-64 baseline), so the same results bit for bit, at
+# about a tenth less time a step (benchmarks/master.py).
 include(CheckIPOSupported)
 check_ipo_supported(RESULT FMU_LINK_TIME_OPTIMIZATION LANGUAGES C)
 
