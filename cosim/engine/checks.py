@@ -83,7 +83,10 @@ def check_parameters(structure: SystemStructure) -> None:
 
 
 def check_values(component: str, fmu: Path, values: Mapping[str, Value]) -> None:
-    """Raises ParameterError for the first of `values` (by variable name) that the FMU cannot take."""
+    """Raises ParameterError for the first of `values` (by variable name) that the FMU cannot take
+    (none given: its description is not read)."""
+    if not values:
+        return
     known = variables(fmu)
     for name, value in values.items():
         if name not in known:

@@ -104,6 +104,36 @@ def fmi2_kinds(description):
     return description
 
 
+_SIGNATURES: dict[type, list[tuple[str, list, list, object]]] = {}
+
+
+class _SignaturesOnce:
+    """fmpy's FMU classes read every FMI function's signature (inspect) for each instance, about
+    3 ms each, eight times for a platform: read here once per class (the signatures are the
+    class's, not the library's) and set on each instance's library functions."""
+
+    def _loadFunctions(self) -> None:
+        known = _SIGNATURES.get(type(self))
+        if known is None:
+            super()._loadFunctions()
+            _SIGNATURES[type(self)] = [(name, f.argnames, f.argtypes, f.restype) for name, f in self._functions.items()]
+            return
+        for name, argnames, argtypes, restype in known:
+            function = getattr(self.dll, name)
+            function.argnames, function.argtypes, function.restype = argnames, argtypes, restype
+            self._functions[name] = function
+
+
+class FMU2SlaveOnce(_SignaturesOnce, FMU2Slave):  # fmpy takes the FMI version from the class name's start
+    pass
+
+
+@functools.cache
+def _slave3() -> type:
+    from fmpy.fmi3 import FMU3Slave
+    return type("FMU3SlaveOnce", (_SignaturesOnce, FMU3Slave), {})
+
+
 @atexit.register
 def _remove_extractions() -> None:
     for _, folder in _LOADED.values():
@@ -131,8 +161,7 @@ class FmuInstance:
         self.fmi3 = str(self.model_description.fmiVersion).startswith("3")
         self.clock = None  # a function giving the instance's time while a native loop runs it
         if self.fmi3:
-            from fmpy.fmi3 import FMU3Slave
-            self.fmu = FMU3Slave(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
+            self.fmu = _slave3()(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
                                  modelIdentifier=self.model_description.coSimulation.modelIdentifier,
                                  instanceName=instance_name)
             self._call("fmi3InstantiateCoSimulation", self.fmu.instantiate, loggingOn=logging_on,
@@ -145,7 +174,7 @@ class FmuInstance:
         self._callbacks.logger = self._logger
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
-        self.fmu = FMU2Slave(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
+        self.fmu = FMU2SlaveOnce(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),
                              modelIdentifier=self.model_description.coSimulation.modelIdentifier,
                              instanceName=instance_name)
         self._call("fmi2Instantiate", self.fmu.instantiate, callbacks=self._callbacks, loggingOn=logging_on)

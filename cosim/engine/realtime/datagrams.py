@@ -14,18 +14,13 @@ references it takes, with a receiver and a sender.
 
 from __future__ import annotations
 
-import hashlib
-import hmac
-import ipaddress
 import math
 import os
-import socket
 import struct
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
-from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
@@ -46,6 +41,7 @@ KEY_MAX = 256
 def address(text: str, option: str) -> tuple[str, int, dict[str, str]]:
     """udp://HOST:PORT[?key=value] (HOST may be left out: 127.0.0.1) as (host, port, query);
     a UsageError naming `option` for anything else."""
+    from urllib.parse import parse_qs, urlsplit  # here: a run that streams nothing loads no networking
     parts = urlsplit(text if "://" in text else f"udp://{text}")
     try:
         port = parts.port
@@ -59,6 +55,8 @@ def address(text: str, option: str) -> tuple[str, int, dict[str, str]]:
 
 def is_loopback(host: str) -> bool:
     """True if every address `host` names is this machine's loopback (127.0.0.0/8, ::1)."""
+    import ipaddress
+    import socket
     try:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
@@ -129,6 +127,7 @@ def receive(where: str, timeout: float | None = 10.0, names: Sequence[str] | Non
     seconds (None: never) or, if `until` (a threading.Event) is given, only once it is set.
     `ready`, if given, is called once the socket is bound (a test starts the run then). Samples
     that arrive before the first layout are held until it comes."""
+    import socket
     host, port, _ = address(where, "receive")
     sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
     try:
@@ -178,7 +177,11 @@ def reference_datagram(values: Sequence[float], sequence: int, time: float | Non
     flat = [float(v) for p in parts for v in p]
     datagram = REFERENCE.pack(b"CREF", LIVE_VERSION, len(flat), session, sequence,
                               math.nan if time is None else float(time)) + struct.pack(f"<{len(flat)}d", *flat)
-    return datagram + (hmac.new(key, datagram, hashlib.sha256).digest() if key else b"")
+    if not key:
+        return datagram
+    import hashlib
+    import hmac
+    return datagram + hmac.new(key, datagram, hashlib.sha256).digest()
 
 
 class Sender:
@@ -186,6 +189,7 @@ class Sender:
     random id unless given), tagged with `key` (the run's --listen-key) if given."""
 
     def __init__(self, where: str, key: bytes | None = None, session: int | None = None):
+        import socket
         host, port, _ = address(where, "send")
         self.socket = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_DGRAM)
         self.target, self.sequence, self.key = (host, port), 0, key

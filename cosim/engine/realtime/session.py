@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import ctypes
 import math
-import socket
 import time
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import socket
 
 from ..errors import UsageError
 from .datagrams import MAC_SIZE, MAX_VALUES, REFERENCE, SAMPLE, address, is_loopback, layout_datagram
@@ -284,6 +286,7 @@ class Session:
         r.received = self._array(np.zeros(r.receive_size // 8 + 1)).ctypes.data
 
     def _socket(self, host: str) -> socket.socket:
+        import socket  # here: a run that streams and listens to nothing loads no networking
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
         sock = socket.socket(family, socket.SOCK_DGRAM)
         self.sockets.append(sock)
