@@ -111,12 +111,13 @@ def folder_lock(folder: Path) -> Iterator[None]:
     second run into the folder meanwhile is refused in one line rather than mixing its files with
     these."""
     import fcntl
-    import hashlib
+    import zlib  # two 32-bit checksums name the lock: hashlib's OpenSSL costs a run 8 ms to load
     from .cache import cache_dir
     folder = Path(folder).resolve()
     locks = cache_dir() / "locks"
     locks.mkdir(mode=0o700, exist_ok=True)
-    handle = open(locks / f"{hashlib.sha256(str(folder).encode()).hexdigest()[:32]}.lock", "a+")
+    path = str(folder).encode()
+    handle = open(locks / f"{zlib.crc32(path):08x}{zlib.adler32(path):08x}.lock", "a+")
     try:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)

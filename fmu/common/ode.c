@@ -509,13 +509,15 @@ static const OdeExponential *exponential_for(OdeExponentialCache *cache, int m, 
     ode_phi_functions(m, a, h, 3, phi);
     ode_phi_functions(m, a, 0.5 * h, 1, half);
     for (int k = 0; k < mm; k++) {
+        const int c = (k % m) * m + k / m; /* row k / m, column k % m, stored by column */
         const double p1 = phi[mm + k], p2 = phi[2 * mm + k], p3 = phi[3 * mm + k];
-        e->e[k] = phi[k];
-        e->f1[k] = h * (p1 - 3.0 * p2 + 4.0 * p3);
-        e->f2[k] = h * (p2 - 2.0 * p3);
-        e->f3[k] = h * (-p2 + 4.0 * p3);
-        e->e2[k] = half[k];
-        e->q[k] = 0.5 * h * half[mm + k];
+        e->e[c] = phi[k];
+        e->f1[c] = h * (p1 - 3.0 * p2 + 4.0 * p3);
+        e->f2[c] = h * (p2 - 2.0 * p3);
+        e->f3[c] = h * (-p2 + 4.0 * p3);
+        e->e2[c] = half[k];
+        e->q[c] = 0.5 * h * half[mm + k];
+        e->a_by_column[c] = a[k];
     }
     memcpy(e->a, a, sizeof(double) * (size_t)mm);
     e->h = h;
@@ -529,21 +531,21 @@ static void combine(int n, int m, int terms, const double *const *matrix, const 
     for (int i = 0; i < n; i++) out[i] = 0.0;
     for (int k = 0; k < terms; k++) {
         const double *restrict mk = matrix[k], *restrict vk = vector[k];
-        for (int i = 0; i < m; i++) {
-            double sum = 0.0;
-            for (int j = 0; j < m; j++) sum += mk[i * m + j] * vk[j];
-            out[i] += sum;
-        }
+        double sum[ODE_PHI_MAX];
+        for (int i = 0; i < m; i++) sum[i] = 0.0;
+        for (int j = 0; j < m; j++) /* down column j: each row's sum in a dot product's order */
+            for (int i = 0; i < m; i++) sum[i] += mk[j * m + i] * vk[j];
+        for (int i = 0; i < m; i++) out[i] += sum[i];
         for (int i = m; i < n; i++) out[i] += scalar[k] * vk[i];
     }
 }
 
-/* N = f - A x at (t, x); 0 where A is not the linear part there. */
-static int nonlinear(OdeRhsLinear rhs_linear, void *ctx, int m, const double *a, double t, const double *x,
-                     double *n) {
+/* N = f - A x at (t, x), A stored by column; 0 where A is not the linear part there. */
+static int nonlinear(OdeRhsLinear rhs_linear, void *ctx, int m, const double *a_by_column, double t,
+                     const double *x, double *n) {
     const int holds = rhs_linear(ctx, t, x, n);
-    for (int i = 0; i < m; i++)
-        for (int j = 0; j < m; j++) n[i] -= a[i * m + j] * x[j];
+    for (int j = 0; j < m; j++)
+        for (int i = 0; i < m; i++) n[i] -= a_by_column[j * m + i] * x[j];
     return holds;
 }
 
@@ -553,14 +555,14 @@ static int exponential_step(const OdeExponential *e, int n, int m, OdeRhsLinear 
     double nx[ODE_MAX_STATES], a[ODE_MAX_STATES], na[ODE_MAX_STATES], b[ODE_MAX_STATES], nb[ODE_MAX_STATES];
     double c[ODE_MAX_STATES], nc[ODE_MAX_STATES], mix[ODE_MAX_STATES], next[ODE_MAX_STATES];
     const double half[2] = {1.0, 0.5 * h};
-    if (!nonlinear(rhs_linear, ctx, m, e->a, t, x, nx)) return 0;
+    if (!nonlinear(rhs_linear, ctx, m, e->a_by_column, t, x, nx)) return 0;
     combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){x, nx}, a);
-    if (!nonlinear(rhs_linear, ctx, m, e->a, t + 0.5 * h, a, na)) return 0;
+    if (!nonlinear(rhs_linear, ctx, m, e->a_by_column, t + 0.5 * h, a, na)) return 0;
     combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){x, na}, b);
-    if (!nonlinear(rhs_linear, ctx, m, e->a, t + 0.5 * h, b, nb)) return 0;
+    if (!nonlinear(rhs_linear, ctx, m, e->a_by_column, t + 0.5 * h, b, nb)) return 0;
     for (int i = 0; i < n; i++) mix[i] = 2.0 * nb[i] - nx[i];
     combine(n, m, 2, (const double *[]){e->e2, e->q}, half, (const double *[]){a, mix}, c);
-    if (!nonlinear(rhs_linear, ctx, m, e->a, t + h, c, nc)) return 0;
+    if (!nonlinear(rhs_linear, ctx, m, e->a_by_column, t + h, c, nc)) return 0;
     for (int i = 0; i < n; i++) mix[i] = 2.0 * (na[i] + nb[i]);
     /* e^{hA} x + f1 N_x + 2 f2 (N_a + N_b) + f3 N_c; where A = 0: x + h/6 (N_x + 2 N_a + 2 N_b + N_c) */
     combine(n, m, 4, (const double *[]){e->e, e->f1, e->f2, e->f3}, (const double[]){1.0, h / 6.0, h / 6.0, h / 6.0},

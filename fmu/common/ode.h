@@ -111,9 +111,12 @@ void ode_phi_functions(int n, const double *a, double h, int count, double *phi)
 /* The derivatives at (t, x) into dxdt; returns whether A is the linear part there. */
 typedef int (*OdeRhsLinear)(void *ctx, double t, const double *x, double *dxdt);
 
+/* The matrices of a step, each stored by column (row i, column j at [j * n + i]: the products run
+ * down the columns, several rows at once) but for `a`, which is as the model gives it. */
 typedef struct {
     double h;                                   /* the step they are for (0: none yet) */
-    double a[ODE_PHI_MAX * ODE_PHI_MAX];        /* the linear part they are of */
+    double a[ODE_PHI_MAX * ODE_PHI_MAX];        /* the linear part they are of, row major */
+    double a_by_column[ODE_PHI_MAX * ODE_PHI_MAX];
     double e[ODE_PHI_MAX * ODE_PHI_MAX], e2[ODE_PHI_MAX * ODE_PHI_MAX], q[ODE_PHI_MAX * ODE_PHI_MAX];
     double f1[ODE_PHI_MAX * ODE_PHI_MAX], f2[ODE_PHI_MAX * ODE_PHI_MAX], f3[ODE_PHI_MAX * ODE_PHI_MAX];
 } OdeExponential;
