@@ -114,9 +114,14 @@ class _SignaturesOnce:
 
     def _loadFunctions(self) -> None:
         known = _SIGNATURES.get(type(self))
-        if known is None:
+        if not known:  # the first instance, or an fmpy that keeps them otherwise (its own reading, every time)
             super()._loadFunctions()
-            _SIGNATURES[type(self)] = [(name, f.argnames, f.argtypes, f.restype) for name, f in self._functions.items()]
+            if type(self) not in _SIGNATURES:
+                try:
+                    _SIGNATURES[type(self)] = [(name, f.argnames, f.argtypes, f.restype)
+                                               for name, f in self._functions.items()]
+                except AttributeError:
+                    _SIGNATURES[type(self)] = []
             return
         for name, argnames, argtypes, restype in known:
             function = getattr(self.dll, name)
