@@ -15,7 +15,8 @@ static int for_cs(int states) { return model_exchange ? 0 : states; }
 static int for_me(int states) { return model_exchange ? states : 0; }
 
 /* One of Model Exchange's calls (on a Co-Simulation instance: each is refused), by the FMI 2.0
- * Model Exchange state machine; x: states to set, altered at random. */
+ * Model Exchange state machine; x: states to set, altered at random. *time: the instance's time as
+ * the calls so far set it, NAN where the oracle cannot know it (a state set back, a reset). */
 static void model_exchange_call(fmi2Component c, double *time) {
 #if !MODEL_MODEL_EXCHANGE /* a Co-Simulation-only model's binary has none of them */
     (void)c, (void)time;
@@ -25,12 +26,14 @@ static void model_exchange_call(fmi2Component c, double *time) {
     const size_t n = pick(10) ? (size_t)MODEL_N_STATES : (size_t)pick(N + 2); /* the wrong size now and then */
     fmi2Status status;
     switch (pick(10)) {
-    case 0:
-        *time += pick(8) ? 1e-3 * uniform() : hostile_real();
-        status = fmi2SetTime(c, *time);
+    case 0: {
+        const double t = (isnan(*time) ? 0.0 : *time) + (pick(8) ? 1e-3 * uniform() : hostile_real());
+        status = fmi2SetTime(c, t);
         judge("fmi2SetTime", status, for_me(S_EVENT | S_CONTINUOUS));
+        if (status == fmi2OK) *time = t; /* a refused time is not the instance's */
         after(status, 0);
         break;
+    }
     case 1: {
         for (int k = 0; k < N; k++) x[k] = 0.0;
         fmi2GetContinuousStates(c, x, MODEL_N_STATES);
@@ -66,7 +69,7 @@ static void model_exchange_call(fmi2Component c, double *time) {
         fmi2EventInfo info;
         status = fmi2NewDiscreteStates(c, pick(20) ? &info : NULL);
         judge("fmi2NewDiscreteStates", status, for_me(S_EVENT));
-        if (status == fmi2OK && info.nextEventTimeDefined && !(info.nextEventTime > *time))
+        if (status == fmi2OK && info.nextEventTimeDefined && !isnan(*time) && !(info.nextEventTime > *time))
             violation("fmi2NewDiscreteStates", "the next time event is not after the time now");
         after(status, 0);
         break;
@@ -111,9 +114,10 @@ static void run_sequence(int max_calls) {
     if (!c) { violation("fmi2Instantiate", "returned NULL for a valid GUID"); return; }
     possible = S_INSTANTIATED;
     fmi2FMUstate states[3] = {NULL, NULL, NULL};
+    double state_time[3] = {NAN, NAN, NAN}, bytes_time = NAN; /* the times they were taken at */
     fmi2Byte *bytes = NULL;
     size_t n_bytes = 0;
-    double time = 0.0;
+    double time = 0.0, start = 0.0; /* the instance's time (NAN: unknown to the oracle), its start */
     for (int k = 0; k < max_calls; k++) {
         fmi2ValueReference vrs[4];
         double reals[4];
@@ -125,16 +129,20 @@ static void run_sequence(int max_calls) {
         switch (pick(22)) {
         case 0: {
             const int tolerance_defined = pick(2);
-            status = fmi2SetupExperiment(c, tolerance_defined, pick(2) ? 1e-6 : hostile_real(), pick(4) ? 0.0 : hostile_real(),
+            const double start_time = pick(4) ? 0.0 : hostile_real();
+            status = fmi2SetupExperiment(c, tolerance_defined, pick(2) ? 1e-6 : hostile_real(), start_time,
                                          pick(3) == 0, pick(2) ? 10.0 : hostile_real());
             judge("fmi2SetupExperiment", status, S_INSTANTIATED);
+            if (status == fmi2OK) start = start_time;
             after(status, 0);
             break;
         }
         case 1: status = fmi2EnterInitializationMode(c); judge("fmi2EnterInitializationMode", status, S_INSTANTIATED);
             after(status, S_INIT); break;
         case 2: case 3: status = fmi2ExitInitializationMode(c); judge("fmi2ExitInitializationMode", status, S_INIT);
-            after(status, model_exchange ? S_EVENT : S_STEP_COMPLETE); time = 0.0; break;
+            after(status, model_exchange ? S_EVENT : S_STEP_COMPLETE);
+            if (status == fmi2OK) time = start;
+            break;
         case 4: case 5: case 6: {
             if (model_exchange || pick(8) == 0) { /* Model Exchange's calls (on Co-Simulation: refused) */
                 model_exchange_call(c, &time);
@@ -208,6 +216,7 @@ static void run_sequence(int max_calls) {
             const int slot = pick(3);
             status = fmi2GetFMUstate(c, &states[slot]);
             judge("fmi2GetFMUstate", status, S_ANY);
+            if (status == fmi2OK) state_time[slot] = time;
             break;
         }
         case 16: {
@@ -215,7 +224,7 @@ static void run_sequence(int max_calls) {
             if (!states[slot]) break;
             status = fmi2SetFMUstate(c, states[slot]);
             judge("fmi2SetFMUstate", status, S_ANY);
-            if (status == fmi2OK) possible = S_ANY; /* the state's own phase: unknown to the oracle */
+            if (status == fmi2OK) possible = S_ANY, time = state_time[slot]; /* its phase: unknown */
             break;
         }
         case 17: {
@@ -237,14 +246,19 @@ static void run_sequence(int max_calls) {
             if (!bytes) break;
             status = fmi2SerializeFMUstate(c, states[slot], bytes, size);
             judge("fmi2SerializeFMUstate", status, S_ANY);
+            bytes_time = state_time[slot];
             break;
         }
         case 19: {
             if (!bytes) break;
-            if (pick(2)) bytes[next_random() % n_bytes] ^= (fmi2Byte)(1 + pick(255)); /* altered payload */
+            if (pick(2)) { /* altered payload: its time, if taken, is unknown */
+                bytes[next_random() % n_bytes] ^= (fmi2Byte)(1 + pick(255));
+                bytes_time = NAN;
+            }
             const int slot = pick(3);
             status = fmi2DeSerializeFMUstate(c, bytes, pick(10) ? n_bytes : n_bytes - 1, &states[slot]);
             judge("fmi2DeSerializeFMUstate", status, S_ANY);
+            state_time[slot] = status == fmi2OK ? bytes_time : NAN;
             break;
         }
         case 20: {
@@ -259,7 +273,12 @@ static void run_sequence(int max_calls) {
             const int which = pick(4);
             if (which == 0) { status = fmi2Terminate(c); judge("fmi2Terminate", status, S_STEP_COMPLETE | S_STEP_FAILED | S_EVENT | S_CONTINUOUS);
                 after(status, S_TERMINATED); }
-            else if (which == 1) { status = fmi2Reset(c); judge("fmi2Reset", status, S_ANY); after(status, S_INSTANTIATED); }
+            else if (which == 1) {
+                status = fmi2Reset(c);
+                judge("fmi2Reset", status, S_ANY);
+                after(status, S_INSTANTIATED);
+                if (status == fmi2OK) time = NAN, start = 0.0;
+            }
             else {
                 fmi2String categories[2] = {"logAll", pick(2) ? "logStatusWarning" : "no such category"};
                 status = fmi2SetDebugLogging(c, pick(2), (size_t)pick(3), pick(8) ? categories : NULL);
