@@ -488,4 +488,8 @@ void model_time_event(FmuInstance *fmu) {
     if (mpc_of(fmu)) mpc_time_event(fmu, mpc_of(fmu));
 }
 
-double model_next_time_event(FmuInstance *fmu) { return mpc_of(fmu) ? mpc_next_solve(fmu) : INFINITY; }
+/* The MPC's next solve, a period after the last; at a time too large for the period to show in it
+ * (a start near the largest double), the next time there is: an event time is always after now. */
+double model_next_time_event(FmuInstance *fmu) {
+    return mpc_of(fmu) ? fmax(mpc_next_solve(fmu), nextafter(fmu->s.time, INFINITY)) : INFINITY;
+}
