@@ -7,7 +7,11 @@
  * that is checked at BRAKING_SAMPLES points along its path. Braking from a safe state is safe
  * again (its path is the rest of the one checked), so a reference that starts safe stays so: the
  * guard takes the asked acceleration if it is safe, else the largest blend of it with braking
- * that is (bisection), and braking itself when none is. */
+ * that is (bisection), and braking itself when none is.
+ *
+ * A reference outside the envelope (a takeover from a reference that was outside, parameters
+ * changed under it) is not held there: recovery gives it a pose inside to go back to, on the way
+ * to the neutral pose, and the kernel moves it there within its rate and acceleration limits. */
 #include "envelope.h"
 
 #include <math.h>
@@ -18,7 +22,7 @@
 #define ENVELOPE_EXPORT __attribute__((visibility("default")))
 #endif
 
-enum { BRAKING_SAMPLES_MAX = 8, BISECTIONS = 6 };
+enum { BRAKING_SAMPLES_MAX = 8, BISECTIONS = 6, EDGE_BISECTIONS = 40 };
 static const double SAMPLE_SPACING = 1e-3; /* [m] of a joint's travel between two checked points of a braking path */
 
 /* The limits a pose moving at `rate` breaks; each leg's speed into `leg_velocity`. */
@@ -128,4 +132,22 @@ ENVELOPE_EXPORT int platform_envelope_guard(void *envelope, double h, const doub
     }
     for (int i = 0; i < 6; i++) acceleration[i] = braking[i] + safe * (wanted[i] - braking[i]);
     return asked;
+}
+
+ENVELOPE_EXPORT int platform_envelope_recovery(void *envelope, const double *pose, double *goal) {
+    const PlatformEnvelope *e = prepared(envelope);
+    if (platform_envelope_contains(envelope, pose)) return 0;
+    const double *neutral = e->platform.neutral_pose;
+    double outside = 0.0, inside = 1.0, at[6];
+    if (platform_envelope_contains(envelope, neutral)) {
+        for (int k = 0; k < EDGE_BISECTIONS; k++) { /* the edge between pose (outside) and neutral (inside) */
+            const double s = 0.5 * (outside + inside);
+            for (int i = 0; i < 6; i++) at[i] = pose[i] + s * (neutral[i] - pose[i]);
+            if (platform_envelope_contains(envelope, at)) inside = s;
+            else outside = s;
+        }
+        inside += 0.1 * (1.0 - inside);
+    }
+    for (int i = 0; i < 6; i++) goal[i] = pose[i] + inside * (neutral[i] - pose[i]);
+    return ENVELOPE_RETURN;
 }

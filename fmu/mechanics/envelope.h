@@ -20,8 +20,10 @@ typedef struct {
     int prepared;
 } PlatformEnvelope;
 
-/* What a guard reports it held back (bits), and so what the kernel counts per step. */
-enum { ENVELOPE_STROKE = 1, ENVELOPE_JOINT = 2, ENVELOPE_LEG_VELOCITY = 4, ENVELOPE_LEG_ACCELERATION = 8 };
+/* What a guard reports it held back (bits), and so what the kernel counts per step; RETURN: the
+ * reference was outside and is on its way back in (platform_envelope_recovery). */
+enum { ENVELOPE_STROKE = 1, ENVELOPE_JOINT = 2, ENVELOPE_LEG_VELOCITY = 4, ENVELOPE_LEG_ACCELERATION = 8,
+       ENVELOPE_RETURN = 16 };
 
 /* 1 if the pose (x, y, z [m], roll, pitch, yaw [rad]) puts every leg within the stroke less the
  * margin and every joint within its tilt, 0 otherwise: the step kernel's AdmissibleFn. */
@@ -32,5 +34,11 @@ int platform_envelope_contains(void *envelope, const double *pose);
  * braking acceleration whose motion, and the braking from where it ends, stay within the envelope.
  * Returns the bits of the limits the asked acceleration would have broken (0: taken as asked). */
 int platform_envelope_guard(void *envelope, double h, const double *pose, const double *rate, double *acceleration);
+
+/* The step kernel's RecoverFn: 0 if the pose is inside the envelope (stroke and joints); otherwise
+ * ENVELOPE_RETURN, with `goal` the pose the reference returns to: on the straight line from the
+ * pose to the platform's neutral pose, past the envelope's edge by a tenth of what is left of the
+ * way (the neutral pose itself where that line finds no inside). */
+int platform_envelope_recovery(void *envelope, const double *pose, double *goal);
 
 #endif

@@ -28,10 +28,10 @@ print(json.dumps({"code": code, "opened": opened}))
 """
 
 
-@pytest.mark.parametrize("scene, files", [
-    ("scenes/meng_eq35.toml", {"meng2010.toml"}),
-    ("scenes/sumnu_case_1_pmsm.toml", {"sumnu2015.toml", "sumnu2015_pmsm.toml"}),  # a drive set beside the platform's
-    ("examples/vehicle/car_drive.toml", {"meng2010.toml"}),  # through motion cueing
+@pytest.mark.parametrize("scene, files", [  # each with the envelope's margins (params/envelope.toml)
+    ("scenes/meng_eq35.toml", {"meng2010.toml", "envelope.toml"}),
+    ("scenes/sumnu_case_1_pmsm.toml", {"sumnu2015.toml", "sumnu2015_pmsm.toml", "envelope.toml"}),  # and a drive set
+    ("examples/vehicle/car_drive.toml", {"meng2010.toml", "envelope.toml"}),  # through motion cueing
 ])
 def test_a_run_opens_each_parameter_file_once(tmp_path, scene, files):
     """The whole command, with its plots and interactive report: reading the scene, designing

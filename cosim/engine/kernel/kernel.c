@@ -736,7 +736,7 @@ static const StructLayout LAYOUT[] = {
     STRUCT_LAYOUT(RealTime), R(factor), R(origin), R(t0), R(waited), R(stream_fd), R(stream_every), R(stream_countdown),
     R(n_stream), R(stream_columns), R(stream_sequence), R(packet), R(stream_failed), R(listen_fd), R(live_instance),
     R(n_live), R(live_index), R(live_column), R(live_rate_index), R(live_rate_column), R(rate_max), R(acceleration_max), R(neutral), R(late_after),
-    R(watchdog), R(admissible), R(admissible_context), R(guard), R(guard_context), R(key), R(key_size), R(live),
+    R(watchdog), R(admissible), R(admissible_context), R(guard), R(recover), R(guard_context), R(guard_source), R(live_target), R(key), R(key_size), R(live),
     R(target_time), R(last_good), R(live_active), R(watchdog_engaged), R(owned), R(owner_size), R(owner_address),
     R(owner_session), R(live_sequence), R(counts), R(guard_counts), R(watchdog_time), R(received), R(receive_size),
 #undef R

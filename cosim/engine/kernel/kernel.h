@@ -131,6 +131,9 @@ typedef int (*AdmissibleFn)(void *context, const double *values); /* 1: the valu
  * value with rate is about to take; returns the bits (< 1 << GUARD_KINDS) of the limits it held
  * back, 0 if it took it as asked. */
 typedef int (*GuardFn)(void *context, double h, const double *value, const double *rate, double *acceleration);
+/* 0 if the values are within the envelope; otherwise the bits (< 1 << GUARD_KINDS) counted for a
+ * step spent going back, and in `goal` the values the reference goes back to (inside). */
+typedef int (*RecoverFn)(void *context, const double *value, double *goal);
 
 typedef struct {
     /* pacing (factor <= 0: as fast as it goes) */
@@ -154,12 +157,16 @@ typedef struct {
     AdmissibleFn admissible;          /* NULL: every finite value is within */
     void *admissible_context;
     GuardFn guard;                    /* NULL: the rate and acceleration limits alone */
+    RecoverFn recover;                /* NULL: a reference outside is only braked (the guard's context) */
     void *guard_context;
+    int guard_source;                 /* 1: with no live target the instance's own outputs are the target, taken
+                                       * as they are while the guard would take their motion, else guarded */
+    int live_target;                  /* 1 once a packet or the watchdog gave the target */
     const unsigned char *key;         /* HMAC-SHA256 key of every datagram (key_size 0: none) */
     int key_size;
     double *live;                     /* [6][n_live]: reference value, rate, acceleration; target, its rate, acceleration */
     double target_time, last_good;    /* simulated time the target was given for; wall time of the last good packet */
-    int live_active, watchdog_engaged;
+    int live_active, watchdog_engaged; /* live_active: 0 not yet, 1 starts now, 2 guarded, 3 passed on as it is */
     int owned;                        /* a sender owns the input: owner_address and owner_session */
     unsigned owner_size;
     unsigned char owner_address[128]; /* a struct sockaddr_storage's bytes */

@@ -21,6 +21,12 @@
  * channel's rate and acceleration limits, and `guard` holds it within the application's
  * envelope; after `watchdog` seconds without a good packet the target becomes the neutral
  * values and the input has no owner.
+ *
+ * The guard on the instance's own outputs (guard_source, with or without a live input): until a
+ * packet gives a target, the outputs' own motion is passed on untouched while the guard would take
+ * it; where it would not, a reference takes over from the motion last handed on and follows the
+ * outputs within the limits and the envelope, and hands them back once it has caught up. A
+ * reference outside the envelope goes back in towards what `recover` gives, never held outside.
  */
 #define _POSIX_C_SOURCE 200809L /* clock_nanosleep */
 #include <errno.h>
@@ -86,7 +92,7 @@ static int numbers_within(const RealTime *r, const double *values, int count, do
     const int n = r->n_live;
     for (int i = 0; i < n; i++) {
         const double rate = count >= 2 * n ? values[n + i] : 0.0, acceleration = count >= 3 * n ? values[2 * n + i] : 0.0;
-        if (!(fabs(rate) <= r->rate_max[i] * (1.0 + 1e-9)) || !(fabs(acceleration) <= r->acceleration_max[i] * (1.0 + 1e-9)))
+        if (!(fabs(rate) <= r->rate_max[i]) || !(fabs(acceleration) <= r->acceleration_max[i]))
             return 0;
         const double reach = fabs(values[i]) + fabs(rate) * horizon + 0.5 * fabs(acceleration) * horizon * horizon;
         if (!isfinite(reach)) return -1;
@@ -98,6 +104,29 @@ static int constant_time_equal(const unsigned char *a, const unsigned char *b, s
     unsigned char differ = 0;
     for (size_t i = 0; i < size; i++) differ |= (unsigned char)(a[i] ^ b[i]);
     return differ == 0;
+}
+
+/* The replaced outputs' own motion in the newest sample, [3][n]: values, rates, accelerations (the
+ * rates from the outputs that carry them where the coupling gives no derivatives). */
+static void own_motion(const Kernel *s, const RealTime *r, double *motion) {
+    const KernelInstance *in = &s->instances[r->live_instance];
+    const double *latest = s->samples + (size_t)(s->n_samples - 1) * (size_t)s->n_sample_values;
+    const int n = r->n_live;
+    for (int i = 0; i < n; i++) {
+        const int at = in->output_offset + r->live_index[i];
+        const int rate_at = r->live_rate_index[i] >= 0 ? in->output_offset + r->live_rate_index[i] : -1;
+        motion[i] = latest[at];
+        motion[n + i] = in->rate_order >= 1 ? s->exact_rates[at] : rate_at >= 0 ? latest[rate_at] : 0.0;
+        motion[2 * n + i] = in->rate_order >= 2   ? s->exact_rates[s->n_sample_values + at]
+                            : in->rate_order >= 1 && rate_at >= 0 ? s->exact_rates[rate_at]
+                                                                  : 0.0;
+    }
+}
+
+/* The reference takes over the replaced outputs where they are, with their motion. */
+static void start_reference(const Kernel *s, RealTime *r) {
+    own_motion(s, r, r->live); /* rows VALUE, RATE, ACCELERATION */
+    r->live_active = 1;
 }
 
 /* One datagram of the live input from `from`, classified; a good one becomes the target. t_now:
@@ -153,17 +182,8 @@ static void take_packet(Kernel *s, RealTime *r, ssize_t size, const void *from, 
     r->live_sequence = sequence;
     r->last_good = clock_seconds(CLOCK_MONOTONIC);
     r->watchdog_engaged = 0;
-    if (!r->live_active) { /* the reference starts where the replaced outputs are */
-        const KernelInstance *in = &s->instances[r->live_instance];
-        const double *latest = s->samples + (size_t)(s->n_samples - 1) * (size_t)s->n_sample_values;
-        for (int i = 0; i < n; i++) {
-            const int at = in->output_offset + r->live_index[i];
-            r->live[VALUE * n + i] = latest[at];
-            r->live[RATE * n + i] = in->rate_order >= 1 ? s->exact_rates[at] : 0.0;
-            r->live[ACCELERATION * n + i] = in->rate_order >= 2 ? s->exact_rates[s->n_sample_values + at] : 0.0;
-        }
-        r->live_active = 1;
-    }
+    if (r->live_active != 2) start_reference(s, r); /* it starts where the replaced outputs are */
+    r->live_target = 1;
     r->target_time = isnan(time) ? t_now : time;
     for (int i = 0; i < n; i++) {
         r->live[TARGET * n + i] = values[i];
@@ -172,43 +192,88 @@ static void take_packet(Kernel *s, RealTime *r, ssize_t size, const void *from, 
     }
 }
 
-/* The reference at t_new and its motion over the next step: first carried over the step just
- * taken with the acceleration chosen for it (not on the step the input starts: it starts where
- * the replaced outputs are), then the next step's acceleration chosen towards the target
- * (extrapolated by its rate and acceleration from the time it was given for) as fast as the
- * limits allow, braking in time, then held within the envelope by the guard. Constant over a step, that acceleration makes the value, rate and
+/* The acceleration, constant over the next h, that takes a value moving at `rate` towards a goal
+ * moving at goal_rate with goal_acceleration, as fast as the limits allow, and lands on it: the
+ * rate it asks for at the step's end is the largest from which braking at a_max stops on the goal
+ * (the braking curve of whole steps: the step's own travel counted, so braking starts in time and
+ * never overshoots), near the goal a quarter of the error a step (the error then decays by real
+ * factors 0.70 and 0.18 a step: no ringing). */
+static double towards(double value, double rate, double goal, double goal_rate, double goal_acceleration,
+                      double v_max, double a_max, double h) {
+    const double error = goal - value, distance = fabs(error), direction = error < 0.0 ? -1.0 : 1.0;
+    const double closing = direction * (rate - goal_rate);      /* [/s] towards the goal, relative to it */
+    /* w, the closing rate at the step's end: (closing + w) h / 2 + w^2 / (2 a_max) = distance */
+    const double room = 0.25 * h * h + 2.0 * (distance - 0.5 * closing * h) / a_max;
+    const double braking = room >= 0.0 ? a_max * (sqrt(room) - 0.5 * h) : -INFINITY;
+    double wanted = goal_rate + goal_acceleration * h + direction * fmin(braking, 0.25 * distance / h);
+    wanted = fmax(-v_max, fmin(v_max, wanted));
+    return fmax(-a_max, fmin(a_max, (wanted - rate) / h));
+}
+
+/* The reference carried over the step just taken with the motion handed on for it, chosen or
+ * passed on (not on the step it starts: it starts where the replaced outputs are). */
+static void carry_reference(RealTime *r, double h) {
+    const int n = r->n_live;
+    if (r->live_active < 2) return;
+    for (int i = 0; i < n; i++) {
+        double *value = &r->live[VALUE * n + i], *rate = &r->live[RATE * n + i];
+        const double acceleration = r->live[ACCELERATION * n + i];
+        *value += *rate * h + 0.5 * acceleration * h * h;
+        *rate += acceleration * h;
+    }
+}
+
+/* The reference's motion over the next step: its acceleration chosen towards the target
+ * (extrapolated by its rate and acceleration from the time it was given for; where the reference
+ * is outside the envelope, towards the way back in that `recover` gives), then held within the
+ * envelope by the guard. Constant over a step, that acceleration makes the value, rate and
  * acceleration handed to the inputs the reference's exact motion over the step. */
 static void advance_reference(RealTime *r, double t_new, double h) {
-    const int n = r->n_live, carry = r->live_active == 2;
-    double since = t_new - r->target_time;
+    const int n = r->n_live;
+    double since = t_new - r->target_time, back[64];
     if (fabs(since) > r->watchdog) since = copysign(r->watchdog, since); /* never extrapolated further */
+    const int returning = r->recover ? r->recover(r->guard_context, &r->live[VALUE * n], back) : 0;
     for (int i = 0; i < n; i++) {
-        double *value = &r->live[VALUE * n + i], *rate = &r->live[RATE * n + i], *acceleration = &r->live[ACCELERATION * n + i];
-        if (carry) {
-            *value += *rate * h + 0.5 * *acceleration * h * h;
-            *rate += *acceleration * h;
-        }
-        const double a_max = r->acceleration_max[i], v_max = r->rate_max[i];
-        const double goal = r->live[TARGET * n + i] + r->live[TARGET_RATE * n + i] * since +
-                            0.5 * r->live[TARGET_ACCELERATION * n + i] * since * since;
-        const double goal_rate = r->live[TARGET_RATE * n + i] + r->live[TARGET_ACCELERATION * n + i] * since;
-        const double error = goal - *value;
-        /* the rate wanted: the braking curve sqrt(2 a |e|) far from the goal, 0.25 |e| / h near it (the
-         * error then decays by real factors 0.70 and 0.18 a step: no ringing) */
-        double wanted = goal_rate + copysign(fmin(sqrt(2.0 * a_max * fabs(error)), 0.25 * fabs(error) / h), error);
-        wanted = fmax(-v_max, fmin(v_max, wanted));
-        *acceleration = fmax(-a_max, fmin(a_max, (wanted - *rate) / h));
+        const double target = r->live[TARGET * n + i], target_rate = r->live[TARGET_RATE * n + i],
+                     target_acceleration = r->live[TARGET_ACCELERATION * n + i];
+        const double goal = returning ? back[i] : target + target_rate * since + 0.5 * target_acceleration * since * since;
+        const double goal_rate = returning ? 0.0 : target_rate + target_acceleration * since;
+        r->live[ACCELERATION * n + i] = towards(r->live[VALUE * n + i], r->live[RATE * n + i], goal, goal_rate,
+                                                returning ? 0.0 : target_acceleration, r->rate_max[i],
+                                                r->acceleration_max[i], h);
     }
-    if (r->guard) { /* the application's envelope: it may hold the motion back, towards braking */
-        const int held = r->guard(r->guard_context, h, &r->live[VALUE * n], &r->live[RATE * n],
-                                  &r->live[ACCELERATION * n]);
-        for (int k = 0; k < GUARD_KINDS; k++)
-            if (held & (1 << k)) r->guard_counts[k]++;
-    }
+    /* the application's envelope: it may hold the motion back, towards braking (not on the way back in) */
+    const int held = returning ? returning
+                     : r->guard ? r->guard(r->guard_context, h, &r->live[VALUE * n], &r->live[RATE * n],
+                                           &r->live[ACCELERATION * n])
+                                : 0;
+    for (int k = 0; k < GUARD_KINDS; k++)
+        if (held & (1 << k)) r->guard_counts[k]++;
     r->live_active = 2;
 }
 
-static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *row) {
+/* 1 if the replaced outputs' own motion ([3][n]) may be taken as it is: inside the envelope, and the
+ * guard would take its acceleration. */
+static int own_motion_safe(RealTime *r, double h, const double *own) {
+    const int n = r->n_live;
+    double scratch[64];
+    if (r->recover && r->recover(r->guard_context, own, scratch)) return 0;
+    for (int i = 0; i < n; i++) scratch[i] = own[2 * n + i];
+    return !r->guard || !r->guard(r->guard_context, h, own, own + n, scratch);
+}
+
+/* 1 if the reference has caught up with the replaced outputs' own motion: the same values within
+ * 0.1 um (urad) and rates within 10 um/s, so that handing them back moves nothing a drive feels. */
+static int caught_up(const RealTime *r, const double *own) {
+    const int n = r->n_live;
+    for (int i = 0; i < n; i++)
+        if (!(fabs(r->live[VALUE * n + i] - own[i]) <= 1e-7 && fabs(r->live[RATE * n + i] - own[n + i]) <= 1e-5))
+            return 0;
+    return 1;
+}
+
+/* The datagrams waiting, each classified. */
+static void receive_packets(Kernel *s, RealTime *r, double t_new, double h) {
     for (;;) {
         struct sockaddr_storage from;
         socklen_t from_size = sizeof from;
@@ -218,9 +283,12 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         if (size < 0) break; /* nothing more waiting (or the socket failed: the input is then silent) */
         take_packet(s, r, size, &from, from_size <= sizeof from ? (unsigned)from_size : (unsigned)sizeof from, t_new, h);
     }
-    if (!r->live_active) return;
-    if (!r->watchdog_engaged && clock_seconds(CLOCK_MONOTONIC) - r->last_good > r->watchdog) {
-        const int n = r->n_live;
+}
+
+static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *row) {
+    const int n = r->n_live;
+    if (r->listen_fd >= 0) receive_packets(s, r, t_new, h);
+    if (r->live_target && !r->watchdog_engaged && clock_seconds(CLOCK_MONOTONIC) - r->last_good > r->watchdog) {
         for (int i = 0; i < n; i++) {
             r->live[TARGET * n + i] = r->neutral[i];
             r->live[TARGET_RATE * n + i] = r->live[TARGET_ACCELERATION * n + i] = 0.0;
@@ -231,29 +299,47 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         r->watchdog_time = t_new;
         r->counts[LIVE_WATCHDOG]++;
     }
+    carry_reference(r, h);
+    if (!r->live_target) { /* no live target: the outputs' own motion, guarded where asked */
+        double own[3 * 64];
+        if (!r->guard_source) return;
+        own_motion(s, r, own);
+        for (int i = 0; i < 3 * n; i++) r->live[TARGET * n + i] = own[i];
+        r->target_time = t_new;
+        /* passed on as it is while the guard would take it (once a guarded reference has caught up
+         * with it), kept as the reference's motion: what the inputs were handed over the step, from
+         * which a reference the guard must hold starts, with no jump */
+        if ((r->live_active != 2 || caught_up(r, own)) && own_motion_safe(r, h, own)) {
+            memcpy(r->live, own, 3 * (size_t)n * sizeof(double));
+            r->live_active = 3;
+            return;
+        }
+        if (!r->live_active) start_reference(s, r);
+    }
+    if (!r->live_active) return;
     advance_reference(r, t_new, h);
     const KernelInstance *in = &s->instances[r->live_instance];
     double *latest = s->samples + (size_t)(s->n_samples - 1) * (size_t)s->n_sample_values;
-    for (int i = 0; i < r->n_live; i++) { /* the history's newest sample, as if the instance had given it */
+    for (int i = 0; i < n; i++) { /* the history's newest sample, as if the instance had given it */
         const int at = in->output_offset + r->live_index[i];
-        latest[at] = r->live[VALUE * r->n_live + i];
-        if (in->rate_order >= 1) s->exact_rates[at] = r->live[RATE * r->n_live + i];
-        if (in->rate_order >= 2) s->exact_rates[s->n_sample_values + at] = r->live[ACCELERATION * r->n_live + i];
+        latest[at] = r->live[VALUE * n + i];
+        if (in->rate_order >= 1) s->exact_rates[at] = r->live[RATE * n + i];
+        if (in->rate_order >= 2) s->exact_rates[s->n_sample_values + at] = r->live[ACCELERATION * n + i];
         if (r->live_column[i] >= 0) row[r->live_column[i]] = latest[at];
         if (r->live_rate_index[i] < 0) continue;
         /* the output that carries the reference's rate (a master that gives no derivatives hands it
          * to the inputs that take the rate): the live rate, its rate the live acceleration, constant
          * over the step */
         const int rate_at = in->output_offset + r->live_rate_index[i];
-        latest[rate_at] = r->live[RATE * r->n_live + i];
-        if (in->rate_order >= 1) s->exact_rates[rate_at] = r->live[ACCELERATION * r->n_live + i];
+        latest[rate_at] = r->live[RATE * n + i];
+        if (in->rate_order >= 1) s->exact_rates[rate_at] = r->live[ACCELERATION * n + i];
         if (in->rate_order >= 2) s->exact_rates[s->n_sample_values + rate_at] = 0.0;
         if (r->live_rate_column[i] >= 0) row[r->live_rate_column[i]] = latest[rate_at];
     }
 }
 
 double realtime_after_step(Kernel *s, RealTime *r, double t_new, double h, double *row) {
-    if (r->listen_fd >= 0) live_step(s, r, t_new, h, row);
+    if (r->listen_fd >= 0 || r->guard_source) live_step(s, r, t_new, h, row);
     if (r->stream_fd >= 0 && --r->stream_countdown <= 0) {
         stream_row(r, row);
         r->stream_countdown = r->stream_every;

@@ -28,6 +28,7 @@ from .datagrams import MAC_SIZE, MAX_VALUES, REFERENCE, SAMPLE, address, is_loop
 LIVE_KINDS = ("accepted", "outside", "late", "future", "repeated", "out_of_order", "malformed", "old_version",
               "non_finite", "beyond_limits", "foreign", "unauthenticated", "watchdog")
 GUARD_KINDS = 8  # the guard's limits, as bits (kernel.h)
+MAX_LIVE = 64    # the outputs a live input replaces, at most (realtime.c's scratch)
 
 
 @dataclass(frozen=True)
@@ -42,8 +43,13 @@ class LiveInput:
     to the live rate (the inputs that take a rate where the master gives no derivatives);
     `guard`: a C function int(void *context, double h, const double *value, const double *rate,
     double *acceleration) that holds the reference within the envelope, and its context;
-    `guard_kinds`: what its bits 0, 1, .. are called in the report ('the stroke'); `key`: the
-    shared key every datagram must be tagged with (None: none)."""
+    `guard_kinds`: what its bits 0, 1, .. are called in the report ('the stroke'); `recover`: a C
+    function int(void *context, const double *value, double *goal) that, for values outside the
+    envelope, gives the values to go back to (the guard's context; None: a reference outside is only
+    braked); `guarded`: with no live target (no packet yet, or no --listen at all), the instance's own
+    outputs pass through the guard too: taken as they are while the guard would take their motion,
+    otherwise followed by a reference held within the envelope until it has caught up with them;
+    `key`: the shared key every datagram must be tagged with (None: none)."""
     instance: str
     outputs: Sequence[str]
     rate_max: Sequence[float]
@@ -58,6 +64,8 @@ class LiveInput:
     guard: object = None  # a ctypes function pointer
     guard_context: object = None
     guard_kinds: Sequence[str] = ()
+    recover: object = None  # a ctypes function pointer
+    guarded: bool = False
     key: bytes | None = None
 
 
@@ -65,7 +73,8 @@ class LiveInput:
 class RealTime:
     """A run paced at `factor` (simulated seconds per wall second; None: as fast as it goes),
     streamed to `stream` (udp://HOST:PORT[?every=N]: a datagram every N macro steps) with the
-    recorded columns `stream_names` (default all), and driven through `listen` by `live`."""
+    recorded columns `stream_names` (default all), and driven through `listen` by `live` (with no
+    `listen`, a `live` that is `guarded` holds the instance's own outputs within its envelope)."""
     factor: float | None = 1.0
     stream: str | None = None
     stream_names: Sequence[str] | None = None
@@ -107,7 +116,8 @@ class _RealTime(ctypes.Structure):
                 ("live_instance", ctypes.c_int), ("n_live", ctypes.c_int), ("live_index", _I),
                 ("live_column", _I), ("live_rate_index", _I), ("live_rate_column", _I), ("rate_max", _D), ("acceleration_max", _D), ("neutral", _D),
                 ("late_after", ctypes.c_double), ("watchdog", ctypes.c_double), ("admissible", _P),
-                ("admissible_context", _P), ("guard", _P), ("guard_context", _P), ("key", _P),
+                ("admissible_context", _P), ("guard", _P), ("recover", _P), ("guard_context", _P),
+                ("guard_source", ctypes.c_int), ("live_target", ctypes.c_int), ("key", _P),
                 ("key_size", ctypes.c_int), ("live", _D), ("target_time", ctypes.c_double),
                 ("last_good", ctypes.c_double), ("live_active", ctypes.c_int), ("watchdog_engaged", ctypes.c_int),
                 ("owned", ctypes.c_int), ("owner_size", ctypes.c_uint), ("owner_address", ctypes.c_ubyte * 128),
@@ -133,6 +143,7 @@ class Pacing:
     watchdog_time: float | None = None
     refusal: str = "not admissible"
     held: dict[str, int] = field(default_factory=dict)
+    dropped: int = 0  # datagrams the operating system dropped before the run could read them
 
     @property
     def overruns(self) -> int:
@@ -166,14 +177,16 @@ class Pacing:
                      "beyond_limits": "with rates or accelerations beyond the limits",
                      "future": "for a time beyond the next step", "foreign": "from another sender"}
             taken = self.live.get("accepted", 0) + self.live.get("outside", 0)
-            held = {k: v for k, v in self.held.items() if v}
             out.append(f"live input: {taken} references taken" + (
                 f" ({self.live['outside']} {self.refusal}: held at it)" if self.live.get("outside") else "") + (
                 "; refused: " + ", ".join(f"{v} {names.get(k, k)}" for k, v in refused.items()) if refused else "") + (
-                "; the envelope held the reference back at " + ", ".join(f"{v} steps by {k}" for k, v in held.items())
-                if held else "") +
+                f"; {self.dropped} dropped unread by the operating system (its receive buffer full)"
+                if self.dropped else "") +
                 (f"; the watchdog engaged {self.live['watchdog']} times, last at t = {self.watchdog_time:.3f} s "
                  "(no input: back to neutral)" if self.live.get("watchdog") else ""))
+        held = {k: v for k, v in self.held.items() if v}
+        if held:
+            out.append("the envelope held the reference back at " + ", ".join(f"{v} steps by {k}" for k, v in held.items()))
         return out
 
     def row(self) -> dict[str, float]:
@@ -203,8 +216,10 @@ class Session:
         try:
             if options.stream:
                 self._open_stream(options, list(columns))
+            if options.live is not None and (options.listen or options.live.guarded):
+                self._open_reference(options.live, [tuple(r) for r in record], list(instances), outputs)
             if options.listen:
-                self._open_listen(options, [tuple(r) for r in record], list(instances), outputs)
+                self._open_listen(options)
         except BaseException:
             self.close()
             raise
@@ -237,9 +252,7 @@ class Session:
         self.layout_datagram = layout_datagram(names)
         self.between_batches()  # the layout, before the first sample
 
-    def _open_listen(self, options: RealTime, record: list[tuple[str, str]], instances: list[str],
-                     outputs: dict[str, Sequence[str]]) -> None:
-        live = options.live
+    def _open_listen(self, options: RealTime) -> None:
         host, port, query = address(options.listen, "--listen")
         if query:
             raise UsageError(f"--listen {options.listen}: takes no options")
@@ -251,8 +264,24 @@ class Session:
         sock.setblocking(False)
         self.listen_socket = sock
         r = self.state
+        r.listen_fd = sock.fileno()
+        live = options.live
+        if live.key:
+            key = ctypes.create_string_buffer(live.key, len(live.key))
+            self._keep.append(key)
+            r.key, r.key_size = ctypes.cast(key, ctypes.c_void_p).value, len(live.key)
         n = len(live.outputs)
-        r.listen_fd, r.live_instance, r.n_live = sock.fileno(), instances.index(live.instance), n
+        r.receive_size = REFERENCE.size + 8 * 3 * n + MAC_SIZE + 8
+        r.received = self._array(np.zeros(r.receive_size // 8 + 1)).ctypes.data
+
+    def _open_reference(self, live: LiveInput, record: list[tuple[str, str]], instances: list[str],
+                        outputs: dict[str, Sequence[str]]) -> None:
+        """The outputs the reference replaces, its limits, envelope and state."""
+        r = self.state
+        n = len(live.outputs)
+        if n > MAX_LIVE:
+            raise UsageError(f"a live input replaces at most {MAX_LIVE} outputs, not {n}")
+        r.live_instance, r.n_live = instances.index(live.instance), n
         own = list(outputs[live.instance])
         ints = ctypes.POINTER(ctypes.c_int)
         r.live_index = self._array([own.index(o) for o in live.outputs], np.intc).ctypes.data_as(ints)
@@ -277,13 +306,11 @@ class Session:
             r.guard = ctypes.cast(live.guard, ctypes.c_void_p).value
             r.guard_context = ctypes.cast(live.guard_context, ctypes.c_void_p).value
             self._keep.append((live.guard, live.guard_context))
-        if live.key:
-            key = ctypes.create_string_buffer(live.key, len(live.key))
-            self._keep.append(key)
-            r.key, r.key_size = ctypes.cast(key, ctypes.c_void_p).value, len(live.key)
+        if live.recover is not None:
+            r.recover = ctypes.cast(live.recover, ctypes.c_void_p).value
+            self._keep.append(live.recover)
+        r.guard_source = int(live.guarded)
         r.live = self._array(np.zeros(6 * n)).ctypes.data_as(doubles)
-        r.receive_size = REFERENCE.size + 8 * 3 * n + MAC_SIZE + 8
-        r.received = self._array(np.zeros(r.receive_size // 8 + 1)).ctypes.data
 
     def _socket(self, host: str) -> socket.socket:
         import socket  # here: a run that streams and listens to nothing loads no networking
@@ -339,12 +366,32 @@ class Session:
         r = self.state
         live = dict(zip(LIVE_KINDS, list(r.counts))) if r.listen_fd >= 0 else {}
         kinds = self.options.live.guard_kinds if self.options.live else ()
-        held = {kind: int(r.guard_counts[k]) for k, kind in enumerate(kinds)} if live else {}
+        held = {kind: int(r.guard_counts[k]) for k, kind in enumerate(kinds)} if r.n_live else {}
         return Pacing(self.options.factor, np.concatenate(self.lateness) if self.lateness else np.zeros(0),
                       np.concatenate(self.finish) if self.finish else np.zeros(0), waited=float(r.waited),
                       streamed=int(r.stream_sequence), stream_failed=int(r.stream_failed), live=live,
                       watchdog_time=float(r.watchdog_time) if live.get("watchdog") else None,
-                      refusal=self.options.live.refusal if self.options.live else "not admissible", held=held)
+                      refusal=self.options.live.refusal if self.options.live else "not admissible", held=held,
+                      dropped=self._dropped())
+
+    def _dropped(self) -> int:
+        """Datagrams the operating system dropped at the listening socket, its receive buffer full:
+        the socket's drop counter (Linux: /proc/net/udp and udp6, by the socket's inode; 0 where
+        it cannot be read)."""
+        if self.state.listen_fd < 0:
+            return 0
+        import os
+        inode = str(os.fstat(self.state.listen_fd).st_ino)
+        for table in ("/proc/net/udp", "/proc/net/udp6"):
+            try:
+                with open(table) as f:
+                    for line in f.readlines()[1:]:
+                        fields = line.split()
+                        if len(fields) > 12 and fields[9] == inode:
+                            return int(fields[12])
+            except OSError:
+                continue
+        return 0
 
     def close(self) -> None:
         for sock in self.sockets:

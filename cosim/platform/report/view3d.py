@@ -24,6 +24,7 @@ from scipy.spatial.transform import Rotation
 from ...engine.files import write_text
 from ..core import Core, mechanics_value
 from ..ports import POSE
+from .limits import excursion_lines, excursions
 
 MAX_FRAMES = 200
 CAMERAS = {"iso": dict(x=1.6, y=-1.6, z=1.1), "front": dict(x=0.0, y=-2.4, z=0.4),
@@ -68,6 +69,7 @@ class Frames:
     out_of_stroke: np.ndarray  # n x 6 bool
     past_joint_limit: np.ndarray
     load: np.ndarray           # n x 3: the external force in the base frame [N]
+    tilt: np.ndarray | None = None  # n x 6: each leg's larger tilt of its two joints [rad]
 
 
 def frames(geometry: Geometry, time: np.ndarray, pose: np.ndarray, pose_ref: np.ndarray | None,
@@ -77,11 +79,11 @@ def frames(geometry: Geometry, time: np.ndarray, pose: np.ndarray, pose_ref: np.
     kinematics = geometry.core.pose_kinematics(pose)
     length = kinematics["length"]
     low, high = geometry.stroke
+    tilt = np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])
     return Frames(time, geometry.core.upper_joints_at(pose),
                   None if pose_ref is None else geometry.core.upper_joints_at(pose_ref), length,
-                  (length - low) / (high - low), (length < low) | (length > high),
-                  np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]) > geometry.joint_limit,
-                  np.zeros((len(time), 3)) if force is None else force)
+                  (length - low) / (high - low), (length < low) | (length > high), tilt > geometry.joint_limit,
+                  np.zeros((len(time), 3)) if force is None else force, tilt)
 
 
 def decimate(time: np.ndarray, most: int = MAX_FRAMES) -> np.ndarray:
@@ -237,20 +239,15 @@ SYNC_SCRIPT = """<script>
 
 
 def extremes(geometry: Geometry, f: Frames) -> list[str]:
-    """Per leg, the shortest and longest it gets against the stroke, and when it leaves the
-    stroke or passes the joint-angle limit first."""
+    """Per leg, the shortest and longest it gets against the stroke, then each stretch of time it
+    spends past the stroke or the joint-angle limit, with the farthest it went (excursions)."""
     low, high = geometry.stroke
     lines = [f"stroke [{low:g}, {high:g}] m, joint-angle limit {np.degrees(geometry.joint_limit):.1f} deg"]
     for i in range(6):
         shortest, longest = f.length[:, i].min(), f.length[:, i].max()
-        line = (f"leg {i + 1}: {shortest:.4f} to {longest:.4f} m ({100 * f.use[:, i].min():.0f} to "
-                f"{100 * f.use[:, i].max():.0f} % of the stroke)")
-        if f.out_of_stroke[:, i].any():
-            line += f", out of stroke from t = {f.time[np.argmax(f.out_of_stroke[:, i])]:.3g} s"
-        if f.past_joint_limit[:, i].any():
-            line += f", joint past its limit from t = {f.time[np.argmax(f.past_joint_limit[:, i])]:.3g} s"
-        lines.append(line)
-    return lines
+        lines.append(f"leg {i + 1}: {shortest:.4f} to {longest:.4f} m ({100 * f.use[:, i].min():.0f} to "
+                     f"{100 * f.use[:, i].max():.0f} % of the stroke)")
+    return lines + excursion_lines(excursions(f.time, f.length, f.tilt, geometry.stroke, geometry.joint_limit))
 
 
 def view_samples(duration: float) -> int:

@@ -18,7 +18,7 @@ from ...engine.run import Plan
 from ...engine.settings import output_settings, to_strings
 from ..ports import DRIVES, LEGS, POSE
 from ..scene import Scene, SceneError
-from ..scene.parameter_sets import drive_set, scene_mechanics
+from ..scene.parameter_sets import drive_set, envelope_margins, scene_mechanics
 from ..scene.signals import scene_trajectory
 from .system import columns, platform_structure
 from .tuning import SizingError, check_limit, check_sizing, design, hold_currents, leg_plants, summary
@@ -70,9 +70,11 @@ def scene_record(scene: Scene, fmus: list[Path] | None = None) -> tuple[list[tup
 
 
 def scene_values(scene: Scene) -> tuple[dict, dict]:
-    """The mechanics' and our drives' parameter values: the platform's set, the drive set (a
-    drive sized for this platform), then the scene's own, which win."""
+    """The mechanics' and our drives' parameter values: the platform's set, the envelope's margins
+    for its drive kind (params/envelope.toml), the drive set (a drive sized for this platform),
+    then the scene's own, which win."""
     drive_values, drive_mechanics = drive_set(scene.drive_set) if scene.drive_set else ({}, {})
+    drive_mechanics = {**envelope_margins(scene.parameter_set, scene.drive), **drive_mechanics}
     mechanics_values = scene_mechanics(scene.parameter_set, scene.mass_set, drive_mechanics, scene.mechanics_parameters)
     return mechanics_values, {**drive_values, **(scene.drive_parameters if scene.drive_fmu is None else {})}
 
@@ -163,7 +165,8 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
 
 # the cueing FMU's algorithm parameter per [cueing] algorithm
 CUEING_ALGORITHMS = {"classical": 1, "mpc": 2}
-# the mechanics' limits the cueing FMU takes by the same names (the MPC's envelope)
+# the mechanics' limits the cueing FMU takes by the same names (the MPC's envelope: the guard's, the
+# joints' tilt less limit.joint_margin)
 CUEING_LIMITS = ("leg_length_min", "leg_length_max", "stroke_margin", "leg_velocity", "joint_angle")
 
 
@@ -181,6 +184,7 @@ def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
               for name, side in (("base_joint", platform.lower_joint), ("platform_joint", platform.upper_joint))
               for leg in LEGS for k, axis in enumerate("xyz")}
     limits = {f"limit.{name}": float(mechanics_value(mechanics_values, f"limit.{name}")) for name in CUEING_LIMITS}
+    limits["limit.joint_angle"] -= float(mechanics_value(mechanics_values, "limit.joint_margin"))  # the guard's
     return {"vehicle.file": scene.vehicle, "algorithm": CUEING_ALGORITHMS[scene.cueing_algorithm], **neutral,
             "gravity": float(np.linalg.norm(gravity_of(mechanics_values))), **joints, **limits,
             **scene.cueing_parameters}

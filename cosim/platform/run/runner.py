@@ -20,6 +20,7 @@ from ...engine.run import Plan, run
 from ..core import gravity_of
 from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines, vehicle_motion
 from ..ports import DRIVES, POSE, per_leg
+from ..report.limits import result_excursion_lines
 from ..report.plots import units
 from ..scene import Scene
 from .compile import CompiledScene, compile_scene
@@ -78,6 +79,9 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
     try:
         compiled = compile_scene(scene)
         plan, notes = compiled.plan, compiled.notes
+        if adapt is None and scene.vehicle is not None:
+            from .guard import guarded_plan
+            adapt = guarded_plan  # a cueing output is held within the platform's envelope
         if adapt is not None:
             plan, remark = adapt(compiled)
             if remark:
@@ -112,6 +116,8 @@ def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) 
     report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
                           tuning=compiled.tuning, diverged=outcome.diverged)
     report.name = scene.name
+    if len(result) > 1:
+        report.remarks += result_excursion_lines(compiled.mechanics, result)
     if scene.fmi == 3 and scene.algorithm.order > 0:
         report.remarks.append("FMI 3.0: FMI 3.0 has no input derivatives; the master gives each input's rate and "
                               "curvature through the FMUs' own inputs fmi.rate.* and fmi.curvature.*, so the run "

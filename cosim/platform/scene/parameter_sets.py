@@ -71,6 +71,16 @@ def meng_mechanics(c: dict) -> dict[str, float]:
     return values
 
 
+def envelope_margins(platform: str, drive: str) -> dict[str, float]:
+    """The margins a guarded reference keeps off the stroke and the joints' limit on `platform`
+    driven by `drive` (params/envelope.toml, measured; {} where it lists none: the mechanics FMU's
+    defaults)."""
+    margins = read_parameter_set("envelope").get(platform, {}).get(drive, {})
+    return {**({"limit.stroke_margin": margins["stroke_margin"]} if "stroke_margin" in margins else {}),
+            **({"limit.joint_margin": math.radians(margins["joint_margin_deg"])}
+               if "joint_margin_deg" in margins else {})}
+
+
 def sumnu_mechanics(c: dict, mass_set: str = "heavy") -> dict[str, float]:
     """The Sumnu platform driven by direct (linear-motor) forces: no screw, no motor systems on the
     legs (the forcer and stator masses belong to the legs' parts; see the linear-motor FMU), no

@@ -1,9 +1,10 @@
-"""The motion envelope of a platform in real time (fmu/mechanics/envelope.c, docs/guide/realtime.md):
-where a live reference may go. Every leg within its stroke (limit.leg_length_min/max) less
-limit.stroke_margin at each end, which covers the drives' tracking error; every joint within
-limit.joint_angle; every leg's speed and acceleration within limit.leg_velocity and
-limit.leg_acceleration. The step kernel's guard holds the reference inside it on what is actually
-applied, braking in time; a scene's own reference is checked against it before a real-time run.
+"""The motion envelope of a platform (fmu/mechanics/envelope.c, docs/guide/realtime.md): where a
+guarded reference may go. Every leg within its stroke (limit.leg_length_min/max) less
+limit.stroke_margin at each end and every joint within limit.joint_angle less limit.joint_margin,
+margins that cover the platform's tracking error; every leg's speed and acceleration within
+limit.leg_velocity and limit.leg_acceleration. The step kernel's guard holds the reference inside it
+on what is actually applied, braking in time, and brings one that is outside back in; a scene's own
+reference is checked against it before a real-time run.
 """
 
 from __future__ import annotations
@@ -18,28 +19,33 @@ from ...engine.errors import UsageError
 from ..core import Core, PlatformEnvelope, mechanics_value
 
 # what the guard's bits (ENVELOPE_STROKE, _JOINT, _LEG_VELOCITY, _LEG_ACCELERATION) are called in the report
-GUARD_KINDS = ("the stroke", "a joint's tilt", "a leg's speed", "a leg's acceleration")
+GUARD_KINDS = ("the stroke", "a joint's tilt", "a leg's speed", "a leg's acceleration",
+               "its way back in from outside")
 
 
 @dataclass(frozen=True)
 class Envelope:
-    """A platform's envelope: the stroke [m] and its margin [m], the joints' largest tilt [rad],
-    the legs' largest speed [m/s] and acceleration [m/s^2]."""
+    """A platform's envelope: the stroke [m] and its margin [m], the joints' largest tilt [rad] and
+    its margin [rad], the legs' largest speed [m/s] and acceleration [m/s^2]."""
     stroke: tuple[float, float]
     margin: float
     joint_angle: float
     leg_velocity: float
     leg_acceleration: float
+    joint_margin: float = 0.0
 
     @classmethod
     def of(cls, mechanics_values: Mapping[str, object]) -> "Envelope":
         def value(name: str) -> float:
             return float(mechanics_value(mechanics_values, f"limit.{name}"))
         envelope = cls((value("leg_length_min"), value("leg_length_max")), value("stroke_margin"),
-                       value("joint_angle"), value("leg_velocity"), value("leg_acceleration"))
+                       value("joint_angle"), value("leg_velocity"), value("leg_acceleration"), value("joint_margin"))
         if envelope.usable[0] >= envelope.usable[1]:
             raise UsageError(f"limit.stroke_margin = {envelope.margin:g} m leaves no stroke of "
-                             f"{envelope.stroke[0]:g}-{envelope.stroke[1]:g} m for a live reference")
+                             f"{envelope.stroke[0]:g}-{envelope.stroke[1]:g} m for a guarded reference")
+        if envelope.usable_joint_angle <= 0.0:
+            raise UsageError(f"limit.joint_margin = {envelope.joint_margin:g} rad leaves no tilt of limit.joint_angle = "
+                             f"{envelope.joint_angle:g} rad for a guarded reference")
         return envelope
 
     @property
@@ -47,15 +53,20 @@ class Envelope:
         """The legs' lengths a reference may take [m]: the stroke less the margin."""
         return self.stroke[0] + self.margin, self.stroke[1] - self.margin
 
+    @property
+    def usable_joint_angle(self) -> float:
+        """The tilt a reference may take at a joint [rad]: the limit less its margin."""
+        return self.joint_angle - self.joint_margin
+
     def words(self) -> str:
         return (f"the stroke {self.stroke[0]:g}-{self.stroke[1]:g} m less {1e3 * self.margin:g} mm at each end, "
-                f"joints within {np.degrees(self.joint_angle):.3g} deg")
+                f"joints within {np.degrees(self.joint_angle):.3g} deg less {np.degrees(self.joint_margin):.3g} deg")
 
     def c_struct(self, core: Core, acceleration_max: Sequence[float]) -> PlatformEnvelope:
         """The C side's envelope for `core`'s platform, braking at `acceleration_max` per channel."""
         arm = float(np.linalg.norm(np.array(core.p.upper_joint[:]).reshape(-1, 3), axis=1).max())
-        return PlatformEnvelope(core.p, *self.usable, self.joint_angle, self.leg_velocity, self.leg_acceleration,
-                                (ctypes.c_double * 6)(*acceleration_max), arm)
+        return PlatformEnvelope(core.p, *self.usable, self.usable_joint_angle, self.leg_velocity,
+                                self.leg_acceleration, (ctypes.c_double * 6)(*acceleration_max), arm)
 
 
 def within(core: Core, envelope: PlatformEnvelope, poses: np.ndarray) -> np.ndarray:
@@ -70,17 +81,18 @@ def within(core: Core, envelope: PlatformEnvelope, poses: np.ndarray) -> np.ndar
 def check_reference(name: str, core: Core, envelope: Envelope, times: np.ndarray, poses: np.ndarray) -> str | None:
     """What to say, before a run in real time, of a scene's own reference that leaves the
     envelope: past the legs' stroke (a rig's end stops), or within it into the margin or past a
-    joint's tilt; None if it stays inside. (The guard holds a live reference, not the scene's.)"""
+    joint's tilt; None if it stays inside. (The run's guard holds it within the envelope.)"""
     bare = Envelope(envelope.stroke, 0.0, 3.2, np.inf, np.inf)  # the stroke alone
     inside = within(core, bare.c_struct(core, [1.0] * 6), poses)
     if not inside.all():
         return (f"{name}: its own reference takes {_where(core, bare, times, poses, inside)}, past the legs' stroke "
-                f"({envelope.stroke[0]:g}-{envelope.stroke[1]:g} m): on a rig, into the end stops")
+                f"({envelope.stroke[0]:g}-{envelope.stroke[1]:g} m): this run's guard holds it within the envelope "
+                f"({envelope.words()})")
     inside = within(core, envelope.c_struct(core, [1.0] * 6), poses)
     if inside.all():
         return None
-    return (f"{name}: its own reference takes {_where(core, envelope, times, poses, inside)}, outside the envelope a "
-            f"live reference is held in ({envelope.words()})")
+    return (f"{name}: its own reference takes {_where(core, envelope, times, poses, inside)}, outside the envelope "
+            f"({envelope.words()}): this run's guard holds it within")
 
 
 def _where(core: Core, envelope: Envelope, times: np.ndarray, poses: np.ndarray, inside: np.ndarray) -> str:
