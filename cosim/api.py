@@ -31,7 +31,7 @@ from .engine.outcome import Report, RunStopped
 from .engine.structure import SystemStructure
 from .platform.scene import Scene, SceneError, load_scene
 
-SYSTEM_SUFFIXES = (".ssp", ".ssd")
+SYSTEM_SUFFIXES = (".ssp", ".ssd", ".fmu")  # a system: an SSP, or one Co-Simulation FMU
 
 __all__ = ["Run", "Advice", "load", "simulate", "export_ssp", "sweep", "advise", "RunStopped", "SceneError", "Scene"]
 
@@ -85,6 +85,9 @@ def load(model: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene
         if overrides:
             raise UsageError("load: overrides are a scene's keys; an SSP system's run settings and parameter values "
                              "go to simulate(..., settings=...) or its components' parameters")
+        if Path(str(model)).suffix.lower() == ".fmu":
+            from .engine.single import fmu_system
+            return fmu_system(Path(model))
         from .engine.ssp import read_ssp
         return read_ssp(Path(model))
     return load_scene(model, dict(overrides or {}))
@@ -98,8 +101,8 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
     """Runs a scene or an SSP system and returns its named results.
 
     Args:
-        model: a scene's name or path, a `Scene` (from `load`), an .ssp/.ssd path or a
-            `SystemStructure`.
+        model: a scene's name or path, a `Scene` (from `load`), an .ssp/.ssd path, a
+            Co-Simulation .fmu (run alone: its outputs recorded) or a `SystemStructure`.
         duration: the simulated time [s], instead of the scene's or system's own.
         overrides: a scene's values at dotted keys (see `load`); with a `Scene`, over the ones
             it was made with (`Scene.changed`; its file is not read again).

@@ -1,5 +1,6 @@
-"""`cosim run SCENE|FILE.ssp|FILE.ssd`: one run through `cosim.simulate`, its report printed and its
-results written to --out (CSV, .mat, the FMUs' log; a scene's plots and interactive report)."""
+"""`cosim run SCENE|FILE.ssp|FILE.ssd|FILE.fmu`: one run through `cosim.simulate`, its report printed and
+its results written to --out (CSV, .mat, the FMUs' log; a scene's plots and interactive report). A
+Co-Simulation FMU runs alone as a one-component system (cosim.engine.single)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,10 @@ from .common import report, seconds
 
 
 def add(commands) -> argparse.ArgumentParser:
-    run = commands.add_parser("run", help="run a scene file (see scenes/) or any SSP system (.ssp, .ssd)")
-    run.add_argument("scene", type=Path)
+    run = commands.add_parser("run", help="run a scene file (see scenes/), any SSP system (.ssp, .ssd) or one Co-Simulation FMU alone (.fmu: its "
+                          "start values, its DefaultExperiment, every Real output recorded)")
+    run.add_argument("scene", type=Path, help="a scene (a shipped one by name, or its .toml), an SSP system (.ssp, "
+                     ".ssd) or one Co-Simulation FMU run alone (.fmu)")
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                      help="a run setting (step, algorithm, order, step_control, rtol, atol, ...) or, for a scene, any of "
                      "its keys as table.key (scene.duration, 'mechanics.parameters.\"platform.mass\"'), its value "

@@ -461,8 +461,13 @@ def _check_against_fmus(system: etree._Element, connection_elements: list, folde
 
 @contextmanager
 def opened(path: str | Path) -> Iterator[SystemStructure]:
-    """The system of an SSP archive or SSD for the length of the block: an archive's unpacked copy
-    is removed when the block ends, however it ends."""
+    """The system of an SSP archive or SSD, or of one Co-Simulation FMU (cosim.engine.single), for
+    the length of the block: an archive's unpacked copy is removed when the block ends, however it
+    ends."""
+    if Path(path).suffix.lower() == ".fmu":
+        from .single import fmu_system
+        yield fmu_system(path)
+        return
     structure = read_ssp(path)
     try:
         yield structure
