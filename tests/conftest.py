@@ -149,7 +149,8 @@ def fill(folder, leave: int) -> None:
 
 def fmpy_parameter_set(archive):
     """An SSP archive's SSV values as one fmpy.ssp ParameterSet (fmpy applies no parameter bindings,
-    so a run in fmpy.ssp is given them by name, component.variable). Booleans go as 1.0 and 0.0:
+    so a run in fmpy.ssp of an archive with a user's FMU, which carries no values of its own as ours
+    do, is given them by name, component.variable). Booleans go as 1.0 and 0.0:
     fmpy.ssp sets a Boolean to `value != 0.0`, which the SSV's literal 'false' passes as true
     (fmpy 0.3.32), so a false switch would silently run on."""
     import zipfile

@@ -94,6 +94,12 @@ def fmu_path(name: str, test: bool = False, fmi: int = 2, model_exchange: bool =
     return _check((TEST_FMU_DIR if test else FMU_DIR) / f"{name}.fmu", f"FMU '{name}'")
 
 
+def built_here(fmu: Path) -> bool:
+    """Whether `fmu` is one of this project's built FMUs (build/fmus*/): one that takes the values
+    it carries (cosim.engine.carry), as a user's FMU need not."""
+    return Path(fmu).resolve().parent in {d.resolve() for d in (FMU_DIR, FMU3_DIR, FMU_ME_DIR, FMU3_ME_DIR)}
+
+
 def library_path(name: str) -> Path:
     """Path of a native library of build/lib/ (libcosim_kernel.so, libplatform_core.so)."""
     return _check(LIB_DIR / name, f"library '{name}'")

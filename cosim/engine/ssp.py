@@ -22,12 +22,13 @@ import zipfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Collection, Iterator, Sequence
 
 from fmpy import read_model_description
 from lxml import etree
 
 from .archive import unpack
+from .carry import carrying
 from .errors import SspError
 from .fmi import loaded
 from .files import replacing
@@ -125,12 +126,13 @@ def _decimal(value: float) -> str:
     return text.rstrip("0").rstrip(".") if "." in text else text
 
 
-def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequence[ToolStepped] = ()
-           ) -> tuple[etree._Element, dict[str, etree._Element]]:
+def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequence[ToolStepped] = (),
+           carried: Collection[str] = ()) -> tuple[etree._Element, dict[str, etree._Element]]:
     """The SSD tree and the SSV tree of each component; `sources` maps components to their FMU's
     path inside the archive; `tool_steps`: (tool, step, within its tolerances) measured for other
     tools (cosim.engine.tools), written where each takes its step (the system's own step where a
-    tool has none)."""
+    tool has none); `carried`: the components whose FMU carries their values (its String values
+    stay out of the SSV, which OMSimulator cannot read: ssv:String)."""
     # the tools' namespaces are declared here: libcosim reads an element's attributes, a namespace
     # declaration among them, as its children
     root = etree.Element(_q(SSD, "SystemStructureDescription"), nsmap={"ssd": SSD, "ssc": SSC, "osp": OSP, "oms": OMS},
@@ -163,10 +165,13 @@ def to_xml(structure: SystemStructure, sources: dict[str, str], tool_steps: Sequ
             kind = etree.SubElement(connector, _q(SSC, "Integer" if variable.type == "Enumeration" else variable.type))
             if variable.type == "Real" and (variable.unit or (variable.declaredType and variable.declaredType.unit)):
                 kind.set("unit", variable.unit or variable.declaredType.unit)
-        if component.parameters:
+        kinds = {n: v.type for n, v in variables.items()}
+        bound = Component(component.name, component.fmu, {
+            n: v for n, v in component.parameters.items() if not (component.name in carried and kinds.get(n) == "String")})
+        if bound.parameters:
             bindings = etree.SubElement(element, _q(SSD, "ParameterBindings"))
             etree.SubElement(bindings, _q(SSD, "ParameterBinding"), source=f"resources/{component.name}.ssv")
-            parameter_sets[component.name] = _parameter_set(component, {n: v.type for n, v in variables.items()})
+            parameter_sets[component.name] = _parameter_set(bound, kinds)
     connections = etree.SubElement(system, _q(SSD, "Connections"))
     for c in structure.connections:
         etree.SubElement(connections, _q(SSD, "Connection"), startElement=c.source[0], startConnector=c.source[1],
@@ -290,24 +295,35 @@ def strongly_coupled(root: etree._Element, coupled: StronglyCoupled) -> None:
 
 
 def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped] = (),
-              coupled: StronglyCoupled | None = None) -> Path:
+              coupled: StronglyCoupled | None = None, carry: Collection[str] = ()) -> Path:
     """Writes `structure` as an SSP 1.0 archive at `path` (each FMU file once under resources/);
     the SSD and every SSV are validated against the schemas first. tool_steps: as to_xml's;
-    coupled: the system as OMSimulator's strongly coupled one (its FMUs Model Exchange)."""
+    coupled: the system as OMSimulator's strongly coupled one (its FMUs Model Exchange); carry: the
+    components whose FMU carries their values too (cosim.engine.carry: an FMU of its own,
+    resources/<component>.fmu), for tools that apply no parameter bindings."""
     sources, files = {}, {}
-    for component in structure.components:
-        inner = f"resources/{component.fmu.name}"
-        if files.get(inner, component.fmu) != component.fmu:
-            raise SspError(f"two different FMUs named {component.fmu.name}")
-        files[inner], sources[component.name] = component.fmu, inner
-    root, parameter_sets = to_xml(structure, sources, tool_steps)
+    with tempfile.TemporaryDirectory(prefix="cosim-carry-") as carried:
+        for component in structure.components:
+            fmu = component.fmu
+            if component.name in carry:
+                fmu = carrying(component.fmu, component.parameters, Path(carried) / f"{component.name}.fmu")
+            inner = f"resources/{fmu.name}"
+            if files.get(inner, fmu) != fmu:
+                raise SspError(f"two different FMUs named {fmu.name}")
+            files[inner], sources[component.name] = fmu, inner
+        return _write_archive(structure, Path(path), tool_steps, coupled, sources, files, carry)
+
+
+def _write_archive(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolStepped],
+                   coupled: StronglyCoupled | None, sources: dict[str, str], files: dict[str, Path],
+                   carry: Collection[str]) -> Path:
+    root, parameter_sets = to_xml(structure, sources, tool_steps, carry)
     if coupled is not None:
         strongly_coupled(root, coupled)
         set_tool_steps(root, [("OMSimulator", coupled.output_step, True)], coupled.output_step)
     validate(root, "SystemStructureDescription.xsd", "SystemStructure.ssd")
     for name, tree in parameter_sets.items():
         validate(tree, "SystemStructureParameterValues.xsd", f"resources/{name}.ssv")
-    path = Path(path)
     needed = sum(Path(f).stat().st_size for f in files.values()) + (1 << 20)  # the FMUs stored, the XML besides
     with replacing(path, "the SSP archive", needed) as temporary, \
             zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -320,7 +336,7 @@ def write_ssp(structure: SystemStructure, path: Path, tool_steps: Sequence[ToolS
             archive.write(fmu, inner)
         for component in structure.components:
             for value in component.parameters.values():
-                if isinstance(value, Path):
+                if isinstance(value, Path) and component.name not in carry:  # (a carrying FMU holds its files)
                     archive.write(value, file_resource(component.name, value))
     return path
 

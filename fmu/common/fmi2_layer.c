@@ -9,6 +9,8 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #ifndef MODEL_GUID
@@ -182,18 +184,97 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     return fmi2OK;
 }
 
-static void reset_to_start(FmuInstance *fmu) {
+/* ------------------------------------------------------------------------------------------ */
+/* Start values an FMU carries (cosim export: a scene's values inside its FMUs)                */
+
+static const char CARRIED_FILE[] = "start_values.txt";
+enum { CARRIED_MAX = 1 << 20 }; /* [bytes] a larger start_values.txt is refused */
+
+/* The text of resources/start_values.txt (NULL where there is none); 0 after logging a file that
+ * cannot be read whole. */
+static int read_carried(FmuInstance *fmu) {
+    char path[4096];
+    if (!fmu->resources || strlen(fmu->resources) + sizeof CARRIED_FILE > sizeof path) return 1;
+    strcpy(path, fmu->resources);
+    strcat(path, CARRIED_FILE);
+    FILE *file = fopen(path, "rb");
+    if (!file) return 1; /* an FMU that carries none */
+    const long size = fseek(file, 0, SEEK_END) == 0 ? ftell(file) : -1;
+    char *text = size >= 0 && size <= CARRIED_MAX && fseek(file, 0, SEEK_SET) == 0
+                     ? (char *)fmu->callbacks.allocateMemory((size_t)size + 1, 1)
+                     : NULL;
+    const size_t n = text ? fread(text, 1, (size_t)size, file) : 0;
+    fclose(file);
+    if (!text || n != (size_t)size) {
+        LOG_ERROR(fmu, "fmi2Instantiate: %s: %s", path, size > CARRIED_MAX ? "larger than 1 MiB" : "cannot be read");
+        if (text) fmu->callbacks.freeMemory(text);
+        return 0;
+    }
+    text[n] = '\0';
+    fmu->carried = text;
+    return 1;
+}
+
+static fmi2Status set_values(fmi2Component c, const char *call, FmuType type, const fmi2ValueReference vr[],
+                             size_t nvr, const void *values);
+
+/* The carried values set as fmi2Set* sets them: one "name=value" a line (Real and Integer as C reads
+ * numbers, Boolean true or false, String the rest of the line). 0 after logging the first that is
+ * refused (an unknown name, a value the variable does not take). */
+static int apply_carried(FmuInstance *fmu) {
+    static const char call[] = "the FMU's start_values.txt";
+    for (const char *line = fmu->carried; line && *line;) {
+        const char *end = strchr(line, '\n'), *next = end ? end + 1 : line + strlen(line);
+        size_t length = (size_t)((end ? end : next) - line);
+        if (length && line[length - 1] == '\r') length--;
+        char text[FMU_TEXT_MAX + 256];
+        if (length >= sizeof text) { LOG_ERROR(fmu, "%s: a line longer than %d bytes", call, (int)sizeof text - 1); return 0; }
+        memcpy(text, line, length);
+        text[length] = '\0';
+        line = next;
+        char *value = strchr(text, '=');
+        if (!text[0] || text[0] == '#') continue;
+        if (!value) { LOG_ERROR(fmu, "%s: '%s' is not name=value", call, text); return 0; }
+        *value++ = '\0';
+        fmi2ValueReference vr = 0;
+        for (int k = 1; k < VR_COUNT && !vr; k++)
+            if (strcmp(fmu_variables[k].name, text) == 0) vr = (fmi2ValueReference)k;
+        if (!vr) { LOG_ERROR(fmu, "%s: no variable '%s'", call, text); return 0; }
+        const FmuType type = fmu_variables[vr].type;
+        char *rest = value;
+        fmi2Status status;
+        if (type == FMU_REAL) {
+            const double number = strtod(value, &rest);
+            status = *rest || rest == value ? fmi2Error : set_values(fmu, call, type, &vr, 1, &number);
+        } else if (type == FMU_STRING) {
+            const fmi2String string = value;
+            status = set_values(fmu, call, type, &vr, 1, &string);
+        } else {
+            const long number = type == FMU_BOOLEAN ? (strcmp(value, "true") == 0 ? 1 : strcmp(value, "false") == 0 ? 0 : -1)
+                                                    : strtol(value, &rest, 10);
+            const fmi2Integer whole = (fmi2Integer)number;
+            status = (type == FMU_BOOLEAN ? number < 0 : *rest || rest == value || number != whole) ? fmi2Error
+                     : set_values(fmu, call, type, &vr, 1, &whole);
+        }
+        if (status != fmi2OK) { LOG_ERROR(fmu, "%s: %s = '%s' not taken", call, text, value); return 0; }
+    }
+    return 1;
+}
+
+/* The instance as instantiated: the table's start values, then those it carries. 0 after logging a
+ * carried value refused (only ever at instantiation: a reset takes what was taken then). */
+static int reset_to_start(FmuInstance *fmu) {
     fmu_set_model_data(fmu, NULL, NULL);
     memset(&fmu->s, 0, sizeof fmu->s);
     fmu->s.phase = PHASE_INSTANTIATED;
     set_start_values(fmu);
     fmu->outputs_stale = 1;
+    return apply_carried(fmu);
 }
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
-    (void)fmuResourceLocation;
     (void)visible;
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
     FmuInstance probe;
@@ -232,7 +313,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         if (fmu_variables[vr].causality == FMU_OUTPUT) fmu->real_outputs[fmu->n_real_outputs++] = vr;
         if (fmu_variables[vr].causality == FMU_INPUT) fmu->real_inputs[fmu->n_real_inputs++] = vr;
     }
-    reset_to_start(fmu);
+    fmu->resources = fmu_resources_folder(fmu, fmuResourceLocation);
+    if (!read_carried(fmu) || !reset_to_start(fmu)) {
+        fmi2FreeInstance(fmu);
+        return NULL;
+    }
     return fmu;
 }
 
@@ -241,6 +326,8 @@ void fmi2FreeInstance(fmi2Component c) {
     if (!fmu) return;
     fmi2CallbackFreeMemory release = fmu->callbacks.freeMemory;
     fmu_set_model_data(fmu, NULL, NULL);
+    if (fmu->resources) release(fmu->resources);
+    if (fmu->carried) release(fmu->carried);
     release(fmu->instance_name);
     release(fmu);
 }
@@ -305,7 +392,7 @@ fmi2Status fmi2Terminate(fmi2Component c) {
 fmi2Status fmi2Reset(fmi2Component c) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!fmu_allowed(fmu, "fmi2Reset", ANY_LIVE_PHASE)) return fmi2Error;
-    reset_to_start(fmu);
+    (void)reset_to_start(fmu); /* the values it carries were taken at instantiation */
     return fmi2OK;
 }
 

@@ -58,7 +58,15 @@ typedef struct FmuInstance {
     int real_outputs[VR_COUNT];
     int n_real_inputs;                     /* the Real inputs: a step extrapolates, keeps aside and */
     int real_inputs[VR_COUNT];             /* clears only their derivatives */
+    char *resources;                       /* the FMU's resources folder, a native path ending in a separator
+                                            * (NULL: not given, or not a local folder) */
+    char *carried;                         /* its carried start values (resources/start_values.txt), or NULL */
 } FmuInstance;
+
+/* The file an FMU's resources hold, for a path given as "@resources/NAME" (a scene's file that
+ * travels inside the FMU): resources + NAME written into `out` (size bytes); any other path as it
+ * is. NULL if the FMU has no resources folder or the path does not fit. */
+const char *fmu_resource_path(const FmuInstance *fmu, const char *path, char *out, size_t size);
 
 /* ---- hooks implemented by each model (model.c) ---- */
 

@@ -27,6 +27,11 @@ void *fmu_value_address(FmuInstance *fmu, int vr);
  * master gets one from the FMU itself. */
 void fmu_extrapolate_inputs(FmuInstance *fmu, double t0);
 
+/* The resources folder as a native path ending in '/' (allocated by the instance's callbacks), from
+ * FMI 2.0's URI (file:///path/, file://localhost/path/, file:/path/, percent-encoded) or FMI 3.0's
+ * native path; NULL for anything else (another scheme, none given). */
+char *fmu_resources_folder(FmuInstance *fmu, const char *location);
+
 #if MODEL_MODEL_EXCHANGE
 /* Model Exchange's state and derivative variables (fmi2_me.c): 1 and the value if vr is one of
  * them, 0 otherwise. */

@@ -168,7 +168,13 @@ static void hermite_slopes(FmuTable *table) {
 }
 
 FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const char *const *names, int n_names) {
+    char resolved[2 * FMU_TEXT_MAX];
     const char *path = strncmp(given_path, "file://", 7) == 0 ? given_path + 7 : given_path;
+    path = fmu_resource_path(fmu, path, resolved, sizeof resolved);
+    if (!path) {
+        fmu_reject(fmu, vr, "names a file in the FMU's resources, and the FMU was given no resources folder");
+        return NULL;
+    }
     FILE *file = open_table(fmu, vr, path);
     if (!file) return NULL;
     const long rows = count_rows(fmu, vr, file);

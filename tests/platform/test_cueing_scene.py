@@ -71,8 +71,12 @@ def test_a_drive_stays_in_the_stroke_and_the_platform_follows(drive_run):
 def test_the_exported_system_carries_the_vehicle_and_runs_the_same(tmp_path, drive_run):
     scene = load_scene(EXAMPLE, {"scene.duration": 3.0})
     archive = cosim.export_ssp(scene, tmp_path / "drive.ssp")
+    import io
     import zipfile
-    assert any(name.endswith("drive.csv") for name in zipfile.ZipFile(archive).namelist())
+    with zipfile.ZipFile(archive) as outer:  # the vehicle's motion travels inside the cueing's FMU, which carries it
+        cueing = zipfile.ZipFile(io.BytesIO(outer.read("resources/cueing.fmu")))
+        assert "resources/drive.csv" in cueing.namelist()
+        assert "vehicle.file=@resources/drive.csv" in cueing.read("resources/start_values.txt").decode()
     (tmp_path / "elsewhere").mkdir()
     moved = (tmp_path / "elsewhere" / "drive.ssp")
     archive.rename(moved)

@@ -94,12 +94,11 @@ def test_ecos_at_its_written_step_ends_where_the_export_measured(archive):
 
 
 def test_fmpy_ssp_at_its_written_step_runs_as_the_export_measured(archive):
+    """As a user calls it: fmpy applies no parameter bindings, the FMUs carry the scene's values."""
     from fmpy.ssp.simulation import simulate_ssp
-    from conftest import fmpy_parameter_set
     step = written(archive)["tools"]["fmpy.ssp"][0]
     stop = 0.05  # fmpy.ssp steps in Python: the start-up's first 50 ms, every sample compared
-    parameters = fmpy_parameter_set(archive)
-    theirs = simulate_ssp(str(archive), stop_time=stop, step_size=step, parameter_set=parameters)
+    theirs = simulate_ssp(str(archive), stop_time=stop, step_size=step)
     reference = emulated(archive, "fmpy.ssp", stop)
     # fmpy labels a row with its step's start, and its accumulated clock may take one step more
     n = len(reference) - 1

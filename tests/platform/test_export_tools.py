@@ -185,10 +185,9 @@ def test_fmpy_ssp_at_its_written_step_runs_as_the_export_measured(export):
     """fmpy.ssp is its emulation bit for bit over its start (where its own choice, every connection
     0 over the first step, acts), and the emulation over the whole probe is where the table said."""
     from fmpy.ssp.simulation import simulate_ssp
-    from conftest import fmpy_parameter_set
     step = export.written()["fmpy.ssp"][0]
-    theirs = simulate_ssp(str(export.archive), stop_time=FMPY_START - step / 2, step_size=step,
-                          parameter_set=fmpy_parameter_set(export.archive))
+    # as a user calls it: fmpy applies no parameter bindings, the FMUs carry the scene's values
+    theirs = simulate_ssp(str(export.archive), stop_time=FMPY_START - step / 2, step_size=step)
     reference = emulated(export, "fmpy.ssp", FMPY_START)
     assert len(theirs) == len(reference) - 1
     structure = read_ssp(export.archive)  # (its FMUs unpacked while it lives)
@@ -293,3 +292,27 @@ def test_omsimulator_integrates_the_model_exchange_export_within_the_tolerances(
     export, result = model_exchange_export
     judgement = judge(export.scene, result, export.reference)
     assert judgement.within, judgement
+
+
+def test_a_vehicle_scene_imports_into_omsimulator_and_fmpy(tmp_path):
+    """OMSimulator reads no ssv:String and fmpy's simulate_ssp sets no parameter at all: the vehicle
+    scene's FMUs carry its values (the cueing its vehicle's motion in its resources/), so both run
+    the scene as a user calls them. The cueing FMU takes no input: its reference is the vehicle's
+    washed-out motion whatever the tool's coupling, equal to our run's at every common time (to the
+    digits OMSimulator writes)."""
+    from fmpy.ssp.simulation import simulate_ssp
+    from peers import run_omsimulator
+    scene = ROOT / "examples" / "vehicle" / "car_drive.toml"
+    archive = cosim.export_ssp(scene, tmp_path / "car.ssp", measure=False)
+    ours = cosim.simulate(scene, duration=3.0)
+    at = {round(t, 9): k for k, t in enumerate(ours["time"])}
+    omsimulator = run_omsimulator(archive, ["cueing.pose_ref.x", "cueing.vehicle.specific_force.x"], 3.0, tmp_path)
+    fmpy = simulate_ssp(str(archive), stop_time=0.5, step_size=1e-3)
+    fmpy_time = fmpy["time"] + 1e-3  # fmpy labels a row with its step's start: the values are those at its end
+    for times, values in ((omsimulator["time"], omsimulator), (fmpy_time, fmpy)):
+        rows = [(k, at[round(t, 9)]) for k, t in enumerate(times) if round(t, 9) in at]
+        assert len(rows) > 400
+        theirs, mine = np.array([values["cueing.pose_ref.x"][k] for k, _ in rows]), ours["pose_ref.x"][[m for _, m in rows]]
+        # (OMSimulator's result file prints 12 significant digits, and the tools' clocks differ by ulps)
+        assert np.abs(theirs - mine).max() <= 1e-9 * np.ptp(ours["pose_ref.x"])
+    assert np.ptp(omsimulator["cueing.vehicle.specific_force.x"]) == pytest.approx(4.0)  # the drive's braking, read

@@ -92,12 +92,14 @@ def ecos_matches(meng_ssp) -> None:
         simulation.terminate()
 
 
-def fmpy_matches(meng_ssp) -> None:
-    """fmpy.ssp runs the SSP bit for bit like our master with zero_start, the SSV files' values given."""
+def fmpy_matches(meng_ssp, bindings: bool = False) -> None:
+    """fmpy.ssp, called as a user calls it (it applies no parameter bindings: our FMUs carry the
+    scene's values; with `bindings`, for a user's FMU that carries none, the SSV's values given by
+    name), runs the SSP bit for bit like our master with zero_start."""
     from fmpy.ssp.simulation import simulate_ssp
     from conftest import fmpy_parameter_set
-    parameters = fmpy_parameter_set(meng_ssp)
-    theirs = simulate_ssp(str(meng_ssp), stop_time=STOP, step_size=STEP, parameter_set=parameters)
+    theirs = simulate_ssp(str(meng_ssp), stop_time=STOP, step_size=STEP,
+                          parameter_set=fmpy_parameter_set(meng_ssp) if bindings else None)
     reference = ours(meng_ssp, zero_start=True)  # fmpy's rows are labelled with the step's start
     assert len(theirs) == len(reference) - 1
     for name in ("mechanics.leg[1].angle", "mechanics.leg[4].speed", *[f"{d}.torque" for d in LEGS]):

@@ -169,7 +169,21 @@ def export_model_exchange(scene: Scene, ssp: Path, fmi2_warnings: bool = False) 
     lines.append(f"note: the system as Model Exchange FMUs in one strongly coupled system (OMSimulator's oms-sc: CVODE, "
                  f"relative tolerance {coupled.relative_tolerance:g}, steps up to {coupled.maximum_step:g} s), its "
                  f"outputs every {coupled.output_step:g} s: no coupling, no step to measure")
-    return Exported([write_ssp(structure, ssp, coupled=coupled)], lines)
+    return Exported([write_ssp(structure, ssp, coupled=coupled, carry=carried(structure, lines))], lines)
+
+
+def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
+    """The components whose FMU carries its values in the export (ours: cosim.engine.carry), so that
+    a tool that applies no parameter bindings (fmpy's simulate_ssp) or reads no ssv:String
+    (OMSimulator) runs the scene; what the export says of it added to `lines`."""
+    from ...engine.artifacts import built_here
+    ours = [c.name for c in structure.components if built_here(c.fmu)]
+    others = [c.name for c in structure.components if c.name not in ours]
+    lines.append("note: each of our FMUs carries its component's values as well (resources/start_values.txt, the "
+                 "start values of its modelDescription.xml; a file it reads in its resources/), so that a tool that "
+                 "applies no parameter bindings (fmpy's simulate_ssp) runs the scene" +
+                 (f"; not {', '.join(others)} (a user's FMU: its values are in the SSV alone)" if others else ""))
+    return ours
 
 
 def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False) -> Exported:
@@ -198,7 +212,8 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     else:
         lines.append(f"note: every tool gets the scene's own step, {scene.step:g} s, unmeasured (--scene-step)")
     if ssp is not None:
-        files.append(write_ssp(structure, ssp, [(s.master.tool, s.step, s.within) for s in steps]))
+        files.append(write_ssp(structure, ssp, [(s.master.tool, s.step, s.within) for s in steps],
+                               carry=carried(structure, lines)))
     for note in not_portable(structure.settings):
         lines.append(f"note: other tools run this system without {note}")
     if osp is not None:
