@@ -76,6 +76,7 @@ class Report:
     remarks: list[str] = field(default_factory=list)  # what the run chose that its input did not say
     fmi_seconds_by_instance: dict[str, float] = field(default_factory=dict, repr=False)  # of the stepping
     pacing: Pacing | None = field(default=None, repr=False)  # a real-time run's lateness, stream, live input
+    bonds: int = 0  # the power bonds whose energy residual is measured (none: the line is left out)
 
     @classmethod
     def of(cls, outcome: Outcome, simulated: float | None = None, **extra) -> "Report":
@@ -84,7 +85,8 @@ class Report:
                    outcome.wall, outcome.fmi_seconds, float(np.max(outcome.energy_residuals, initial=0.0)),
                    outcome.warnings, str(outcome.failure) if outcome.failure else None, outcome.rejected,
                    outcome.control, message_kinds(outcome.messages), messages=outcome.messages,
-                   fmi_seconds_by_instance=dict(outcome.fmi_seconds_by_instance), pacing=outcome.pacing, **extra)
+                   fmi_seconds_by_instance=dict(outcome.fmi_seconds_by_instance), pacing=outcome.pacing,
+                   bonds=len(outcome.bond_residuals), **extra)
 
     @property
     def real_time_factor(self) -> float:
@@ -115,9 +117,10 @@ class Report:
                      f"{100 * self.busy / self.wall:.0f} % of the wall time stepping (the rest waiting for deadlines), "
                      f"{100 * self.master_share:.0f} % of the stepping in the master outside the FMUs"
                      if self.pacing is not None and self.pacing.waited > 0 else
-                     f"{100 * self.master_share:.0f} % of the wall time in the master outside the FMUs"), f"largest energy residual of a power bond in one step: "
-                 f"{self.largest_energy_residual:.2e} J", *(self.pacing.lines() if self.pacing else []),
-                 *self.measured()]
+                     f"{100 * self.master_share:.0f} % of the wall time in the master outside the FMUs"),
+                 *([f"largest energy residual of a power bond in one step: {self.largest_energy_residual:.2e} J"]
+                   if self.bonds and self.step_control != "cvode" else []),  # (no bond, or no coupling: nothing to say)
+                 *(self.pacing.lines() if self.pacing else []), *self.measured()]
         if self.warnings:
             kinds = "; ".join(f"{n} x {kind}" for n, kind in self.warning_kinds[:3])
             more = f"; {len(self.warning_kinds) - 3} more kinds" if len(self.warning_kinds) > 3 else ""

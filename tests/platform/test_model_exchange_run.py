@@ -39,6 +39,8 @@ def test_the_monolithic_run_agrees_with_the_converged_co_simulation(runs):
         change = np.ptp(reference)
         assert np.abs(me[f"torque[{leg}]"] - reference).max() < 0.02 * change, leg
     assert any("Model Exchange" in remark for remark in me.report.remarks)
+    # no coupling, so no energy residual to speak of: the co-simulation's report has the line, this one not
+    assert "energy residual" in cs.report.text() and "energy residual" not in me.report.text()
 
 
 def test_a_vehicles_drive_runs_as_one_system_too():
