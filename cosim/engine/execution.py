@@ -51,9 +51,11 @@ class Execution:
         check_parameters(structure)  # before any FMU is instantiated
         check_capabilities(structure, control)
         if real_time is not None and not isinstance(control, FixedStep):
-            raise SettingsError(f"a real-time run takes fixed steps, one a deadline; the step control "
-                                f"'{control_name(control)}' chooses its steps as it goes: set step_control = fixed",
-                                "step_control")
+            what = ("a real-time run takes fixed steps, one a deadline" if real_time.factor is not None or
+                    real_time.stream or real_time.listen else
+                    "a guarded reference takes fixed steps, held within its envelope at each (a cueing scene's)")
+            raise SettingsError(f"{what}; the step control '{control_name(control)}' chooses its steps as it goes: set "
+                                "step_control = fixed", "step_control")
         self.real_time, self.pacing = real_time, None
         self.structure, self.algorithm, self.control = structure, algorithm, control
         self.record = list(record)

@@ -347,3 +347,14 @@ def test_datagrams_the_operating_system_drops_are_counted(tmp_path):
     assert pacing.dropped > 0, (pacing.live, run.sent)
     assert sum(v for k, v in pacing.live.items() if k != "watchdog") + pacing.dropped == run.sent
     assert f"{pacing.dropped} dropped unread by the operating system" in run.report.text()
+
+
+def test_a_cueing_scene_with_an_adaptive_step_is_refused_in_one_line(capsys, tmp_path):
+    """The guard holds the reference at every fixed macro step: a cueing scene that asks for step
+    doubling is refused before it runs (not run unguarded), in one line saying why."""
+    from cosim.cli import main
+    from cosim.engine.artifacts import ROOT
+    assert main(["run", str(ROOT / "examples" / "vehicle" / "car_drive.toml"), "--set", "step_control=doubling",
+                 "--duration", "0.1", "--no-plots", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "a guarded reference takes fixed steps" in err and "Traceback" not in err
