@@ -119,3 +119,16 @@ def test_advise_finds_candidates_and_refuses_a_tolerance_of_zero():
     assert advice.recommended is min(within, key=lambda c: c.wall) and "recommended for" in advice.text
     with pytest.raises(UsageError, match="tolerance = 0"):
         cosim.advise(scene, 0.0)
+
+
+def test_the_command_line_says_its_version(capsys):
+    """`cosim --version`: the installed package's, which is pyproject.toml's (one source)."""
+    import tomllib
+
+    from cosim.cli import main
+    from cosim.engine.artifacts import ROOT
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code == 0
+    wanted = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    assert capsys.readouterr().out.split()[-1] == wanted

@@ -30,12 +30,23 @@ def parser() -> argparse.ArgumentParser:
     prog = "cosim" if Path(sys.argv[0]).name == "cosim" else "python -m cosim"  # the console script, or -m
     top = argparse.ArgumentParser(prog=prog, description="Stewart platform co-simulation",
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    top.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     commands = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add(commands).set_defaults(main=command.main)
     top.epilog = "usage of each command:\n" + "\n".join(
         "  " + " ".join(sub.format_usage().split())[len("usage: "):] for sub in subcommands(top).values())
     return top
+
+
+def version() -> str:
+    """The installed package's version (its metadata: pyproject.toml's), 'unknown' where it is not
+    installed."""
+    from importlib.metadata import PackageNotFoundError, version as installed
+    try:
+        return installed("stewart-cosim")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
 
 
 def subcommands(top: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
