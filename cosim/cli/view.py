@@ -47,12 +47,12 @@ def live(scene, args: argparse.Namespace) -> int:
     from ..engine.errors import UsageError
     from ..engine.realtime import address
     from ..platform.realtime.view import serve
-    from ..platform.run.compile import scene_values
+    from ..platform.run.compile import run_label, scene_values
     address(args.live, "--live")
     if not 0 <= args.port < 65536 or not args.factor > 0:
         raise UsageError(f"--port {args.port} / --factor {args.factor}: a port 0-65535 and a factor > 0")
     try:
-        serve(scene_values(scene)[0], scene.name, args.live, args.port, args.factor,
+        serve(scene_values(scene)[0], run_label(scene), args.live, args.port, args.factor,
               ready=lambda port: print(f"the live view of {args.live}: http://127.0.0.1:{port}/ (Ctrl-C to end)",
                                        flush=True))
     except OSError as error:

@@ -9,6 +9,7 @@ import sys
 
 import pytest
 
+import cosim
 from cosim.engine.artifacts import ROOT
 from cosim.platform.run.compile import compile_scene, scene_record, scene_values
 from cosim.platform.scene import load_scene
@@ -56,3 +57,19 @@ def test_the_plan_is_made_of_the_compiled_scene():
     assert len(drives) == 6
     for drive, leg in zip(drives, compiled.legs):
         assert all(drive.parameters[k] == v for k, v in leg.items()), drive.name
+
+
+def test_every_report_names_what_was_run(tmp_path):
+    """The scene's name says six PMSM drives; run on linear motors, the headline, the HTML report's
+    title say so (the drive set too; the PNG plots take the same label), and a cueing scene names its
+    cueing."""
+    from cosim.platform.run.compile import run_label
+    run = cosim.simulate("meng_eq35", duration=0.05, overrides={"drive.kind": "linear"}, out=tmp_path, plots=True)
+    headline = run.report.text().splitlines()[0]
+    assert headline.startswith("Meng 2010: Eq 35 with the impact of Eq 36, six PMSM drives [run: meng2010, linear "
+                               "motors (meng2010_linear)]:")
+    page = (tmp_path / "meng_eq35.html").read_text()
+    assert "<h1>Meng 2010: Eq 35 with the impact of Eq 36, six PMSM drives [run: meng2010, linear motors" in page
+    cueing = load_scene(ROOT / "examples" / "vehicle" / "car_drive.toml", {"cueing.algorithm": "mpc"})
+    assert run_label(cueing).endswith("[run: meng2010, PMSM drives, mpc cueing of drive.csv]")
+    assert "sumnu2015, heavy masses, linear motors" in run_label(load_scene("sumnu_case_1"))

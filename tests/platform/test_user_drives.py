@@ -146,6 +146,8 @@ def test_a_users_servo_tracks_eq35_and_mixes_with_ours(fmus, tmp_path):
     assert max(leg_errors(result)) < max(leg_errors(ours)) + compliance, (leg_errors(result), leg_errors(ours))
     assert "current.q[1]" not in result.dtype.names  # the servo has no current: not recorded for any leg
     assert "on legs 3" in report.text() and "sizing not checked for legs 3" in report.text()
+    # the headline names what ran: the user's FMU on its leg, ours on the others
+    assert "the user's rotary_servo.fmu on leg 3, PMSM drives on the others]" in report.text().splitlines()[0]
 
 
 def test_a_users_co_simulation_fmu_is_one_line_for_a_model_exchange_run(fmus, tmp_path, capsys):

@@ -52,6 +52,28 @@ def compile_scene(scene: Scene) -> CompiledScene:
     return CompiledScene(scene, mechanics, fmus, legs, tuning, notes, structure, plan)
 
 
+DRIVE_WORDS = {"pmsm": "PMSM drives", "linear": "linear motors"}
+
+
+def run_label(scene: Scene) -> str:
+    """What a run of the scene runs, for its reports' titles: the scene's name and, in brackets, the
+    platform (its parameter set and mass set), the drives as run (their kind and drive set, or the
+    user's FMU and its legs) and the cueing, read from the scene as compiled (its name alone may say
+    other drives than a `--set drive.kind=...` runs)."""
+    platform = scene.parameter_set + (f", {scene.mass_set} masses" if scene.parameter_set == "sumnu2015" else "")
+    ours = DRIVE_WORDS.get(scene.drive, f"{scene.drive} drives") + (f" ({scene.drive_set})" if scene.drive_set else "")
+    users: dict[str, list[int]] = {}
+    for leg in LEGS:
+        if scene.leg_fmu(leg) is not None:
+            users.setdefault(scene.leg_fmu(leg).name, []).append(leg)
+    drives = "; ".join(f"the user's {name} on leg{'s' if len(legs) > 1 else ''} {', '.join(map(str, legs))}"
+                       for name, legs in users.items())
+    if sum(len(legs) for legs in users.values()) < len(LEGS):
+        drives = f"{drives}, {ours} on the others" if drives else ours
+    cueing = f", {scene.cueing_algorithm} cueing of {Path(str(scene.vehicle)).name}" if scene.vehicle is not None else ""
+    return f"{scene.name} [run: {platform}, {drives}{cueing}]"
+
+
 def drive_fmus(scene: Scene) -> list[Path]:
     """Per leg, the drive FMU: the user's where the scene names one, ours for its kind otherwise."""
     return [scene.leg_fmu(leg) or fmu_path(DRIVES[scene.drive].fmu, fmi=scene.fmi) for leg in LEGS]

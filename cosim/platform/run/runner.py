@@ -23,7 +23,7 @@ from ..ports import DRIVES, POSE, per_leg
 from ..report.limits import result_excursion_lines
 from ..report.plots import units
 from ..scene import Scene
-from .compile import CompiledScene, compile_scene
+from .compile import CompiledScene, compile_scene, run_label
 from .errors import BUILD_ERRORS, scene_error
 
 # the paper's figures that a scene's plots correspond to, per parameter set
@@ -115,7 +115,7 @@ def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) 
                        for a in POSE])
     report = RunReport.of(outcome, simulated=float(result["time"][-1]) if len(result) else 0.0, largest_error=errors,
                           tuning=compiled.tuning, diverged=outcome.diverged)
-    report.name = scene.name
+    report.name = run_label(scene)  # what was run, not only what the scene is called
     if len(result) > 1:
         report.remarks += result_excursion_lines(compiled.mechanics, result)
     if scene.fmi == 3 and scene.algorithm.order > 0:
@@ -194,12 +194,13 @@ def write_figures(compiled: CompiledScene, result: np.ndarray, report: RunReport
         effort = f"{effort}_applied"
     tracking, drives = FIGURES.get(scene.parameter_set, ("", ""))
     impacts = sorted({(p.start, p.end) for p in scene.pulses})
-    plot_tracking(result, folder / f"{scene.path.stem}_tracking.png", scene.name, tracking, impacts)
+    label = run_label(scene)
+    plot_tracking(result, folder / f"{scene.path.stem}_tracking.png", label, tracking, impacts)
     if report.perceived is not None:
         plot_perception(report.perceived, folder / f"{scene.path.stem}_perception.png",
-                        f"{scene.name}: vehicle and platform as the occupant perceives them")
+                        f"{label}: vehicle and platform as the occupant perceives them")
     if {f"{effort}[1]", f"{speed}[1]"} <= set(result.dtype.names):
-        plot_drives(result, folder / f"{scene.path.stem}_drives.png", scene.name, effort, speed, units(scene.drive),
+        plot_drives(result, folder / f"{scene.path.stem}_drives.png", label, effort, speed, units(scene.drive),
                     drives, impacts)
     return write_report(folder / f"{scene.path.stem}.html", scene, result, report, outcome.messages,
                         outcome.bond_residuals, compiled.mechanics)
