@@ -53,26 +53,29 @@ def settings(items: list[str]) -> dict[str, str]:
     return out
 
 
-def set_values(items: list[str]) -> dict[str, object]:
+def set_values(items: list[str]) -> tuple[dict[str, object], dict[str, str]]:
     """--set NAME=VALUE for a scene: the scene keys they set (a run setting's name to its key), each
-    value read as TOML writes it (text that is not a TOML value as text)."""
+    value read as TOML writes it (text that is not a TOML value as text), and how each was given
+    ('--set step=-1e-3': what an error about it names, not the scene file's line)."""
     import tomllib
     from ..platform.scene.schema import setting_key
-    out = {}
+    out, given = {}, {}
     for name, text in settings(items).items():
         try:
             value = tomllib.loads(f"value = {text}")["value"]
         except tomllib.TOMLDecodeError:
             value = text
         try:
-            out[setting_key(name)] = value
+            key = setting_key(name)
         except InputError as error:
             raise UsageError(f"--set {name}={text}: {error}") from None
-    return out
+        out[key], given[key] = value, f"--set {name}={text}"
+    return out, given
 
 
 def main(args: argparse.Namespace) -> int:
     from ..api import SYSTEM_SUFFIXES, simulate
+    from ..platform.scene import load_scene
     duration = seconds("--duration", args.duration)
     factor = seconds("--real-time", args.real_time, "expected a real-time factor > 0 (1: the wall clock's pace)")
     if args.listen_key is not None and not args.listen:
@@ -92,11 +95,14 @@ def main(args: argparse.Namespace) -> int:
     if args.me and system:
         raise UsageError(f"--me: for a scene; {args.scene.name} names its own FMUs")
     if system:  # an SSP's run settings by name (cosim.engine.settings), checked by the engine
-        given = {"settings": settings(args.set) or None}
-    else:  # a scene's keys
-        given = {"overrides": {**set_values(args.set), **({"scene.fmi": args.fmi} if args.fmi is not None else {})}
-                 or None}
-    return report(lambda: simulate(args.scene, duration=duration, out=args.out, plots=not args.no_plots and not system,
-                                   twin=args.twin, progress=True, advice=True, real_time=factor, stream=args.stream,
-                                   listen=args.listen, listen_key=args.listen_key, model_exchange=args.me,
-                                   **given).report, written, args.out)
+        model, given = args.scene, {"settings": settings(args.set) or None}
+    else:  # a scene's keys, each error about one naming the option that set it
+        overrides, labels = set_values(args.set)
+        if args.fmi is not None:
+            overrides["scene.fmi"], labels["scene.fmi"] = args.fmi, f"--fmi {args.fmi}"
+        model, given = (lambda: load_scene(args.scene, overrides, labels)), {}
+    return report(lambda: simulate(model() if callable(model) else model, duration=duration, out=args.out,
+                                   plots=not args.no_plots and not system, twin=args.twin, progress=True, advice=True,
+                                   real_time=factor, stream=args.stream, listen=args.listen,
+                                   listen_key=args.listen_key, model_exchange=args.me, **given).report,
+                  written, args.out)

@@ -123,6 +123,7 @@ class Document:
     path: Path
     text: str
     data: dict = field(default_factory=dict)
+    given: Mapping[str, str] = field(default_factory=dict)  # an override's dotted key -> how it was given ('--set ...')
 
     def table(self, name: str) -> dict:
         """[name]'s keys and tables ({} where the file has none)."""
@@ -174,11 +175,22 @@ class Document:
                 return found
         return 0
 
+    def given_for(self, full: str) -> str | None:
+        """How the value at the full key (or a table or list above it) was set over the file, if it
+        was ('--set step=-1e-3'), else None."""
+        return next((how for key, how in self.given.items() if _parts(full)[:len(_parts(key))] == _parts(key)), None)
+
+    def where(self, full: str) -> str:
+        """Where a key's value comes from, as an error names it: 'file:line', or how it was set over
+        the file ('--set step=-1e-3 (over file)')."""
+        given = self.given_for(full)
+        line = self.line(full)
+        return f"{given} (over {self.path})" if given else f"{self.path}:{line}" if line else f"{self.path}"
+
     def fail(self, full: str, problem: str, value: Any = None) -> InputError:
         """The schema's error for the key `full`: `file:line: 'full' = value: problem`, or
         `file:line: 'full' problem` where no value is given ("is missing")."""
-        line = self.line(full)
-        where = f"{self.path}:{line}" if line else f"{self.path}"
+        where = self.where(full)  # a value set over the file named as it was given, not at the file's line
         shown = f"'{full}' = {_shown(value)}:" if value is not None else f"'{full}'"
         return self.schema.error(f"{where}: {shown}{'' if problem.startswith(':') else ' '}{problem}")
 
@@ -228,14 +240,15 @@ def _children(schema: Schema, name: str) -> dict[str, Table | None]:
 
 
 def read(schema: Schema, path: str | Path, overrides: Mapping[str, Any] | None = None,
-         text: str | None = None, data: dict | None = None) -> Document:
+         text: str | None = None, data: dict | None = None, given: Mapping[str, str] | None = None) -> Document:
     """Reads and checks a file against its schema: its text and document (or the given ones, read
-    before), with values set at dotted keys over it (`overrides`, as if the file said them);
+    before), with values set at dotted keys over it (`overrides`, as if the file said them; `given`:
+    how some were given, '--set KEY=VALUE', which their errors name instead of the file's line);
     every mistake raises the schema's error, one line."""
     path = Path(path)
     if data is None:
         text, data = _load(schema, path)
-    document = Document(schema, path, text or "", _with_overrides(schema, path, data, overrides or {}))
+    document = Document(schema, path, text or "", _with_overrides(schema, path, data, overrides or {}), dict(given or {}))
     _check_table(document, "", document.data, "")
     return document
 

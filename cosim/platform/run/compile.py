@@ -120,7 +120,7 @@ def scene_design(scene: Scene, values: tuple[dict, dict] | None = None,
         for k in own:
             check_sizing(scene.drive, [plants[k]], legs[k], leg=k + 1)
     except SizingError as error:
-        raise SceneError(f"{scene.path}:{scene.document.line('drive.kind')}: drive.kind = "
+        raise SceneError(f"{scene.document.where('drive.kind')}: drive.kind = "
                          f"{scene.drive!r} on {scene.parameter_set}: {error}") from None
     notes, unchecked = user_drive_notes(scene), []
     for k, leg in enumerate(LEGS):
@@ -136,7 +136,7 @@ def scene_design(scene: Scene, values: tuple[dict, dict] | None = None,
             check_limit(scene.drive, plants[k], limit, f"{fmu.name}'s {name}", leg)
         except SizingError as error:
             table = f"drive.leg.{leg}" if scene.document.value(f"drive.leg.{leg}", "continuous_limit") else "drive"
-            raise SceneError(f"{scene.path}:{scene.document.line(f'{table}.continuous_limit')}: {error}") from None
+            raise SceneError(f"{scene.document.where(f'{table}.continuous_limit')}: {error}") from None
     if unchecked:
         notes.append(f"sizing not checked for legs {', '.join(map(str, unchecked))}: name the parameter that holds "
                      "the drive's continuous torque or force with drive.continuous_limit")

@@ -48,6 +48,9 @@ def located(scene: Scene, component: str, variable: str) -> str:
         rest = variable.split(".", 1)[1]
         item = re.match(r"(sine|step|ramp)\[(\d+)\]\.(\w+)$", rest)
         shown = f"{table}.{item.group(1)}s[{item.group(2)}].{item.group(3)}" if item else f"{table}.{rest}"
+    given = scene.document.given_for(shown.split(" (")[0])
+    if given:
+        return f"{given} (over {scene.path}): {shown}"
     return f"{scene.path}:{line}: {shown}" + ("" if line else f" (from parameter set {scene.parameter_set})")
 
 
@@ -76,14 +79,14 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
         where = located(scene, error.instance, named) if named else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):
-        return SceneError(f"{scene.path}:{scene.document.line('scene.step')}: scene.step = "
+        return SceneError(f"{scene.document.where('scene.step')}: scene.step = "
                           f"{scene.step:g} s, duration {scene.duration:g} s: {error}")
     if isinstance(error, (LayoutImpossible, SingularPose)):  # the platform the scene asks for, at its start pose
-        return SceneError(f"{scene.path}:{scene.document.line('mechanics.parameters')}: the platform "
+        return SceneError(f"{scene.document.where('mechanics.parameters')}: the platform "
                           f"of [mechanics] at its start pose: {error}")
     if isinstance(error, KeyError) and "no variable" in str(error):  # a recorded output the FMU lacks
         names = set(scene.outputs_mechanics)
         key = "mechanics" if any(f"'{n}'" in str(error) for n in names) else "drive"
-        return SceneError(f"{scene.path}:{scene.document.line(f'outputs.{key}')}: 'outputs.{key}': "
+        return SceneError(f"{scene.document.where(f'outputs.{key}')}: 'outputs.{key}': "
                           f"{error.args[0]}")
     return None

@@ -72,6 +72,7 @@ class Scene:
     text: str = field(repr=False)
     data: Mapping[str, Any] = field(repr=False)  # the file's TOML document, as read
     overrides: Mapping[str, Any] = field(default_factory=dict)  # the dotted keys set over the file
+    given: Mapping[str, str] = field(default_factory=dict, repr=False)  # how some were given ('--set step=...')
     document: Document = field(init=False, repr=False)  # the file with the overrides, checked
     name: str = field(init=False)
     duration: float = field(init=False)  # [s]
@@ -120,10 +121,12 @@ class Scene:
         """Leg `leg`'s (1..6) drive FMU when it is not ours."""
         return self.leg_fmus.get(leg, self.drive_fmu)
 
-    def changed(self, overrides: Mapping[str, Any]) -> "Scene":
+    def changed(self, overrides: Mapping[str, Any], given: Mapping[str, str] | None = None) -> "Scene":
         """This scene with values set at dotted keys of its document (over the ones set before),
-        read and checked as if its file said them; the file is not read again."""
-        return Scene(self.path, self.text, self.data, {**self.overrides, **overrides})
+        read and checked as if its file said them (`given`: how some were given, which their errors
+        name); the file is not read again."""
+        return Scene(self.path, self.text, self.data, {**self.overrides, **overrides},
+                     {**{k: v for k, v in self.given.items() if k not in overrides}, **(given or {})})
 
 
 def signals_document(trajectory: Mapping[str, Signal]) -> dict[str, dict[str, Any]]:

@@ -46,10 +46,12 @@ def shipped(name: str, folder: str = "scenes") -> Path | None:
     return path if path.is_file() else None
 
 
-def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:
+def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None,
+               given: Mapping[str, str] | None = None) -> Scene:
     """Reads and checks a scene file, or a shipped scene by its name (`meng_eq35`); `overrides`
     sets values at dotted keys of its document first (a sweep's point), checked as if the file
-    said them."""
+    said them; `given`: how some of them were given ('--set step=-1e-3'), which their errors name
+    instead of the file's line."""
     path = Path(path)
     if not path.exists() and path.suffix == "" and len(path.parts) == 1:  # a shipped scene's name
         path = shipped(str(path)) or path
@@ -60,13 +62,13 @@ def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     if path.is_dir():
         raise SceneError(f"{path}: is a folder, not a scene file (the shipped scenes are scenes/*.toml)")
     file = read(SCHEMA, path)
-    return Scene(path, file.text, file.data, dict(overrides or {}))
+    return Scene(path, file.text, file.data, dict(overrides or {}), dict(given or {}))
 
 
 def derive(scene: Scene) -> dict[str, Any]:
     """Every derived field of a scene (cosim.platform.scene.model.Scene) from its file and
     overrides; raises SceneError, one line, for anything that cannot run."""
-    doc = read(SCHEMA, scene.path, scene.overrides, text=scene.text, data=dict(scene.data))
+    doc = read(SCHEMA, scene.path, scene.overrides, text=scene.text, data=dict(scene.data), given=scene.given)
     out: dict[str, Any] = {"document": doc, "name": doc.value("scene", "name", scene.path.stem),
                            "duration": float(doc.value("scene", "duration")), "fmi": int(doc.value("scene", "fmi"))}
     out.update(_drives(doc))
@@ -154,8 +156,8 @@ def _parameters(doc: Document, table: str, fmu: str | Path) -> dict[str, Any]:
     try:
         check_values(table, fmu if isinstance(fmu, Path) else fmu_path(fmu), given)
     except ParameterError as error:
-        line = doc.line(f'{table}.parameters."{error.variable}"')
-        raise SceneError(f"{doc.path}:{line}: {table}.parameters.\"{error.variable}\" = {error.value!r}: "
+        where = doc.where(f'{table}.parameters."{error.variable}"')
+        raise SceneError(f"{where}: {table}.parameters.\"{error.variable}\" = {error.value!r}: "
                          f"{error.reason} ({error.fmu})") from None
     return dict(given)
 
