@@ -1,6 +1,6 @@
-"""`cosim export SCENE --ssp FILE.ssp --osp DIR`: the scene's whole system for other FMI tools, as an
-SSP 1.0 archive and/or an OSP configuration (libcosim), each tool's step measured by its master in
-our engine (cosim.platform.run.portable)."""
+"""`cosim export SCENE --ssp FILE.ssp --osp DIR [--set KEY=VALUE] [--duration S]`: the scene's whole
+system (or a variant of it) for other FMI tools, as an SSP 1.0 archive and/or an OSP configuration
+(libcosim), each tool's step measured by its master in our engine (cosim.platform.run.portable)."""
 
 from __future__ import annotations
 
@@ -28,6 +28,10 @@ def add(commands) -> argparse.ArgumentParser:
                         "archive (scene.fmi)")
     export.add_argument("--me", action="store_true", help="the FMUs as Model Exchange in one strongly coupled system "
                         "(OMSimulator's oms-sc integrates them as one by CVODE): with --ssp alone")
+    export.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a key of the scene as `cosim run --set` takes it (step, 'mechanics.parameters.\"platform."
+                             "mass\"', ...): the variant exported, the file unchanged")
+    export.add_argument("--duration", type=str, help="the exported experiment's stop time [s], instead of the scene's")
     return export
 
 
@@ -41,7 +45,14 @@ def main(args: argparse.Namespace) -> int:
     for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp)):
         if folder is not None and (problem := unwritable(folder)):
             raise UsageError(f"{option} {folder}: {problem}")
-    scene = load_scene(args.scene, {"scene.fmi": args.fmi} if args.fmi is not None else None)
+    from .common import seconds
+    from .run import set_values
+    overrides, given = set_values(args.set)
+    for key, value, label in (("scene.fmi", args.fmi, f"--fmi {args.fmi}"),
+                              ("scene.duration", seconds("--duration", args.duration), f"--duration {args.duration}")):
+        if value is not None:
+            overrides[key], given[key] = value, label
+    scene = load_scene(args.scene, overrides, given)
     if args.me:
         if args.osp is not None or args.ssp is None or args.fmi == 3 or args.scene_step:
             raise UsageError("export --me: an SSP archive alone (--ssp), FMI 2.0, no step to measure (libcosim and Ecos "

@@ -329,3 +329,23 @@ def test_a_vehicle_scene_too_long_to_record_is_one_line_through_run_and_tune(tmp
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1, err
     assert err.startswith(f"error: {scene}:3: scene.step = 0.001 s, duration 1e+12 s: the run would record"), err
+
+
+def test_export_takes_set_and_duration(tmp_path, capsys):
+    """`cosim export SCENE --set KEY=VALUE --duration S`: the variant is exported (its value in the
+    SSV and in the FMU that carries it, its stop time in the SSD), the scene file unchanged; a bad
+    value is one line naming the option."""
+    from cosim.engine.ssp import read_ssp
+    scene = str(ROOT / "scenes" / "meng_eq35.toml")
+    before = (ROOT / "scenes" / "meng_eq35.toml").read_text()
+    archive = tmp_path / "variant.ssp"
+    assert main(["export", scene, "--ssp", str(archive), "--scene-step", "--duration", "2",
+                 "--set", 'mechanics.parameters."platform.mass"=1100']) == 0
+    structure = read_ssp(archive)
+    assert structure.experiment.stop == 2.0 and structure.component("mechanics").parameters["platform.mass"] == 1100.0
+    assert (ROOT / "scenes" / "meng_eq35.toml").read_text() == before
+    capsys.readouterr()
+    for arguments, message in ((["--set", "step=-1"], "--set step=-1 (over "), (["--duration", "-3"], "--duration -3:")):
+        assert main(["export", scene, "--ssp", str(archive), "--scene-step", *arguments]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, err
