@@ -18,6 +18,9 @@ def add(commands) -> argparse.ArgumentParser:
     return sweep
 
 
+SHOWN, MESSAGE = 10, 400  # the points not ok listed, and the characters of each one's message shown
+
+
 def main(args: argparse.Namespace) -> int:
     from ..engine.sweep import column_name, plot_sweep
     from ..platform.run.sweep import load_sweep
@@ -33,9 +36,15 @@ def main(args: argparse.Namespace) -> int:
     kinds = {s: sum(r["status"] == s for r in outcome.rows) for s in ("ok", "diverged", "failed")}
     print(f"{sweep.name}: {len(outcome.rows)} points ({outcome.ran} run now, {outcome.skipped} found done): "
           + ", ".join(f"{n} {s}" for s, n in kinds.items() if n))
-    for row in [r for r in outcome.rows if r["status"] != "ok"][:5]:
+    import textwrap
+    unfinished = [r for r in outcome.rows if r["status"] != "ok"]
+    shown = unfinished if len(unfinished) <= SHOWN + 2 else unfinished[:SHOWN]  # never "1 more" for one line
+    for row in shown:  # each message whole, or cut at a word with "..." past MESSAGE characters
         print(f"  {row['status']}: {', '.join(f'{a.name}={row[column_name(a.name)]!r}' for a in sweep.axes)}: "
-              f"{row['message'][:200]}")
+              f"{textwrap.shorten(str(row['message']), MESSAGE, placeholder=' ...')}")
+    if len(shown) < len(unfinished):
+        print(f"  ... and {len(unfinished) - len(shown)} more not ok, each with its whole message in the results "
+              "table")
     written = [*outcome.files]
     if sweep.plot is not None:
         written.append(plot_sweep(outcome.rows, sweep.plot, args.out / f"{sweep.name}.png", sweep.name, sweep.units))

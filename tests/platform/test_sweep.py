@@ -369,3 +369,21 @@ def test_a_scheduler_beyond_this_machine_without_tls_is_named(address, exposed):
     assert (said is not None) == exposed
     if exposed:
         assert address in said and "neither encrypted nor authenticated" in said and "tls://" in said
+
+
+def test_the_command_lists_the_points_not_ok_with_whole_messages(tmp_path, capsys):
+    """Thirteen steps too long for the coupling: the command lists ten of the points not ok,
+    each with its message whole (cut only at a word past 400 characters), and says how many more."""
+    values = ", ".join(f"{2.4e-3 + k * 1e-4:.4g}" for k in range(13))  # (3.7 ms runs, here)
+    axes = f'[[axis]]\nkey = "scene.step"\nvalues = [{values}]\n'
+    path = sweep_file(tmp_path, axes, duration=0.5, report='[report]\nvalues = ["steps"]\n')
+    assert main(["sweep", str(path), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    rows = pq.read_table(tmp_path / "out" / "study.parquet").to_pylist()
+    listed = [line for line in out.splitlines() if line.startswith(("  diverged: ", "  failed: "))]
+    assert len(rows) == 13 and all(r["status"] != "ok" for r in rows), [r["status"] for r in rows]
+    assert len(listed) == 10 and "  ... and 3 more not ok" in out
+    for line, row in zip(listed, rows):
+        assert line.startswith(f"  {row['status']}: scene.step={row['scene.step']!r}: ")
+        message = row["message"]
+        assert line.endswith(message) if len(message) <= 400 else line.endswith(" ...")
