@@ -120,3 +120,39 @@ def test_the_live_view_shows_the_streamed_platform_moving_in_chromium(tmp_path):
     x = np.array([np.mean(d) for d in drawn])
     assert np.ptp(x) > 0.002  # by the run's sine in x (20 mm)
     assert np.ptp(run["pose.x"]) > 0.03
+
+
+def test_a_second_run_on_the_stream_has_figures_of_its_own_and_the_page_no_missing_icon():
+    """The view's figures start again with a new run (its sequence starts again at 0): samples and
+    gaps are the new run's, not added to the last one's; a browser's /favicon.ico is answered (204,
+    no content) rather than a 404 in its console."""
+    import tornado.httpclient
+    from cosim.engine.realtime.datagrams import Sample
+    from cosim.platform.realtime.view import Follower, make_app
+    from cosim.platform.report.view3d import Geometry
+    follower = Follower()
+    wall = time.time()
+    for k in (0, 1, 2, 5):  # a first run with one gap
+        follower.add(Sample(k, k * 1e-3, wall + k * 1e-3, ("pose.z",), np.zeros(1)))
+    assert follower.figures()["samples"] == "4" and follower.figures()["gaps in the sequence"] == "1"
+    for k in (0, 1):  # the next run
+        follower.add(Sample(k, k * 1e-3, wall + 1 + k * 1e-3, ("pose.z",), np.zeros(1)))
+    assert follower.figures()["samples"] == "2" and follower.figures()["gaps in the sequence"] == "0"
+    app = make_app(Geometry.of({}), follower, "test", "udp://127.0.0.1:9")
+
+    async def fetch() -> int:
+        port = free_port_tcp()
+        server = app.listen(port, address="127.0.0.1")
+        try:
+            response = await tornado.httpclient.AsyncHTTPClient().fetch(f"http://127.0.0.1:{port}/favicon.ico")
+            return response.code
+        finally:
+            server.stop()
+
+    assert asyncio.run(fetch()) == 204
+
+
+def free_port_tcp() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]

@@ -37,10 +37,12 @@ class Follower:
 
     def add(self, sample: Sample) -> None:
         now = time.time()
+        if self.latest is not None and sample.sequence < self.latest.sequence:  # a new run: figures of its own
+            self.latest, self.received, self.gaps, self.behind, self.delay, self.first = None, 0, 0, [], [], None
         if self.latest is not None and sample.sequence != self.latest.sequence + 1:
             self.gaps += 1
-        if self.first is None or (self.latest is not None and sample.sequence < self.latest.sequence):
-            self.first = (sample.time, sample.wall)  # a new run
+        if self.first is None:
+            self.first = (sample.time, sample.wall)
         self.latest, self.received = sample, self.received + 1
         self.behind = (self.behind + [(sample.wall - self.first[1]) - (sample.time - self.first[0]) / self.factor])[-1000:]
         self.delay = (self.delay + [now - sample.wall])[-1000:]
@@ -144,7 +146,11 @@ def make_app(geometry: Geometry, follower: Follower, title: str, address: str, r
         for client in list(clients):
             client.write_message(text)
 
-    app = tornado.web.Application([(r"/", Page), (r"/ws", Push)])
+    class NoIcon(tornado.web.RequestHandler):  # a browser's /favicon.ico: none, and no error for it
+        def get(self):
+            self.set_status(204)
+
+    app = tornado.web.Application([(r"/", Page), (r"/ws", Push), (r"/favicon.ico", NoIcon)])
     app.push, app.period_ms = push, 1000.0 / rate
     return app
 
