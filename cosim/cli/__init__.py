@@ -18,10 +18,11 @@ from pathlib import Path
 
 from ..engine.artifacts import ArtifactMissing
 from ..engine.errors import InputError, UsageError
-from . import advise, copy, design, export, export_check, run, stream, sweep, tune, validate, view
+from . import advise, compare, copy, design, export, run, stream, sweep, tune, validate, view
+from .export import export_check
 from .common import unwritable
 
-COMMANDS = (run, export, export_check, view, validate, advise, sweep, design, tune, copy, stream)
+COMMANDS = (run, compare, export, export_check, view, validate, advise, sweep, design, tune, copy, stream)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -30,13 +31,21 @@ def parser() -> argparse.ArgumentParser:
     prog = "cosim" if Path(sys.argv[0]).name == "cosim" else "python -m cosim"  # the console script, or -m
     top = argparse.ArgumentParser(prog=prog, description="Stewart platform co-simulation",
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
-    top.add_argument("--version", action="version", version=f"%(prog)s {version()}")
+    top.add_argument("--version", action=Version, nargs=0, help="print the version and exit")
     commands = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add(commands).set_defaults(main=command.main)
     top.epilog = "usage of each command:\n" + "\n".join(
         "  " + " ".join(sub.format_usage().split())[len("usage: "):] for sub in subcommands(top).values())
     return top
+
+
+class Version(argparse.Action):
+    """--version, its metadata read only when asked (importlib.metadata loads email and socket)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"{parser.prog} {version()}")
+        parser.exit()
 
 
 def version() -> str:

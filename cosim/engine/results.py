@@ -91,3 +91,40 @@ def message_kinds(messages, status: str = "warning") -> list[tuple[int, str]]:
             text = re.sub(r"^t = [^:]*: ", "", m.text)
             counts[f"{re.sub(r'[0-9]+$', '', instance)}: {number.sub('#', text)}"] += 1
     return [(n, kind) for kind, n in counts.most_common()]
+
+
+def read_results(path: str | Path) -> np.ndarray:
+    """A run's results as a structured array: its CSV (ours, or any whose first column is `time`
+    and whose rows are numbers), or the one CSV of an output folder (`cosim run --out`). A file that
+    cannot be read so is one line naming it (UsageError)."""
+    import pyarrow as pa
+    import pyarrow.csv
+    from .errors import UsageError
+    path = Path(path)
+    if path.is_dir():
+        found = sorted(path.glob("*.csv"))
+        if len(found) != 1:
+            raise UsageError(f"{path}: an output folder holds one run's CSV; here {len(found) or 'none'}"
+                             + (f" ({', '.join(f.name for f in found)}): name the CSV" if found else ""))
+        path = found[0]
+    if not path.is_file():
+        raise UsageError(f"{path}: no such file or folder")
+    try:
+        table = pyarrow.csv.read_csv(path)
+    except (pa.ArrowInvalid, OSError, UnicodeDecodeError) as error:
+        raise UsageError(f"{path}: not a results CSV ({str(error).splitlines()[0]})") from None
+    names = table.column_names
+    if not names or names[0] != "time":
+        raise UsageError(f"{path}: not a results CSV: its first column is {names[0] if names else 'missing'!r}, not "
+                         "'time'")
+    bad = [n for n in names if not (pa.types.is_floating(table[n].type) or pa.types.is_integer(table[n].type))]
+    if bad or len(set(names)) != len(names):
+        raise UsageError(f"{path}: not a results CSV: column {bad[0] if bad else 'names'!r} "
+                         + ("holds other than numbers" if bad else "repeat"))
+    out = np.zeros(table.num_rows, dtype=[(n, float) for n in names])
+    for name in names:
+        out[name] = table[name].to_numpy(zero_copy_only=False).astype(float)
+    if table.num_rows < 2 or np.any(np.diff(out["time"]) < 0):
+        raise UsageError(f"{path}: not a results CSV: " + ("fewer than two rows" if table.num_rows < 2 else
+                                                           "its times go back"))
+    return out

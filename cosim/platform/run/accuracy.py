@@ -166,3 +166,37 @@ def judge(scene: "Scene", result: np.ndarray, reference: np.ndarray) -> Judgemen
     bound = steady_bound(scene.drive, [p.static_force for p in leg_plants(scene_values(scene)[0])])
     ratio, window = tolerance_ratio(found, bound)
     return Judgement(pose, ratio, window)
+
+
+@dataclass(frozen=True)
+class Compared:
+    """One column of a run against the reference run, in one window (or over the whole run)."""
+    run: str
+    column: str
+    window: str
+    difference: float  # largest |run - reference| there, at the run's times (the reference interpolated)
+    at: float          # [s] where
+    change: float      # the reference's own change there (max - min)
+
+    @property
+    def relative(self) -> float:
+        return self.difference / self.change if self.change > 0 else (0.0 if self.difference == 0 else float("inf"))
+
+
+def compare(reference: np.ndarray, runs: dict[str, np.ndarray], columns: Sequence[str],
+            spans: Sequence[Window]) -> list[Compared]:
+    """Each run's columns against the reference's, over the whole run and per window (where both
+    have samples), within the time both cover: `cosim compare`."""
+    out = []
+    for label, run in runs.items():
+        t = run["time"]
+        common = (t >= reference["time"][0] - 1e-12) & (t <= reference["time"][-1] + 1e-12)
+        for column in columns:
+            gap = np.abs(run[column] - np.interp(t, reference["time"], reference[column]))
+            for window in (Window("whole run", ((-np.inf, np.inf),)), *spans):
+                here, there = window.mask(t) & common, window.mask(reference["time"])
+                if here.any() and there.any():
+                    k = int(np.argmax(np.where(here, gap, -1.0)))
+                    out.append(Compared(label, column, window.name, float(gap[k]), float(t[k]),
+                                        float(np.ptp(reference[column][there]))))
+    return out
