@@ -219,3 +219,12 @@ class TaskProgress:
             print(f"{self.label}: {self.done}/{self.total} done{failures}{f' ({what})' if what else ''}, "
                   f"{now - self._start:.0f} s"
                   f"{self._left(now)}", file=self.stream, flush=True)
+
+    def finish(self, what: str = "") -> None:
+        """The tasks ended before `total` (a search that converged early): says so, and ends a
+        terminal's bar."""
+        if self.total is None or self.done >= self.total:
+            return
+        end_bar = "\n" if self.stream.isatty() and self.done else ""
+        print(f"{end_bar}{self.label}: {self.done} done{f' ({what})' if what else ''}, fewer than the most "
+              f"({self.total}): converged, {time.perf_counter() - self._start:.0f} s", file=self.stream, flush=True)

@@ -69,12 +69,16 @@ def test_tuning_beats_the_scenes_cueing_within_every_limit_and_is_the_same_on_da
     assert on_dask.best == here.best and on_dask.evaluations == here.evaluations
 
 
-def test_the_command_writes_a_tuned_scene_that_runs(tmp_path):
+def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
+    """... and shows its search's progress as it goes (not silent for minutes): the screenings out of
+    the most the search takes, each generation."""
     scene = tmp_path / "short.toml"
     scene.write_text(EXAMPLE.read_text().replace("duration = 20.0", "duration = 3.0").replace(
         'vehicle = "drive.csv"', f'vehicle = "{EXAMPLE.parent / "drive.csv"}"')
         + '\n[cueing.tune]\nranges = {"tilt.gain" = [0.2, 0.8]}\niterations = 1\npopulation = 3\n')
     assert main(["tune", str(scene), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
+    progress = [line for line in capsys.readouterr().err.splitlines() if line.startswith("tune: screenings")]
+    assert progress and re.search(r"tune: screenings: \d+(/6)? done", progress[-1]), progress  # at most (1 + 1) x 3 x 1
     tuned = load_scene(tmp_path / "out" / "short_tuned.toml")
     summary = (tmp_path / "out" / "short_tuning.txt").read_text()
     gain = float(re.search(r"tilt.gain = ([0-9.]+)", summary).group(1))

@@ -214,10 +214,12 @@ class Tuning:
 
 
 def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, workers: int | None = 0,
-         scheduler: str | None = None, seed: int = 1, iterations: int = 15, population: int = 6) -> Tuning:
+         scheduler: str | None = None, seed: int = 1, iterations: int = 15, population: int = 6,
+         progress: bool = False) -> Tuning:
     """The cueing parameters within `ranges` (default: the scene's [cueing.tune] ranges, or
     DEFAULT_RANGES of its algorithm) whose screened objective is least (Judged.objective), searched on Dask
-    (workers, scheduler as for a sweep), then it and the scene's own confirmed by co-simulation."""
+    (workers, scheduler as for a sweep), then it and the scene's own confirmed by co-simulation;
+    `progress`: the search's progress shown (the command line's)."""
     ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES[scene.cueing_algorithm])
     keys = tuple(ranges)
     start = time.perf_counter()
@@ -229,7 +231,7 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
             raise
         raise mapped from None
     result = evolve(partial(_objective, scene=scene, keys=keys), [tuple(map(float, ranges[k])) for k in keys],
-                    workers, scheduler, seed, iterations, population)
+                    workers, scheduler, seed, iterations, population, progress="tune: screenings" if progress else None)
     best = dict(zip(keys, map(float, result.x)))
     tuning = Tuning(ranges, best, int(result.nfev), time.perf_counter() - start)
     for name, parameters in (("scene", {}), ("tuned", best)):

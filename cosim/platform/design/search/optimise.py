@@ -69,20 +69,30 @@ def optimise(study: Study, actuator: Actuator, workers: int | None = 0, schedule
 
 
 def evolve(objective, bounds: list[tuple[float, float]], workers: int | None, scheduler: str | None, seed: int,
-           max_iterations: int, population: int = 15):
+           max_iterations: int, population: int = 15, progress: str | None = None):
     """scipy's differential evolution of `objective` (a picklable function of a point) within
     `bounds`, each generation's points evaluated on Dask when workers/scheduler say so (in this
-    process for workers = 0 and no scheduler); the same seed gives the same answer. Returns
-    scipy's OptimizeResult."""
+    process for workers = 0 and no scheduler); the same seed gives the same answer. `progress`: a
+    label for the evaluations' progress (cosim.engine.observers.TaskProgress: a bar with the time
+    left on a terminal, out of the most the search can take). Returns scipy's OptimizeResult."""
     from contextlib import nullcontext
     from scipy.optimize import differential_evolution
+    from ....engine.observers import TaskProgress
     from ....engine.sweep.dask_run import dask_client
+    shown = TaskProgress(progress, (max_iterations + 1) * population * len(bounds)) if progress else None
     with (dask_client(workers, scheduler) if workers != 0 or scheduler else nullcontext()) as client:
 
         def mapper(function, points):  # what differential_evolution evaluates its population through
-            return client.gather(client.map(function, list(points), pure=False)) if client else list(map(function, points))
-        return differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, popsize=population,
-                                      tol=1e-6, polish=False, updating="deferred", workers=mapper)
+            points = list(points)
+            values = client.gather(client.map(function, points, pure=False)) if client else list(map(function, points))
+            if shown is not None:
+                shown.advance(f"best so far {min(values):.4g}", count=len(points))
+            return values
+        result = differential_evolution(objective, bounds, seed=seed, maxiter=max_iterations, popsize=population,
+                                        tol=1e-6, polish=False, updating="deferred", workers=mapper)
+        if shown is not None:
+            shown.finish(f"best {result.fun:.4g}")
+        return result
 
 
 def study_optimum(study: Study, workers: int | None = 0, scheduler: str | None = None) -> Optimum | None:
