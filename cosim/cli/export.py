@@ -76,6 +76,8 @@ def main(args: argparse.Namespace) -> int:
             from ..engine.ssp import ANNOTATION
             print(f"written: {path} (SSP 1.0; our run settings in its annotation '{ANNOTATION}', which other tools "
                   "ignore)")
+        elif path.suffix == ".lua":
+            print(f"written: {path} (OMSimulator's script for it: `OMSimulator {path.name}` in its folder)")
         else:
             print(f"written: {path} and the FMUs beside it (OSP; libcosim runs it with its fixed-step or ECCO algorithm "
                   "and no input derivatives; libcosimpy 0.0.6 loads a file with more than one power bond only once "

@@ -11,6 +11,7 @@ OMSimulator (b3cd458, from ../shared/peers) to round-off at the steps the export
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
@@ -172,3 +173,43 @@ def check_system(structure: SystemStructure) -> tuple[float, list[ToolStep]]:
 
     fmi3 = any(str(loaded(c.fmu)[0].fmiVersion).startswith("3") for c in structure.components)
     return duration, largest_steps(step, attempt, fmi3)
+
+
+# about what OMSimulator's CSV result file takes per value it writes (its numbers print 12 significant
+# digits, a separator between them): what an export says of the file's size
+OMSIMULATOR_BYTES_PER_VALUE = 15.0
+
+
+def omsimulator_script(archive: Path, record: Sequence[tuple[str, str]], interval: float, stop: float) -> Path:
+    """Beside an SSP archive, the Lua script that runs it in OMSimulator recording only `record`
+    (component, variable) every `interval` seconds of simulated time until `stop` into
+    <archive>_omsimulator.csv (OMSimulator records every signal at every communication point
+    otherwise, and reads no result filter from an SSP): `OMSimulator <archive>.lua` in the archive's
+    folder. Returns its path."""
+    import re
+    from .files import write_text
+    archive = Path(archive)
+    pattern = "|".join(re.escape(f"{c}.{v}") for c, v in record)  # (component.variable, under the model's systems)
+    lua = "\n".join([
+        f"-- {archive.name} in OMSimulator, recording only the {len(record)} outputs the run reports, every "
+        f"{interval:g} s: OMSimulator {archive.stem}.lua",
+        f'model, status = oms_importFile("{archive.name}")',
+        f'oms_setResultFile(model, "{archive.stem}_omsimulator.csv", 1000)',
+        'oms_removeSignalsFromResults(model, ".*")',
+        f'oms_addSignalsToResults(model, "^[^.]+\\\\.[^.]+\\\\.([^.]+\\\\.)?({_lua(pattern)})$")',
+        f"oms_setLoggingInterval(model, {interval!r})",
+        f"oms_setStopTime(model, {stop!r})",
+        "oms_instantiate(model)", "oms_initialize(model)", "oms_simulate(model)", "oms_terminate(model)",
+        "oms_delete(model)", ""])
+    return write_text(archive.with_suffix(".lua"), lua, "the OMSimulator script")
+
+
+def omsimulator_bytes_per_second(record: Sequence[tuple[str, str]], interval: float) -> float:
+    """About how large the script's result file grows per simulated second [bytes]: b3cd458
+    writes each logged point twice (before and after the step that reaches it)."""
+    return 2 * (len(record) + 1) * OMSIMULATOR_BYTES_PER_VALUE / interval
+
+
+def _lua(text: str) -> str:
+    """A string for a Lua double-quoted literal."""
+    return text.replace("\\", "\\\\").replace('"', '\\"')

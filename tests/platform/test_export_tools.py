@@ -316,3 +316,38 @@ def test_a_vehicle_scene_imports_into_omsimulator_and_fmpy(tmp_path):
         # (OMSimulator's result file prints 12 significant digits, and the tools' clocks differ by ulps)
         assert np.abs(theirs - mine).max() <= 1e-9 * np.ptp(ours["pose_ref.x"])
     assert np.ptp(omsimulator["cueing.vehicle.specific_force.x"]) == pytest.approx(4.0)  # the drive's braking, read
+
+
+def test_the_export_s_omsimulator_script_records_what_the_run_reports(tmp_path):
+    """`OMSimulator meng.lua` beside the export, as the export says: only the run's recorded outputs,
+    every scene step, into meng_omsimulator.csv, about the size per simulated second the export
+    states (OMSimulator alone writes every signal at every 62.5 us point: over a hundred times more)."""
+    import re
+    import subprocess
+    from peers import omsimulator
+    from cosim.cli import main
+    from cosim.engine.settings import recorded
+    duration = 0.5
+    assert main(["export", "meng_eq35", "--ssp", str(tmp_path / "meng.ssp"), "--duration", str(duration)]) == 0
+    done = subprocess.run([str(omsimulator()), "meng.lua"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0 and "error:" not in done.stdout + done.stderr, done.stdout[-2000:]
+    result = tmp_path / "meng_omsimulator.csv"
+    header = result.read_text().splitlines()[0].replace('"', "").split(",")
+    record = recorded(read_ssp(tmp_path / "meng.ssp").settings)[0]
+    assert header[0] == "time" and sorted(n.split(".", 2)[2] for n in header[1:]) == sorted(f"{c}.{v}" for c, v in record)
+    times = np.unique(np.loadtxt(result, delimiter=",", skiprows=1, usecols=0))
+    # every scene step, to the communication point OMSimulator's 62.5 us master reaches it at
+    assert times[-1] == pytest.approx(duration) and np.abs(np.diff(times) - 1e-3).max() <= 6.25e-5 + 1e-12
+    stated = float(re.search(r"about ([\d.]+) MB per simulated second", _export_note(tmp_path)).group(1))
+    assert result.stat().st_size / duration / 1e6 <= 1.25 * stated
+
+
+def _export_note(folder: Path) -> str:
+    """What the export said of its script (the export run again, to its output)."""
+    import contextlib
+    import io
+    from cosim.cli import main
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        main(["export", "meng_eq35", "--ssp", str(folder / "again.ssp"), "--duration", "0.5", "--scene-step"])
+    return text.getvalue()

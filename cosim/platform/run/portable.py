@@ -15,6 +15,7 @@ master without such sweeps does not start the drives on a reference they are not
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -169,7 +170,24 @@ def export_model_exchange(scene: Scene, ssp: Path, fmi2_warnings: bool = False) 
     lines.append(f"note: the system as Model Exchange FMUs in one strongly coupled system (OMSimulator's oms-sc: CVODE, "
                  f"relative tolerance {coupled.relative_tolerance:g}, steps up to {coupled.maximum_step:g} s), its "
                  f"outputs every {coupled.output_step:g} s: no coupling, no step to measure")
-    return Exported([write_ssp(structure, ssp, coupled=coupled, carry=carried(structure, lines))], lines)
+    archive = write_ssp(structure, ssp, coupled=coupled, carry=carried(structure, lines))
+    return Exported([archive, omsimulator_lua(scene, structure, Path(ssp), lines)], lines)
+
+
+def omsimulator_lua(scene: Scene, structure: SystemStructure, archive: Path, lines: list[str]) -> Path:
+    """Beside the archive, OMSimulator's script that records only what the run reports, at the
+    scene's output interval (cosim.engine.tools.omsimulator_script); what the export says of it added
+    to `lines`."""
+    from ...engine.settings import recorded
+    from ...engine.tools import omsimulator_bytes_per_second, omsimulator_script
+    record = recorded(structure.settings)[0]
+    interval = scene.output_interval or scene.step
+    script = omsimulator_script(archive, record, interval, scene.duration)
+    lines.append(f"note: {script.name}: `OMSimulator {script.name}` in its folder runs the archive recording only "
+                 f"the {len(record)} outputs the run reports, every {interval:g} s, into "
+                 f"{archive.stem}_omsimulator.csv: about {omsimulator_bytes_per_second(record, interval) / 1e6:.2g} MB "
+                 "per simulated second (OMSimulator alone records every signal at every communication point)")
+    return script
 
 
 def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
@@ -214,6 +232,7 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
     if ssp is not None:
         files.append(write_ssp(structure, ssp, [(s.master.tool, s.step, s.within) for s in steps],
                                carry=carried(structure, lines)))
+        files.append(omsimulator_lua(scene, structure, Path(ssp), lines))
     for note in not_portable(structure.settings):
         lines.append(f"note: other tools run this system without {note}")
     if osp is not None:
