@@ -13,21 +13,37 @@ ldconfig -p 2>/dev/null | grep -q "libtbb.so.12" || missing="$missing libtbb12"
 command -v openssl > /dev/null 2>&1 || missing="$missing openssl"
 command -v x86_64-w64-mingw32-gcc > /dev/null 2>&1 || missing="$missing gcc-mingw-w64-x86-64"
 { command -v wine64 > /dev/null 2>&1 || [ -x /usr/lib/wine/wine64 ]; } || missing="$missing wine64"
-if [ -n "$missing" ]; then
+if [ -z "$missing" ]; then
+  echo "setup: the system packages are present (TBB, openssl, MinGW-w64, Wine)"
+else
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   # shellcheck disable=SC2086
   $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq $missing >> apt.log 2>&1 \
     || { cat apt.log; echo "could not install$missing (needed by ecospy, the win64 binaries and the tests)" >&2; exit 1; }
 fi
-if [ ! -x .venv/bin/python ]; then
-  "$PYTHON" -m venv .venv
+# Each step once: the environment is made again only when what it is made from changed (the pinned
+# requirements, pyproject.toml, the Python), and CMake builds only what changed.
+wanted="$(cat requirements.txt pyproject.toml | sha256sum | cut -c1-16) $("$PYTHON" --version 2>&1)"
+stamp=.venv/.cosim-environment
+if [ -x .venv/bin/python ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$wanted" ]; then
+  echo "setup: .venv/ is current (requirements.txt, pyproject.toml and $("$PYTHON" --version 2>&1) as when it was made)"
+else
+  if [ ! -x .venv/bin/python ]; then
+    "$PYTHON" -m venv .venv
+  fi
+  .venv/bin/python -m pip install --quiet --upgrade pip
+  .venv/bin/python -m pip install --quiet -r requirements.txt
+  # the package editable, its Python files from this checkout; CMake builds the C parts into build/ below
+  # (a wheel, `pip install .` or `pip wheel .`, builds them into the package instead: scikit-build-core)
+  .venv/bin/python -m pip install --quiet --no-deps --no-build-isolation -C wheel.cmake=false -e .
+  echo "$wanted" > "$stamp"
 fi
-.venv/bin/python -m pip install --quiet --upgrade pip
-.venv/bin/python -m pip install --quiet -r requirements.txt
-# the package editable, its Python files from this checkout; CMake builds the C parts into build/ below
-# (a wheel, `pip install .` or `pip wheel .`, builds them into the package instead: scikit-build-core)
-.venv/bin/python -m pip install --quiet --no-deps --no-build-isolation -C wheel.cmake=false -e .
-.venv/bin/cmake -S . -B build -DPython3_EXECUTABLE="$PWD/.venv/bin/python" > build.log 2>&1 || { cat build.log; exit 1; }
+if [ -f build/CMakeCache.txt ]; then
+  echo "setup: build/ is configured; building what changed"  # (CMake configures again where its files changed)
+  : > build.log
+else
+  .venv/bin/cmake -S . -B build -DPython3_EXECUTABLE="$PWD/.venv/bin/python" > build.log 2>&1 || { cat build.log; exit 1; }
+fi
 .venv/bin/cmake --build build -j 2 >> build.log 2>&1 || { cat build.log; exit 1; }
 touch build/built.stamp  # cosim.engine.artifacts: the build is current
 echo "FMUs built:" build/fmus/*.fmu
