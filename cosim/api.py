@@ -138,7 +138,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         raise UsageError("simulate: plots are drawn into a folder: give out as well")
     if isinstance(model, SystemStructure) or (not isinstance(model, Scene)
                                               and Path(str(model)).suffix.lower() in SYSTEM_SUFFIXES):
-        given = [name for name, value in (("overrides", overrides), ("plots", plots), ("twin", twin),
+        given = [name for name, value in (("overrides", overrides), ("twin", twin),
                                           ("listen", listen), ("listen_key", listen_key),
                                           ("model_exchange", model_exchange)) if value]
         if given:
@@ -152,7 +152,7 @@ def simulate(model: str | Path | Scene | SystemStructure, *, duration: float | N
         paced = RealTime(real_time, stream) if real_time is not None or stream else None
         with nullcontext(model) if isinstance(model, SystemStructure) else opened(Path(model)) as structure:
             values, report = run_system(structure, dict(settings or {}), duration, target, source=source,
-                                        progress=progress, advice=advice, real_time=paced)
+                                        progress=progress, advice=advice, real_time=paced, plots=plots)
         return Run(values, report)
     if settings:
         raise UsageError("simulate: settings are an SSP system's run settings; a scene's are keys of its file, given "

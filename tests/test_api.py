@@ -70,6 +70,11 @@ def test_simulate_runs_a_system_and_writes_its_results(ssp, tmp_path):
     from_object = cosim.simulate(structure, out=tmp_path / "object")  # written, not dropped
     assert (tmp_path / "object" / f"{structure.name}.csv").is_file()
     assert np.array_equal(from_object["pose.z"], cosim.simulate(ssp)["pose.z"])
+    # with plots, the system's page and figure: every recorded output, one plot per component
+    cosim.simulate(ssp, out=tmp_path / "plots", plots=True)
+    page = (tmp_path / "plots" / "meng.html").read_text()
+    assert all(f"{name}" in page for name in ("mechanics", "pose.z", "trajectory", "pmsm3"))
+    assert (tmp_path / "plots" / "meng_outputs.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.mark.parametrize("arguments,message", [

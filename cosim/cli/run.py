@@ -88,7 +88,7 @@ def main(args: argparse.Namespace) -> int:
                   "drive this run's platform", flush=True)
     system = args.scene.suffix.lower() in SYSTEM_SUFFIXES
     stem = args.scene.stem
-    written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if system or args.no_plots else
+    written = f"{args.out}/{stem}.csv, .mat, .log" + ("" if args.no_plots else
                                                      f", plots and the report {stem}.html")
     if args.fmi is not None and system:
         raise UsageError(f"--fmi: for a scene; {args.scene.name} names its own FMUs")
@@ -102,7 +102,7 @@ def main(args: argparse.Namespace) -> int:
             overrides["scene.fmi"], labels["scene.fmi"] = args.fmi, f"--fmi {args.fmi}"
         model, given = (lambda: load_scene(args.scene, overrides, labels)), {}
     return report(lambda: simulate(model() if callable(model) else model, duration=duration, out=args.out,
-                                   plots=not args.no_plots and not system, twin=args.twin, progress=True, advice=True,
+                                   plots=not args.no_plots, twin=args.twin, progress=True, advice=True,
                                    real_time=factor, stream=args.stream, listen=args.listen,
                                    listen_key=args.listen_key, model_exchange=args.me, **given).report,
                   written, args.out)

@@ -204,9 +204,11 @@ def system_plan(structure: SystemStructure, overrides: Mapping[str, str] | None 
 
 def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
                stop_time: float | None = None, out: Path | None = None, *, source: str | None = None,
-               progress: bool = False, advice: bool = False, real_time: RealTime | None = None) -> tuple[np.ndarray, Report]:
+               progress: bool = False, advice: bool = False, real_time: RealTime | None = None,
+               plots: bool = False) -> tuple[np.ndarray, Report]:
     """Runs a system by its own settings (system_plan) and writes its results to `out` as
-    <name>.csv, .mat and .log; paced and streamed by `real_time` if given. What cannot start (a
+    <name>.csv, .mat and .log (and with `plots` the page and figure of cosim.engine.page); paced and
+    streamed by `real_time` if given. What cannot start (a
     setting, a parameter value, a time that fits no step, an FMU that refuses its values) is an
     SspError naming `source` (the file the system came from; default its name), one line; a run
     that stopped part way raises RunStopped."""
@@ -227,7 +229,10 @@ def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None =
                     not (overrides or {}).get("step"):
                 made.remarks.append(f"macro step {structure.experiment.step:g} s: {structure.experiment.step_source}")
             return made
+        def page(result: np.ndarray, made: Report, outcome: Outcome, folder: Path) -> None:
+            from .page import write_page
+            write_page(result, made.text(), plan.record, folder, Path(where).stem if source else structure.name)
         return run(plan, out, Path(where).stem if source else structure.name, progress=progress, advice=advice,
-                   report=report)
+                   report=report, files=page if plots else None)
     except (ParameterError, NoStep, SettingsError, FmuError) as error:  # the values, settings or times, before a step
         raise SspError(f"{where}: {error}") from None
