@@ -32,7 +32,9 @@ def main(args: argparse.Namespace) -> int:
         return live(scene, args)
     try:
         motion = reference_motion(scene, view_samples(scene.duration))
-        path, lines = write_view(scene, scene_values(scene)[0], motion, args.out / f"{scene.path.stem}_view.html")
+        every_step = reference_motion(scene, int(round(scene.duration / scene.step)) + 1)[:2]  # the run's samples
+        path, lines = write_view(scene, scene_values(scene)[0], motion, args.out / f"{scene.path.stem}_view.html",
+                                 every_step)
     except ValueError as error:  # a platform the scene's values do not build
         mapped = scene_error(scene, error)
         if mapped is None:

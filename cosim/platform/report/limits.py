@@ -63,15 +63,16 @@ def platform_excursions(mechanics_values: Mapping[str, object], time: np.ndarray
                       stroke, float(mechanics_value(mechanics_values, "limit.joint_angle")))
 
 
-def excursion_lines(found: list[Excursion], most: int = 8) -> list[str]:
-    """What a report says of the excursions: the `most` that went farthest (a millimetre weighed as a
-    degree), in time order, and how many there were."""
+def excursion_lines(found: list[Excursion], most: int = 8, subject: str = "the platform past its limits") -> list[str]:
+    """What a report says of the excursions of `subject` (the platform as it ran, or the reference
+    it was asked for): the `most` that went farthest (a millimetre weighed as a degree), in time
+    order, and how many there were."""
     if not found:
         return []
     farthest = sorted(found, key=lambda e: -e.beyond / (np.radians(1.0) if "joint" in e.limit else 1e-3))
     shown = sorted(farthest[:most], key=lambda e: (e.start, e.leg))
     longest = max(e.end - e.start for e in found)
-    lines = [f"{len(found)} excursions past the platform's limits (the longest {longest:.3f} s)" +
+    lines = [f"{len(found)} excursions of {subject} (the longest {longest:.3f} s)" +
              (f"; the {most} farthest:" if len(found) > most else ":")]
     return lines + [e.words() for e in shown]
 

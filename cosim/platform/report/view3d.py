@@ -240,14 +240,17 @@ SYNC_SCRIPT = """<script>
 
 def extremes(geometry: Geometry, f: Frames) -> list[str]:
     """Per leg, the shortest and longest it gets against the stroke, then each stretch of time it
-    spends past the stroke or the joint-angle limit, with the farthest it went (excursions)."""
+    spends past the stroke or the joint-angle limit, with the farthest it went (excursions of the
+    reference; `f`: frames at every step of the scene, as a run records them, so that a crossing's
+    time is the run's, not a frame's)."""
     low, high = geometry.stroke
     lines = [f"stroke [{low:g}, {high:g}] m, joint-angle limit {np.degrees(geometry.joint_limit):.1f} deg"]
     for i in range(6):
         shortest, longest = f.length[:, i].min(), f.length[:, i].max()
         lines.append(f"leg {i + 1}: {shortest:.4f} to {longest:.4f} m ({100 * f.use[:, i].min():.0f} to "
                      f"{100 * f.use[:, i].max():.0f} % of the stroke)")
-    return lines + excursion_lines(excursions(f.time, f.length, f.tilt, geometry.stroke, geometry.joint_limit))
+    found = excursions(f.time, f.length, f.tilt, geometry.stroke, geometry.joint_limit)
+    return lines + excursion_lines(found, subject="the reference past the platform's limits")
 
 
 def view_samples(duration: float) -> int:
@@ -256,10 +259,11 @@ def view_samples(duration: float) -> int:
 
 
 def write_view(scene, values: Mapping[str, object], motion: tuple[np.ndarray, np.ndarray, np.ndarray],
-               path) -> tuple[object, list[str]]:
+               path, fine: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[object, list[str]]:
     """`python -m cosim view SCENE`: the platform following the scene's reference motion (no
     co-simulation: the pose is the reference; `motion`: times, poses and base-frame load forces at
-    view_samples), as a self-contained page; returns its path and the extremes per leg."""
+    view_samples), as a self-contained page; returns its path and the extremes per leg (of `fine`,
+    times and poses at the scene's every step, where given; else of the frames)."""
     import html
     from pathlib import Path
     from plotly.offline import get_plotlyjs
@@ -267,7 +271,7 @@ def write_view(scene, values: Mapping[str, object], motion: tuple[np.ndarray, np
     time, pose, force = motion
     f = frames(geometry, time, pose, None, force + pulse_forces([p for p in scene.pulses if p.frame == "platform"],
                                                                  time, pose))
-    lines = extremes(geometry, f)
+    lines = extremes(geometry, f if fine is None else frames(geometry, fine[0], fine[1], None))
     page = (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{html.escape(scene.name)}</title>'
             f'<script>{get_plotlyjs()}</script><style>body{{font-family:sans-serif;margin:1.5em;max-width:1200px}}'
             f'</style></head><body><h1>{html.escape(scene.name)}: the reference motion</h1><p>The platform at the '
