@@ -349,3 +349,17 @@ def test_export_takes_set_and_duration(tmp_path, capsys):
         assert main(["export", scene, "--ssp", str(archive), "--scene-step", *arguments]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_reference_the_platform_cannot_take_is_refused_before_its_run(tmp_path, capsys):
+    """A roll amplitude of 5 (degrees meant, read as radians) takes the legs past any joint: refused
+    in one line naming the scene's line of that angle and what it reaches, before the run (no
+    results written), not when the mechanics stops part way."""
+    scene = tmp_path / "tilted.toml"
+    scene.write_text('[scene]\nduration = 3.0\n[mechanics]\nparameter_set = "meng2010"\n[trajectory.z]\n'
+                     'offset = "neutral"\n[trajectory.roll]\nsines = [{amplitude = 5, frequency = 0.3}]\n')
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "tilted.toml:7: the reference takes leg" in err, err
+    assert "its roll reaches 5 rad (286 deg): a scene's angles are radians" in err
+    assert not list((tmp_path / "out").glob("*.csv"))

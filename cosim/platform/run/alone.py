@@ -54,3 +54,34 @@ def play_cueing(cueing_values: dict, duration: float, step: float) -> tuple[np.n
     result = alone("cueing", cueing_values, duration, step, CUEING_OUTPUTS)
     return (result["time"], *(_columns(result, "cueing", names)
                               for names in (CUEING_OUTPUTS[:6], CUEING_OUTPUTS[6:8], CUEING_OUTPUTS[8:])))
+
+
+WORKSPACE_STEP = 0.01  # [s] the reference's samples a workspace check takes (at most its scene's step apart)
+TILT_IMPOSSIBLE = np.pi / 2  # [rad] a leg turned past a right angle from its neutral direction: no joint allows it
+
+
+def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] | None:
+    """What a scene's own reference asks that no platform of its kind can do, found before its run,
+    as (the scene's key to blame, what): None for nothing; a leg of no length or turned past a right angle from its neutral direction at
+    either joint (the joints would cross: the mechanics stops there), where and when; a hint where an
+    angle of the reference is larger than half a turn (radians meant as degrees). Not for a cueing
+    scene (its reference is the guarded cueing's)."""
+    from ..core import Core
+    if scene.vehicle is not None:
+        return None
+    step = max(scene.step, min(WORKSPACE_STEP, scene.duration / 2))
+    times, poses, _ = play(scene_trajectory(scene), scene.duration, step)
+    kinematics = Core(values=mechanics_values).pose_kinematics(poses)
+    tilt = np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])
+    bad = (kinematics["length"] <= 0.0) | ~(tilt < TILT_IMPOSSIBLE)
+    if not bad.any():
+        return None
+    k = int(np.flatnonzero(bad.any(axis=1))[0])
+    leg = int(np.flatnonzero(bad[k])[0]) + 1
+    largest = np.abs(poses[:, 3:]).max(axis=0)  # each angle's largest over the reference
+    wide = POSE[3 + int(np.argmax(largest))]
+    hint = (f"; its {wide} reaches {largest.max():.3g} rad ({np.degrees(largest.max()):.0f} deg): a scene's angles "
+            "are radians" if largest.max() > np.pi / 2 else "")
+    how = "to no length" if kinematics["length"][k, leg - 1] <= 0 else "past a right angle from its neutral direction"
+    return (f"trajectory.{wide}" if hint else "trajectory",
+            f"the reference takes leg {leg} {how} at t = {times[k]:.3f} s (the joints would cross){hint}")

@@ -22,7 +22,8 @@ from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, 
 from ..ports import DRIVES, POSE, per_leg
 from ..report.limits import result_excursion_lines
 from ..report.plots import units
-from ..scene import Scene
+from ..scene import Scene, SceneError
+from .alone import workspace_problem
 from .compile import CompiledScene, compile_scene, run_label
 from .errors import BUILD_ERRORS, scene_error
 
@@ -79,6 +80,9 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
     try:
         compiled = compile_scene(scene)
         plan, notes = compiled.plan, compiled.notes
+        problem = workspace_problem(scene, compiled.mechanics)
+        if problem is not None:  # before the run, not when the mechanics stops part way
+            raise SceneError(f"{scene.document.where(problem[0])}: {problem[1]}")
         if adapt is None and scene.vehicle is not None:
             from .guard import guarded_plan
             adapt = guarded_plan  # a cueing output is held within the platform's envelope
