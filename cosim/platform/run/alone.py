@@ -58,6 +58,7 @@ def play_cueing(cueing_values: dict, duration: float, step: float) -> tuple[np.n
 
 WORKSPACE_STEP = 0.01  # [s] the reference's samples a workspace check takes (at most its scene's step apart)
 TILT_IMPOSSIBLE = np.pi / 2  # [rad] a leg turned past a right angle from its neutral direction: no joint allows it
+WORKSPACE_SAMPLES = 1e6  # the most a workspace check plays
 
 
 def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] | None:
@@ -67,9 +68,9 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
     angle of the reference is larger than half a turn (radians meant as degrees). Not for a cueing
     scene (its reference is the guarded cueing's)."""
     from ..core import Core
-    if scene.vehicle is not None:
-        return None
     step = max(scene.step, min(WORKSPACE_STEP, scene.duration / 2))
+    if scene.vehicle is not None or scene.duration / step > WORKSPACE_SAMPLES:
+        return None  # (a run that long is refused by what it would record)
     times, poses, _ = play(scene_trajectory(scene), scene.duration, step)
     kinematics = Core(values=mechanics_values).pose_kinematics(poses)
     tilt = np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])

@@ -80,9 +80,6 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
     try:
         compiled = compile_scene(scene)
         plan, notes = compiled.plan, compiled.notes
-        problem = workspace_problem(scene, compiled.mechanics)
-        if problem is not None:  # before the run, not when the mechanics stops part way
-            raise SceneError(f"{scene.document.where(problem[0])}: {problem[1]}")
         if adapt is None and scene.vehicle is not None:
             from .guard import guarded_plan
             adapt = guarded_plan  # a cueing output is held within the platform's envelope
@@ -92,6 +89,10 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
                 notes = [*notes, remark]
                 if progress:  # the command line: before the run starts
                     print(f"note: {remark}", flush=True)
+        guarded = plan.real_time is not None and plan.real_time.live is not None and plan.real_time.live.guarded
+        problem = None if guarded else workspace_problem(scene, compiled.mechanics)  # (a guard holds it)
+        if problem is not None:  # before the run, not when the mechanics stops part way
+            raise SceneError(f"{scene.document.where(problem[0])}: {problem[1]}")
 
         def report(outcome: Outcome, result: np.ndarray) -> RunReport:
             made = scene_report(compiled, result, outcome)
