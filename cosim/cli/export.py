@@ -69,7 +69,7 @@ def main(args: argparse.Namespace) -> int:
         exported = export_model_exchange(scene, args.ssp, fmi2_warnings=args.fmi2_warnings)
     else:
         exported = export_scene(scene, args.ssp, args.osp, measure=not args.scene_step,
-                                fmi2_warnings=args.fmi2_warnings)
+                                fmi2_warnings=args.fmi2_warnings, progress=True)
     print("\n".join(exported.lines))
     for path in exported.files:
         if path.suffix == ".ssp":

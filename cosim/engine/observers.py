@@ -221,9 +221,13 @@ class TaskProgress:
                   f"{self._left(now)}", file=self.stream, flush=True)
 
     def finish(self, what: str = "") -> None:
-        """The tasks ended before `total` (a search that converged early): says so, and ends a
-        terminal's bar."""
-        if self.total is None or self.done >= self.total:
+        """The tasks ended: before `total` (a search that converged early), says so; a count's or a
+        bar's line on a terminal ended."""
+        if self.total is None:  # a count: its line ended on a terminal
+            if self.stream.isatty() and self.done:
+                print(file=self.stream, flush=True)
+            return
+        if self.done >= self.total:
             return
         end_bar = "\n" if self.stream.isatty() and self.done else ""
         print(f"{end_bar}{self.label}: {self.done} done{f' ({what})' if what else ''}, fewer than the most "

@@ -139,3 +139,33 @@ def test_the_export_prints_its_table_and_keeps_the_scene_step_on_request(tmp_pat
     structure = read_ssp(tmp_path / "a.ssp")
     assert not any(c.parameters.get("fmi.warnings_as_ok") for c in structure.components)
     assert main(["export", str(scene), "--ssp", str(tmp_path / "b.ssp"), "--fmi2-warnings", "--warnings-as-ok"]) == 2
+
+
+def test_the_export_shows_its_measuring_on_a_terminal(tmp_path):
+    """On a terminal (a pseudo-terminal here), `cosim export` counts its measuring runs as they end,
+    each naming the tool and step, on one line that ends before what the export prints next."""
+    import os
+    import pty
+    import re
+    import subprocess
+    import sys
+    main_end, child_end = pty.openpty()
+    process = subprocess.Popen([sys.executable, "-m", "cosim", "export", "meng_eq35", "--ssp",
+                                str(tmp_path / "m.ssp"), "--duration", "1"], stdin=child_end, stdout=child_end,
+                               stderr=child_end, close_fds=True)
+    os.close(child_end)
+    output = b""
+    while True:
+        try:
+            chunk = os.read(main_end, 65536)
+        except OSError:  # the child closed its end
+            break
+        if not chunk:
+            break
+        output += chunk
+    assert process.wait(timeout=300) == 0
+    os.close(main_end)
+    text = output.decode(errors="replace")
+    counted = [line for line in text.replace("\r\n", "\n").split("\r") if "export: measuring each tool's step, runs:" in line]
+    assert counted and re.search(r"runs: \d+ done \((OMSimulator|libcosim|Ecos|fmpy\.ssp) at [\d.]+ ms\)", counted[-1])
+    assert re.search(r"runs: \d+ done \([^)]*\), \d+ s\n", text.replace("\r\n", "\n"))  # the line ended

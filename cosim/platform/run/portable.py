@@ -112,23 +112,32 @@ def _run(scene: Scene, master: ToolMaster, step: float, duration: float, structu
 _MEASURED: dict[tuple, list[ToolStep]] = {}
 
 
-def tool_steps(scene: Scene) -> list[ToolStep]:
+def tool_steps(scene: Scene, progress: bool = False) -> list[ToolStep]:
     """Per tool of TOOL_MASTERS, the largest step (the scene's step over a power of two, down to
     FLOOR) at which its master holds the tolerances over a probe of the scene, or the one that came
     closest. Tools with the same master are run once; a scene measured before in this process is
-    not measured again."""
+    not measured again. `progress`: each run of the measurement counted as it ends (the command
+    line's; cosim.engine.observers.TaskProgress)."""
+    from ...engine.observers import TaskProgress
     key = (str(scene.path), scene.text, tuple(sorted((k, repr(v)) for k, v in scene.overrides.items())))
     if key in _MEASURED:
         return _MEASURED[key]
+    shown = TaskProgress("export: measuring each tool's step, runs", None) if progress else None
     duration = probe_duration(scene)
     reference = converged(scene, duration)
+    if shown is not None:
+        shown.advance("the converged reference")
     structure = portable_structure(scene)[0]  # its drives designed once, for every master and step
 
     def attempt(master: ToolMaster, step: float) -> ToolStep:
         result, wall = _run(scene, master, step, duration, structure)
+        if shown is not None:
+            shown.advance(f"{master.tool} at {1e3 * step:g} ms")
         return ToolStep(master, step, judge(scene, result, reference), wall)
 
     _MEASURED[key] = largest_steps(scene.step, attempt, fmi3=scene.fmi == 3)
+    if shown is not None:
+        shown.finish()
     return _MEASURED[key]
 
 
@@ -204,13 +213,14 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
-def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False) -> Exported:
+def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False,
+                 progress: bool = False) -> Exported:
     """The scene's whole system for other tools: an SSP archive at `ssp` and/or an OSP
     configuration in the folder `osp`. measure: each tool's step measured (tool_steps) and written
     where it takes it; otherwise the scene's own step everywhere. Unless fmi2_warnings, every FMU
     that can returns fmi2OK where it logs a warning (fmi.warnings_as_ok), so that a tool which stops
     at the first fmi2Warning (OMSimulator, at a leg past its stroke) runs on. Raises SceneError for
-    values the FMUs refuse (the scene's file and line)."""
+    values the FMUs refuse (the scene's file and line). progress: the measuring's shown as it goes."""
     from ...engine import ParameterError
     from ...engine.osp import write_osp
     from ...engine.ssp import not_portable, write_ssp
@@ -224,7 +234,7 @@ def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_wa
         lines.append("note: the archive holds our FMUs as FMI 3.0 (no input derivatives: each extrapolates the inputs "
                      "its master holds itself, as above); our engine runs it")
         lines += fmi3_lines()
-    steps = tool_steps(scene) if measure else []
+    steps = tool_steps(scene, progress) if measure else []
     if steps:
         lines += steps_text(scene, steps)
     else:
