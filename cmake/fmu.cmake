@@ -3,10 +3,10 @@
 # sources/ and documentation/index.html.
 
 set(FMU_COMMON_DIR "${CMAKE_SOURCE_DIR}/fmu/common")
-set(FMU_COMMON_SOURCES "${FMU_COMMON_DIR}/runtime.c" "${FMU_COMMON_DIR}/fmi2_layer.c" "${FMU_COMMON_DIR}/fmi2_me.c"
+set(FMU_COMMON_SOURCES "${FMU_COMMON_DIR}/runtime.c" "${FMU_COMMON_DIR}/location.c" "${FMU_COMMON_DIR}/fmi2_layer.c" "${FMU_COMMON_DIR}/fmi2_me.c"
                        "${FMU_COMMON_DIR}/fmu_state.c"
                        "${FMU_COMMON_DIR}/ode.c" "${FMU_COMMON_DIR}/table.c")
-set(FMU_COMMON_HEADERS "${FMU_COMMON_DIR}/fmu_common.h" "${FMU_COMMON_DIR}/fmu_table.h" "${FMU_COMMON_DIR}/runtime.h"
+set(FMU_COMMON_HEADERS "${FMU_COMMON_DIR}/fmu_common.h" "${FMU_COMMON_DIR}/location.h" "${FMU_COMMON_DIR}/fmu_table.h" "${FMU_COMMON_DIR}/runtime.h"
                        "${FMU_COMMON_DIR}/ode.h" "${FMU_COMMON_DIR}/struct_layout.h"
                        "${FMU_COMMON_DIR}/table.h")
 

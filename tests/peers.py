@@ -18,20 +18,31 @@ PEERS = ROOT.parent / "shared" / "peers"
 STRONGLY_COUPLED = "model_exchange"  # cosim.engine.ssp.StronglyCoupled.name: an export --me system's inner system
 
 
-def omsimulator() -> Path:
-    """OMSimulator's command line, unpacked from the peers' archive (skips the test without it)."""
-    archives = sorted(PEERS.glob("omsimulator-*-linux-x86_64.tar.xz"))
+def _peer(archive_glob: str, suffix: str, binary: str, what: str) -> Path:
+    """A peer's binary, its archive unpacked once into build/peers/ (skips the test without it)."""
+    archives = sorted(PEERS.glob(archive_glob))
     if not archives:
         if os.environ.get("CI"):
-            raise RuntimeError(f"no OMSimulator in {PEERS}: CI always has it")
-        pytest.skip(f"no OMSimulator in {PEERS} (../shared/peers beside the checkout)")
-    target = BUILD_DIR / "peers" / archives[-1].name.removesuffix("-linux-x86_64.tar.xz")
-    binary = target / "omsimulator" / "bin" / "OMSimulator"
-    if not binary.exists():
+            raise RuntimeError(f"no {what} in {PEERS}: CI always has it")
+        pytest.skip(f"no {what} in {PEERS} (../shared/peers beside the checkout)")
+    target = BUILD_DIR / "peers" / archives[-1].name.removesuffix(suffix)
+    found = target / binary
+    if not found.exists():
         target.mkdir(parents=True, exist_ok=True)
         with tarfile.open(archives[-1]) as archive:
             archive.extractall(target, filter="data")
-    return binary
+    return found
+
+
+def omsimulator() -> Path:
+    """OMSimulator's command line, unpacked from the peers' archive (skips the test without it)."""
+    return _peer("omsimulator-*-linux-x86_64.tar.xz", "-linux-x86_64.tar.xz", "omsimulator/bin/OMSimulator",
+                 "OMSimulator")
+
+
+def fmusim() -> Path:
+    """Reference-FMUs' C fmusim (Linux), unpacked from the peers' archive (skips the test without it)."""
+    return _peer("fmusim-*-x86_64.tar.xz", "-x86_64.tar.xz", "fmusim/bin/fmusim", "fmusim")
 
 
 def run_omsimulator(archive: Path, signals: list[str], stop: float, folder: Path) -> dict[str, np.ndarray]:

@@ -1,6 +1,7 @@
-"""`cosim export SCENE --ssp FILE.ssp --osp DIR [--set KEY=VALUE] [--duration S]`: the scene's whole
-system (or a variant of it) for other FMI tools, as an SSP 1.0 archive and/or an OSP configuration
-(libcosim), each tool's step measured by its master in our engine (cosim.platform.run.portable).
+"""`cosim export SCENE --ssp FILE.ssp --osp DIR --fmu FILE.fmu [--set KEY=VALUE] [--duration S]`: the
+scene's whole system (or a variant of it) for other FMI tools, as an SSP 1.0 archive and/or an OSP
+configuration (libcosim), each tool's step measured by its master in our engine, and/or as ONE
+Co-Simulation FMU with our coupling inside (cosim.platform.run.portable).
 
 `cosim export-check SYSTEM.ssp` (export_check, below): the step each other tool gets for any SSP
 system (one of ours, a user's own, a peer's demo), measured as `cosim export` measures a scene's: each tool's master
@@ -25,6 +26,8 @@ def add(commands) -> argparse.ArgumentParser:
     export.add_argument("scene", type=Path)
     export.add_argument("--ssp", type=Path, help="the .ssp file to write")
     export.add_argument("--osp", type=Path, help="a folder for OspSystemStructure.xml and the FMUs (libcosim)")
+    export.add_argument("--fmu", type=Path, help="the .fmu file to write: the whole scene as ONE Co-Simulation FMU, "
+                        "coupled inside as `cosim run` couples it (any tool that imports an FMU runs it)")
     export.add_argument("--scene-step", action="store_true",
                         help="write the scene's own step for every tool, unmeasured (by default each tool's master is "
                              "run in our engine and the largest step within the tolerances written for it)")
@@ -44,13 +47,19 @@ def add(commands) -> argparse.ArgumentParser:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..platform.run.portable import export_scene
+    from ..platform.run.portable import Exported, export_scene
     from ..platform.scene import load_scene
-    if args.ssp is None and args.osp is None:
-        raise UsageError("export: give --ssp FILE.ssp, --osp DIR or both")
+    if args.ssp is None and args.osp is None and args.fmu is None:
+        raise UsageError("export: give --ssp FILE.ssp, --osp DIR, --fmu FILE.fmu or more than one")
+    if args.fmu is not None and args.fmu.suffix.lower() != ".fmu":
+        raise UsageError(f"export --fmu {args.fmu}: the file an FMU is written to ends in .fmu")
+    if args.fmu is not None and (args.me or args.fmi == 3):
+        raise UsageError(f"export --fmu: {'--me' if args.me else '--fmi 3'} is not offered yet: the system FMU is FMI 2.0 "
+                         "Co-Simulation (our coupling inside)")
     if args.fmi2_warnings and args.warnings_as_ok:
         raise UsageError("export: --fmi2-warnings and --warnings-as-ok contradict each other: give one")
-    for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp)):
+    for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp),
+                           ("--fmu", args.fmu.parent if args.fmu else None)):
         if folder is not None and (problem := unwritable(folder)):
             raise UsageError(f"{option} {folder}: {problem}")
     from .common import seconds
@@ -67,15 +76,24 @@ def main(args: argparse.Namespace) -> int:
                              "run no Model Exchange)")
         from ..platform.run.portable import export_model_exchange
         exported = export_model_exchange(scene, args.ssp, fmi2_warnings=args.fmi2_warnings)
-    else:
+    elif args.ssp is not None or args.osp is not None:
         exported = export_scene(scene, args.ssp, args.osp, measure=not args.scene_step,
                                 fmi2_warnings=args.fmi2_warnings, progress=True)
+    else:
+        exported = Exported([], [])
+    if args.fmu is not None:
+        from ..platform.run.portable import export_fmu
+        one = export_fmu(scene, args.fmu)
+        exported = Exported(exported.files + one.files, exported.lines + one.lines)
     print("\n".join(exported.lines))
     for path in exported.files:
         if path.suffix == ".ssp":
             from ..engine.ssp import ANNOTATION
             print(f"written: {path} (SSP 1.0; our run settings in its annotation '{ANNOTATION}', which other tools "
                   "ignore)")
+        elif path.suffix == ".fmu":
+            print(f"written: {path} (FMI 2.0 Co-Simulation, the whole scene: `cosim run {path.name}`, fmpy, fmusim, "
+                  "OMSimulator and any tool that imports an FMU run it)")
         elif path.suffix == ".lua":
             print(f"written: {path} (OMSimulator's script for it: `OMSimulator {path.name}` in its folder)")
         else:

@@ -175,20 +175,9 @@ class Execution:
 
     def _fixed_batches(self, stop_time: float):
         """The regular steps from now to stop_time, those of the finer start and of the windows
-        taken at startup_step instead, landing on the regular grid."""
-        h, control = self.control.step, self.control
-        n = int(round((stop_time - self.time) / h))
-        fine = np.zeros(n, dtype=bool)  # per regular step: taken at the finer step
-        if control.startup_time > 0.0:
-            fine[:int(round(control.startup_time / h))] = True
-        for start, end in control.windows:
-            first = max(0, math.floor((start - self.time) / h + 1e-9))
-            last = min(n, math.ceil((end - self.time) / h - 1e-9))
-            fine[first:max(first, last)] = True
-        per = int(round(h / control.startup_step)) if control.startup_time > 0.0 else 1
-        bounds = [0, *(np.flatnonzero(np.diff(fine)) + 1).tolist(), n] if n else [0]  # runs of equal kind
-        for k, end in zip(bounds[:-1], bounds[1:]):
-            yield from (self._batches(control.startup_step, (end - k) * per) if fine[k] else self._batches(h, end - k))
+        taken at startup_step instead, landing on the regular grid (fixed_runs)."""
+        for h, n in fixed_runs(self.control, self.time, stop_time):
+            yield from self._batches(h, n)
 
     def _batches(self, h: float, n: int):
         done, size = 0, 100  # small batches first: a divergence shows early
@@ -221,6 +210,25 @@ class Execution:
         for instance in self.instances.values():
             instance.free()
         self.instances = {}
+
+
+def fixed_runs(control: FixedStep, start: float, stop_time: float) -> list[tuple[float, int]]:
+    """A fixed-step run from start to stop_time as runs of equal steps (step, count): the regular
+    steps, those of the finer start and of the windows taken at startup_step instead, landing on
+    the regular grid. The one plan of a fixed-step run, ours and the system FMU's."""
+    h = control.step
+    n = int(round((stop_time - start) / h))
+    fine = np.zeros(n, dtype=bool)  # per regular step: taken at the finer step
+    if control.startup_time > 0.0:
+        fine[:int(round(control.startup_time / h))] = True
+    for window_start, window_end in control.windows:
+        first = max(0, math.floor((window_start - start) / h + 1e-9))
+        last = min(n, math.ceil((window_end - start) / h - 1e-9))
+        fine[first:max(first, last)] = True
+    per = int(round(h / control.startup_step)) if control.startup_time > 0.0 else 1
+    bounds = [0, *(np.flatnonzero(np.diff(fine)) + 1).tolist(), n] if n else [0]  # runs of equal kind
+    return [(control.startup_step, (end - k) * per) if fine[k] else (h, end - k)
+            for k, end in zip(bounds[:-1], bounds[1:])]
 
 
 def _memory() -> float:

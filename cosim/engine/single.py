@@ -50,7 +50,9 @@ def fmu_system(path: str | Path) -> SystemStructure:
     step = given if given > 0 else (stop - start) / DEFAULT_STEPS
     source = "the FMU's DefaultExperiment" if given > 0 else f"a {DEFAULT_STEPS}th of the FMU's DefaultExperiment"
     structure = SystemStructure(name, [Component(name, path)], [], experiment=Experiment(start, stop, step, source))
-    structure.settings = output_settings([(name, n) for n in outputs], outputs)
+    # alone, it has no inputs to couple: its steps taken as they come (order 0: no start-up iteration,
+    # which needs fmi2GetFMUstate, as a system FMU does not offer)
+    structure.settings = {**output_settings([(name, n) for n in outputs], outputs), "order": "0"}
     return structure
 
 

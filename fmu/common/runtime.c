@@ -4,6 +4,7 @@
  * states; and the call-sequence check the FMI layers share (runtime.h).
  */
 #include "fmu_common.h"
+#include "location.h"
 #include "runtime.h"
 
 #include <math.h>
@@ -222,38 +223,6 @@ const char *fmu_resource_path(const FmuInstance *fmu, const char *path, char *ou
     return out;
 }
 
-static int hex_digit(char c) {
-    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
-}
-
 char *fmu_resources_folder(FmuInstance *fmu, const char *location) {
-    if (!location || !location[0]) return NULL;
-    const char *path = location;
-    if (strncmp(location, "file:", 5) == 0) {
-        path = location + 5;
-        if (strncmp(path, "///", 3) == 0) path += 2;
-        else if (strncmp(path, "//localhost/", 12) == 0) path += 11;
-        else if (strncmp(path, "//", 2) == 0) return NULL; /* another host's */
-#ifdef _WIN32
-        if (path[0] == '/' && path[1] && path[2] == ':') path++; /* /C:/... */
-#endif
-    } else if (strstr(location, "://")) {
-        return NULL;
-    }
-    const size_t n = strlen(path);
-    char *out = (char *)fmu->callbacks.allocateMemory(n + 2, 1);
-    if (!out) return NULL;
-    size_t k = 0;
-    for (size_t i = 0; i < n; i++) { /* percent-decoded where it was a URI */
-        const int high = i + 2 < n ? hex_digit(path[i + 1]) : -1, low = i + 2 < n ? hex_digit(path[i + 2]) : -1;
-        if (path != location && path[i] == '%' && high >= 0 && low >= 0) {
-            out[k++] = (char)(16 * high + low);
-            i += 2;
-        } else {
-            out[k++] = path[i];
-        }
-    }
-    if (k == 0 || (out[k - 1] != '/' && out[k - 1] != '\\')) out[k++] = '/';
-    out[k] = '\0';
-    return out;
+    return location_folder(location, fmu->callbacks.allocateMemory);
 }

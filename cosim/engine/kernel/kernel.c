@@ -567,10 +567,16 @@ int kernel_run_fixed(Kernel *s, RealTime *real_time, int clock, double h, int n_
     for (int step = 0; step < n_steps; step++) {
         double *bonds = bond_energy + (size_t)step * 2 * (size_t)s->n_bonds;
         double *row = rows + (size_t)step * (size_t)(1 + s->n_columns);
+#ifndef KERNEL_WITHOUT_REAL_TIME /* the system FMU (system_fmu.c): an importer's steps, no clock or sockets */
         if (real_time) lateness[step] = realtime_wait(real_time, s->instance_time[clock]);
+#endif
         if (!macro_step(s, s->instance_time[clock], h, &residuals[step], bonds)) return step;
         if (!record(s, row, s->instance_time[clock])) return step;
+#ifndef KERNEL_WITHOUT_REAL_TIME
         if (real_time) finish[step] = realtime_after_step(s, real_time, s->instance_time[clock], h, row);
+#else
+        (void)real_time, (void)lateness, (void)finish;
+#endif
     }
     return n_steps;
 }

@@ -213,6 +213,37 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
+def export_fmu(scene: Scene, target: Path) -> Exported:
+    """The scene as ONE Co-Simulation FMU at `target` (cosim.engine.system_fmu): its FMUs nested,
+    coupled inside by our kernel exactly as `cosim run` couples them, its values, drives' design
+    and tables inside; what the export says about it. Raises SceneError for values the FMUs refuse."""
+    from ...engine import ParameterError
+    from ...engine.settings import SettingsError
+    from ...engine.system_fmu import system_binaries, write_system_fmu
+    from .compile import compile_scene
+    from .errors import scene_error
+    try:
+        compiled = compile_scene(scene)
+        path = write_system_fmu(compiled.plan, target, model_name=scene.name)
+    except (ParameterError, SettingsError) as error:
+        raise scene_error(scene, error) from None
+    plan = compiled.plan
+    steps = sorted({h for h in (plan.control.step, plan.control.startup_step if plan.control.startup_time else None)
+                    if h})
+    lines = [f"note: one FMI 2.0 Co-Simulation FMU ({', '.join(system_binaries())} binaries) holding the scene's "
+             f"{len(plan.structure.components)} FMUs, coupled inside as `cosim run` couples them ({plan.algorithm.kind}, "
+             f"extrapolation order {plan.algorithm.order}, steps of {', '.join(f'{h:g}' for h in steps)} s with its finer "
+             f"start and edges); at a communication step that is a multiple of {plan.control.step:g} s its outputs are "
+             "`cosim run`'s bit for bit, a shorter one steps finer inside",
+             f"note: its variables: the {len(plan.record)} recorded outputs as the results name them, the inputs no "
+             "connection feeds and every parameter as 'component.variable', the scene's values as their starts "
+             "(the drives' design and the tables inside)"]
+    if scene.vehicle is not None:
+        lines.append("note: the FMU runs the cueing's reference as it comes: the guard that holds it within the "
+                     "platform's envelope in `cosim run` is not inside it")
+    return Exported([path], lines)
+
+
 def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False,
                  progress: bool = False) -> Exported:
     """The scene's whole system for other tools: an SSP archive at `ssp` and/or an OSP

@@ -1,0 +1,106 @@
+/* The system FMU's parts (system_fmu.c: its FMI 2.0 layer; system_read.c: its description read,
+ * its nested FMUs loaded and the step kernel set up over them). */
+#ifndef COSIM_SYSTEM_H
+#define COSIM_SYSTEM_H
+
+#include "fmi2Functions.h"
+#include "kernel.h"
+
+enum { PHASE_INSTANTIATED, PHASE_INITIALIZATION, PHASE_STEPPING, PHASE_TERMINATED, PHASE_FAILED };
+
+typedef struct { /* a nested FMU's binary and its functions */
+    void *library;
+    char *resources_uri; /* its resources/ as a file URI */
+    char *guid;
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *free_instance;
+    fmi2SetupExperimentTYPE *setup_experiment;
+    fmi2EnterInitializationModeTYPE *enter_initialization;
+    fmi2ExitInitializationModeTYPE *exit_initialization;
+    fmi2TerminateTYPE *terminate;
+    fmi2ResetTYPE *reset;
+    fmi2SetRealTYPE *set_real;
+    fmi2SetIntegerTYPE *set_integer;
+    fmi2SetBooleanTYPE *set_boolean;
+    fmi2SetStringTYPE *set_string;
+    fmi2GetRealTYPE *get_real;
+    fmi2GetIntegerTYPE *get_integer;
+    fmi2GetBooleanTYPE *get_boolean;
+    fmi2GetStringTYPE *get_string;
+    void *set_input_derivatives, *get_output_derivatives, *do_step, *get_state, *set_state, *free_state;
+} Nested;
+
+typedef struct { /* a value a component is given at instantiation */
+    char kind;   /* r, i, b, s */
+    unsigned vr;
+    double real;
+    int integer;
+    char *text;
+} Value;
+
+typedef struct System System;
+
+typedef struct { /* one nested instance */
+    System *system;
+    char *name;
+    int fmu;
+    fmi2Component component;
+    fmi2CallbackFunctions callbacks;
+    int n_values;
+    Value *values;
+} Inner;
+
+typedef struct { /* a variable of the outer FMU: one of an instance's */
+    int instance;
+    char kind;
+    unsigned vr;
+} Variable;
+
+struct System {
+    fmi2CallbackFunctions outer;
+    char *instance_name, *resources;
+    int logging, phase;
+    /* the description */
+    double start, regular_step;
+    int n_runs, run, run_left; /* the step plan: runs of equal steps, the current one and its steps left */
+    double *run_step;
+    int *run_count;
+    double grid_step, grid_start, grid_end; /* the plan's step under way (0: none) */
+    int clock, sweeps, zero_start;
+    int n_fmus, n_instances, n_variables;
+    Nested *fmus;
+    Inner *inners;
+    Variable *variables;
+    /* the kernel and its arrays */
+    Kernel kernel;
+    KernelInstance *kernel_instances;
+    KernelBond *bonds;
+    KernelFeed *feeds;
+    int *ints[8];                      /* sequence, stage_end, feed_indices, stepped, order_one, order_two, sources, indices */
+    unsigned *vrs[2];                  /* outputs and inputs of every instance, one after another */
+    double *doubles;                   /* every double array of the kernel, one allocation */
+    void **states;
+    unsigned *feed_vrs;
+    double row[1];
+};
+
+/* Logs through the importer's logger: errors and warnings always, the rest where logging is on. */
+void say(System *s, fmi2Status status, const char *category, const char *format, ...);
+
+enum { READ_OK, READ_FAILED, READ_FOREIGN, READ_NESTED };
+
+/* The system from resources/system.txt's text (changed in place): READ_OK, READ_FOREIGN where it is
+ * another FMU's (guid), READ_NESTED where a nested FMU's binary cannot be loaded (logged),
+ * READ_FAILED where it is malformed, *line then where. */
+int read_system(System *s, char *description, const char *guid, long *line);
+
+/* The whole file at path (NUL-terminated, freed by the caller), NULL where it cannot be read. */
+char *read_file(const char *path);
+
+/* The step kernel's struct over arrays of the system's own, the instances' functions bound. */
+int build_kernel(System *s);
+
+/* Lets a nested FMU's binary go. */
+void library_close(void *library);
+
+#endif

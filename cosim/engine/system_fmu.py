@@ -1,0 +1,282 @@
+"""A whole system as ONE FMI 2.0 Co-Simulation FMU, coupled inside by the engine's step kernel.
+
+The FMU's binary is the step kernel with an FMI 2.0 layer that nests the system's FMUs
+(cosim/engine/kernel/system_fmu.c); `write_system_fmu` adds what it runs: the nested FMUs unzipped
+under resources/fmus/, the files the components' values name under resources/files/, and
+resources/system.txt, the system as this engine resolves it for `cosim run` (the coupling's
+indices read from the kernel's own setup, the fixed-step plan with its finer start and edges,
+each component's values). Inside each communication step the FMU takes the plan's steps, so the
+importer's step changes the answer no more than stepping finer does; where it is a multiple of
+the plan's steps, the FMU's outputs are `cosim run`'s bit for bit.
+
+Its variables: the recorded outputs (by the results' column names), every input no connection
+feeds and every Real, Integer and Boolean parameter of the components ('component.variable', the
+system's value as its start); each passed on to the nested instance whose it is.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+from urllib.parse import quote
+
+from lxml import etree
+
+from .artifacts import LIB_DIR, INSTALLED, BUILD_DIR, library_path
+from .execution import Execution, fixed_runs
+from .fmi import FmuInstance, loaded
+from .run import Plan
+from .settings import FixedStep, SettingsError
+from .structure import SystemStructure
+
+_KINDS = {"Real": "r", "Integer": "i", "Enumeration": "i", "Boolean": "b", "String": "s"}
+_TYPES = {"r": "Real", "i": "Integer", "b": "Boolean"}
+
+
+class NotExportable(SettingsError):
+    """A system the one-FMU export cannot carry (a step control that chooses its steps, Model
+    Exchange, an FMI 3.0 component): one line that says which and what to do."""
+
+
+@dataclass(frozen=True)
+class Outer:
+    """A variable of the system FMU: its name, causality, variability, the instance and the
+    nested variable it passes on to, the type (r, i, b) and its start (None: an output)."""
+    name: str
+    causality: str
+    variability: str
+    instance: int
+    vr: int
+    kind: str
+    start: str | None
+    description: str = ""
+
+
+def system_binaries() -> dict[str, Path]:
+    """The system FMU's binaries by FMI 2.0 platform: linux64 always, win64 where the cross build
+    made it (build/win64/, or the wheel's lib/)."""
+    found = {"linux64": library_path("cosim_system.so")}
+    win64 = (LIB_DIR if INSTALLED else BUILD_DIR / "win64") / "cosim_system.dll"
+    if win64.exists():
+        found["win64"] = win64
+    return found
+
+
+def _token(text: str) -> str:
+    """A text as one whitespace-free token of system.txt: '=' and the text percent-encoded."""
+    return "=" + quote(text, safe="@/._-+:{}")
+
+
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def _value_text(kind: str, value) -> str:
+    if kind == "r":
+        return _number(value)
+    if kind == "b":
+        return "1" if value else "0"
+    if kind == "i":
+        return str(int(value))
+    return _token(str(value))
+
+
+def _check(plan: Plan) -> FixedStep:
+    if plan.model_exchange:
+        raise NotExportable("the system FMU is Co-Simulation with our coupling inside: a Model Exchange run "
+                            "(--me) cannot be exported as one", "model_exchange")
+    if not isinstance(plan.control, FixedStep):
+        raise NotExportable("the system FMU steps the run's fixed-step plan inside each communication step: set "
+                            "step_control = fixed (a controlled step chooses its steps as it goes)", "step_control")
+    return plan.control
+
+
+def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None) -> Path:
+    """`plan`'s system as one Co-Simulation FMU at `target` (FMI 2.0; Linux and, where built,
+    Windows binaries). Its default experiment is the plan's (start, stop time, regular step)."""
+    control = _check(plan)
+    structure = plan.structure
+    target = Path(target)
+    identifier = "".join(c if c.isalnum() or c == "_" else "_" for c in target.stem) or "system"
+    if identifier[0].isdigit():
+        identifier = f"system_{identifier}"
+    with tempfile.TemporaryDirectory() as stage_name:
+        stage = Path(stage_name)
+        resources = stage / "resources"
+        with Execution(structure, plan.algorithm, control, plan.record, plan.names, clock=plan.clock) as execution:
+            for instance in execution.instances.values():
+                if instance.fmi3:
+                    raise NotExportable(f"{instance.name}: an FMI 3.0 component ({instance.path.name}); the system "
+                                        "FMU nests FMI 2.0 FMUs: run the scene with fmi = 2", "fmi")
+            folders = _nest_fmus(structure, resources)
+            body, variables = _describe(plan, execution, folders, resources)
+        guid = "{" + str(_uuid(body)) + "}"
+        (resources / "system.txt").write_text(f"cosim-system 1\nguid {guid}\n{body}")
+        for platform, binary in system_binaries().items():
+            folder = stage / "binaries" / platform
+            folder.mkdir(parents=True)
+            shutil.copyfile(binary, folder / f"{identifier}{binary.suffix}")
+        (stage / "modelDescription.xml").write_bytes(
+            _model_description(model_name or structure.name, identifier, guid, plan, variables))
+        target.parent.mkdir(parents=True, exist_ok=True)
+        partial = target.with_name(target.name + ".partial")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            for path in sorted(stage.rglob("*")):
+                if path.is_file():
+                    archive.write(path, path.relative_to(stage).as_posix())
+        partial.replace(target)
+    return target
+
+
+def _uuid(text: str):
+    import uuid
+    return uuid.UUID(hashlib.md5(text.encode()).hexdigest())
+
+
+def _nest_fmus(structure: SystemStructure, resources: Path) -> dict[Path, str]:
+    """Each FMU file of the system unzipped once under resources/fmus/<folder>/ (its description,
+    Linux and Windows binaries and resources); the folder of each."""
+    folders: dict[Path, str] = {}
+    for component in structure.components:
+        path = Path(component.fmu).resolve()
+        if path in folders:
+            continue
+        folder = path.stem
+        while folder in folders.values():
+            folder += "_"
+        folders[path] = folder
+        with zipfile.ZipFile(path) as archive:
+            for member in archive.namelist():
+                top = member.split("/")[0]
+                keep = top in ("modelDescription.xml", "resources") or member.startswith(
+                    ("binaries/linux64/", "binaries/win64/"))
+                if keep and not member.endswith("/"):
+                    archive.extract(member, resources / "fmus" / folder)
+    return folders
+
+
+def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resources: Path
+              ) -> tuple[str, list[Outer]]:
+    """system.txt (after its GUID line) and the outer variables, from the live execution: the
+    kernel's own setup (what `cosim run` steps) and the instances' descriptions."""
+    structure, kernel, coupling = plan.structure, execution.kernel, execution.coupling
+    names = coupling.names
+    index = {n: k for k, n in enumerate(names)}
+    fmu_list = list(folders)
+    lines = [f"start {_number(structure.experiment.start)}",
+             f"algorithm {kernel.setup.gauss_seidel} {kernel.setup.order} {plan.algorithm.initial_sweeps} "
+             f"{int(plan.algorithm.zero_start)}",
+             f"clock {kernel.clock}"]
+    runs = fixed_runs(plan.control, structure.experiment.start, plan.stop_time)
+    lines.append(f"plan {len(runs)} " + " ".join(f"{_number(h)} {n}" for h, n in runs))
+    lines.append(f"step {_number(plan.control.step)}")
+    lines.append(f"fmus {len(fmu_list)}")
+    for path in fmu_list:
+        description = loaded(path)[0]
+        lines.append(f"{folders[path]} {description.coSimulation.modelIdentifier} {_token(description.guid)}")
+    lines.append(f"instances {len(names)}")
+    by_name = {c.name: c for c in structure.components}
+    for k, name in enumerate(names):
+        c, instance = kernel._instances[k], execution.instances[name]
+        component = by_name[name]
+        lines.append(f"instance {_token(name)} {fmu_list.index(Path(component.fmu).resolve())}")
+        lines.append(f" outputs {c.n_outputs} " + " ".join(str(c.output_vrs[i]) for i in range(c.n_outputs)))
+        lines.append(f" inputs {c.n_inputs} " + " ".join(
+            f"{c.input_vrs[i]} {c.feed_source[i]} {c.feed_index[i]}" for i in range(c.n_inputs)))
+        lines.append(f" flags {c.rate_order} {c.interpolating} {c.extrapolating}")
+        values = []
+        for variable, value in component.parameters.items():
+            kind = _KINDS.get(instance.variables[variable].type) if variable in instance.variables else None
+            if kind is None:
+                raise NotExportable(f"{name}: '{variable}' is no variable the system FMU can set", "parameters")
+            if isinstance(value, Path):
+                files = resources / "files" / name
+                files.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(value, files / value.name)
+                value = f"@resources/files/{name}/{value.name}"
+            values.append(f"  {kind} {instance.vr(variable)} {_value_text(kind, value)}")
+        lines.append(f" values {len(values)}")
+        lines += values
+    lines.append(f"sequence {len(names)} " + " ".join(str(int(v)) for v in kernel.sequence))
+    lines.append(f"stages {len(names)} " + " ".join(str(int(v)) for v in kernel.stage_end))
+    bonds = [kernel.bonds[b] for b in range(kernel.n_bonds)]
+    lines.append(f"bonds {len(bonds)} " + " ".join(
+        f"{p.instance} {p.index}" for b in bonds for p in (b.effort_out, b.effort_in, b.flow_out, b.flow_in, b.slope_in)))
+    feeds = [kernel.feeds[f] for f in range(len(kernel.feedthrough_plan))]
+    lines.append(f"feeds {len(feeds)} " + " ".join(f"{f.instance} {f.first} {f.n_inputs} {f.n_outputs}" for f in feeds))
+    lines.append(f"feed_indices {len(kernel.feed_indices)} " + " ".join(str(int(v)) for v in kernel.feed_indices))
+    variables = _outer_variables(plan, execution, index)
+    lines.append(f"variables {len(variables)}")
+    lines += [f"{v.instance} {v.kind} {v.vr}" for v in variables]
+    lines.append("end")
+    return "\n".join(lines) + "\n", variables
+
+
+def _outer_variables(plan: Plan, execution: Execution, index: dict[str, int]) -> list[Outer]:
+    """The recorded outputs, then per component its inputs that no connection feeds and its
+    parameters (not the FMI layer's own fmi.* switches), with the system's values as starts."""
+    structure = plan.structure
+    names = list(plan.names) if plan.names is not None else [f"{c}.{v}" for c, v in plan.record]
+    variables = [Outer(n, "output", "continuous", index[c], execution.instances[c].vr(v), "r", None)
+                 for n, (c, v) in zip(names, plan.record)]
+    connected = {c.target for c in structure.connections}
+    for component in structure.components:
+        instance: FmuInstance = execution.instances[component.name]
+        for v in instance.model_description.modelVariables:
+            kind = _KINDS.get(v.type)
+            if kind not in _TYPES or v.name.startswith("fmi."):
+                continue
+            if v.causality == "input" and (component.name, v.name) not in connected and kind == "r":
+                causality, variability = "input", "continuous"
+            elif v.causality == "parameter":
+                causality, variability = "parameter", v.variability or "fixed"
+            else:
+                continue
+            start = component.parameters.get(v.name, v.start)
+            if start is None or isinstance(start, Path):
+                continue
+            text = _number(start) if kind == "r" else ("true" if str(start).lower() in ("true", "1") else "false") \
+                if kind == "b" else str(int(start))
+            variables.append(Outer(f"{component.name}.{v.name}", causality, variability, index[component.name],
+                                   v.valueReference, kind, text, v.description or ""))
+    return variables
+
+
+def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer]) -> bytes:
+    root = etree.Element("fmiModelDescription", fmiVersion="2.0", modelName=model_name, guid=guid,
+                         description=f"{model_name}: the whole system as one FMU, coupled inside by the cosim engine",
+                         generationTool="cosim (stewart platform co-simulation)",
+                         variableNamingConvention="flat", numberOfEventIndicators="0")
+    etree.SubElement(root, "CoSimulation", modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
+                     canBeInstantiatedOnlyOncePerProcess="false", canNotUseMemoryManagementFunctions="true",
+                     canGetAndSetFMUstate="false", canSerializeFMUstate="false")
+    categories = etree.SubElement(root, "LogCategories")
+    for name in ("logStatusWarning", "logStatusError", "logAll"):
+        etree.SubElement(categories, "Category", name=name)
+    start = plan.structure.experiment.start
+    etree.SubElement(root, "DefaultExperiment", startTime=repr(start), stopTime=repr(float(plan.stop_time)),
+                     stepSize=repr(plan.control.step))
+    model_variables = etree.SubElement(root, "ModelVariables")
+    for vr, v in enumerate(variables):
+        attributes = dict(name=v.name, valueReference=str(vr), causality=v.causality, variability=v.variability)
+        if v.description:
+            attributes["description"] = v.description
+        if v.causality == "parameter":
+            attributes["initial"] = "exact"
+        element = etree.SubElement(model_variables, "ScalarVariable", **attributes)
+        typed = etree.SubElement(element, _TYPES[v.kind])
+        if v.start is not None:
+            typed.set("start", v.start)
+    structure = etree.SubElement(root, "ModelStructure")
+    outputs = etree.SubElement(structure, "Outputs")
+    unknowns = etree.SubElement(structure, "InitialUnknowns")
+    for vr, v in enumerate(variables):
+        if v.causality == "output":
+            etree.SubElement(outputs, "Unknown", index=str(vr + 1))
+            etree.SubElement(unknowns, "Unknown", index=str(vr + 1))
+    return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)

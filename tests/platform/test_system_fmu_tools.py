@@ -1,0 +1,175 @@
+"""Every shipped scene as ONE Co-Simulation FMU (`cosim export SCENE --fmu`, issue 60) in the tools a
+user imports it into, each at 1 ms and 10 ms communication steps over the scene's probe (the
+start-up at its finer step, the first load pulse with its refined edges, steady tracking):
+
+- fmpy's simulate_fmu: `cosim run`'s outputs bit for bit at every communication point (both steps
+  are multiples of the scene's), so within the scene's tolerances of its converged run as
+  `cosim run` is (cosim.platform.run.accuracy.judge);
+- Reference-FMUs' fmusim and OMSimulator (the FMU alone, its command line; ../shared/peers) and
+  libcosim (libcosimpy): fmpy's outputs to the digits each writes (fmusim 16, OMSimulator 12) or
+  gives (libcosim: bit for bit);
+- the win64 binary under Wine (fmpy's remoting, as an unprivileged user): the Linux binary's
+  outputs, to 1e-12 of each output's range (glibc's and MinGW's libm may differ in the last bit:
+  tests/models/test_win64.py).
+
+A stage of scripts/test.sh (pytest -m tools)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+import cosim
+from cosim.engine.artifacts import ROOT
+from cosim.platform.run.accuracy import judge, probe_duration
+from cosim.platform.run.portable import converged, export_fmu
+from cosim.platform.run.runner import run_scene
+
+pytestmark = pytest.mark.tools
+
+SCENES = sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
+STEPS = (1e-3, 1e-2)
+
+
+class Exported:
+    def __init__(self, scene, fmu: Path):
+        self.scene, self.fmu = scene, fmu
+        self.ours = run_scene(scene)[0]
+        self.names = [n for n in self.ours.dtype.names if n != "time"]
+        self.reference = converged(scene, scene.duration)
+        self._fmpy: dict[float, np.ndarray] = {}
+
+    def fmpy(self, step: float) -> np.ndarray:
+        if step not in self._fmpy:
+            self._fmpy[step] = simulate_fmu(str(self.fmu), stop_time=self.scene.duration, step_size=step,
+                                            output_interval=step, output=self.names, logger=lambda *args: None)
+        return self._fmpy[step]
+
+
+@pytest.fixture(scope="module", params=SCENES)
+def exported(request, tmp_path_factory) -> Exported:
+    scene = cosim.load(request.param)
+    scene = scene.changed({"scene.duration": probe_duration(scene)})
+    fmu = tmp_path_factory.mktemp(request.param) / f"{request.param}.fmu"
+    export_fmu(scene, fmu)
+    return Exported(scene, fmu)
+
+
+def same_to(theirs: dict, mine: np.ndarray, names, relative: float) -> None:
+    assert len(theirs["time"]) == len(mine), (len(theirs["time"]), len(mine))
+    assert np.allclose(theirs["time"], mine["time"], rtol=0, atol=1e-9)
+    for name in names:
+        scale = max(float(np.max(np.abs(mine[name]))), 1e-300)
+        assert np.max(np.abs(np.asarray(theirs[name]) - mine[name])) <= relative * scale, name
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_fmpy_runs_it_as_cosim_run_bit_for_bit_within_the_tolerances(exported, step):
+    result = exported.fmpy(step)
+    _, i, j = np.intersect1d(np.round(result["time"], 9), np.round(exported.ours["time"], 9), return_indices=True)
+    assert len(i) == len(result) == round(exported.scene.duration / step) + 1
+    for name in exported.names:
+        assert np.array_equal(result[name][i], exported.ours[name][j]), name
+    verdict = judge(exported.scene, result, exported.reference)
+    assert verdict.within, verdict
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_fmusim_runs_it_as_fmpy_does(exported, step, tmp_path):
+    from peers import fmusim
+    out = tmp_path / "fmusim.csv"
+    done = subprocess.run([str(fmusim()), "--interface-type", "cs", "--stop-time", repr(exported.scene.duration),
+                           "--output-interval", repr(step), "--output-file", str(out), str(exported.fmu)],
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    same_to({n: table[n] for n in table.dtype.names}, exported.fmpy(step), exported.names, 1e-15)
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_omsimulator_runs_it_as_fmpy_does(exported, step, tmp_path):
+    from peers import omsimulator
+    done = subprocess.run([str(omsimulator()), "--mode=cs", f"--stopTime={exported.scene.duration!r}",
+                           f"--stepSize={step!r}", "--resultFile=out.csv", str(exported.fmu)],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=900)
+    log = done.stdout + done.stderr
+    assert done.returncode == 0 and "error:" not in log, log[-3000:]
+    from pyarrow import csv
+    table = csv.read_csv(tmp_path / "out.csv")
+    columns = {name: table[name].to_numpy().astype(float) for name in ("time", *exported.names)}  # the FMU's own names
+    time = columns["time"]
+    last = np.r_[np.diff(time) > 0, True]  # a point written twice (before and after its events): the later one
+    same_to({n: v[last] for n, v in columns.items()}, exported.fmpy(step), exported.names, 1e-11)  # its 12 digits
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_libcosim_runs_it_as_fmpy_does(exported, step):
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_step_size(step_size=int(round(step * 1e9)))
+    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(exported.fmu), instance_name="platform"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    refs = {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
+    vrs = [refs[n] for n in exported.names]
+    n = int(round(exported.scene.duration / step))
+    rows = {name: np.zeros(n) for name in ("time", *exported.names)}
+    for i in range(n):
+        assert execution.simulate_until(int(round((i + 1) * step * 1e9))), f"libcosim stopped at step {i + 1}"
+        rows["time"][i] = (i + 1) * step
+        for name, value in zip(exported.names, observer.last_real_values(slave, vrs)):
+            rows[name][i] = value
+    same_to(rows, exported.fmpy(step)[1:], exported.names, 0.0)
+
+
+REMOTE_RUN = """
+import shutil, sys
+import numpy as np
+from fmpy import extract, simulate_fmu
+fmu, folder, stop, step = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4])
+linux_dir, windows_dir = (str(extract(fmu, folder + "/" + part)) for part in ("linux", "windows"))
+shutil.rmtree(windows_dir + "/binaries/linux64")  # (fmpy remotes only an FMU without a binary for this platform)
+run = dict(stop_time=stop, step_size=step, output_interval=step)
+np.savez(folder + "/runs.npz", linux=simulate_fmu(linux_dir, **run),
+         windows=simulate_fmu(windows_dir, remote_platform="win64", **run))
+"""
+
+
+def test_under_wine_the_windows_binary_gives_the_linux_outputs(tmp_path_factory):
+    """The Meng scene's FMU over its first 0.3 s at 1 ms: the system FMU's DLL nesting the models'
+    DLLs, driven by fmpy's remoting under Wine, as its Linux binary."""
+    from models.test_win64 import WINE, unprivileged
+    if WINE is None:
+        pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
+    import tempfile
+    folder = Path(tempfile.mkdtemp(prefix="cosim-remoting-"))
+    try:
+        folder.chmod(0o755)
+        scene = cosim.load("meng_eq35").changed({"scene.duration": 0.3})
+        fmu = export_fmu(scene, folder / "meng.fmu").files[0]
+        fmu.chmod(0o644)
+        (folder / "run.py").write_text(REMOTE_RUN)
+        env = {**os.environ, "HOME": str(folder), "TMPDIR": str(folder), "WINEDEBUG": "-all",
+               "PATH": f"{Path(WINE).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+        done = subprocess.run([*unprivileged(folder), sys.executable, str(folder / "run.py"), str(fmu), str(folder),
+                               "0.3", "0.001"], capture_output=True, text=True, env=env, cwd=folder, timeout=900)
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+        runs = np.load(folder / "runs.npz")
+        linux, windows = runs["linux"], runs["windows"]
+        assert len(linux) == len(windows) == 301
+        for column in linux.dtype.names:
+            scale = max(float(np.ptp(linux[column])), 1.0)
+            assert np.all(np.abs(windows[column] - linux[column]) <= 1e-12 * scale), column
+        assert np.ptp(linux["torque[1]"]) > 1.0
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
