@@ -36,7 +36,7 @@ def add(commands) -> argparse.ArgumentParser:
                              "fmi2OK, so that OMSimulator, which stops at the first, runs to the end)")
     export.add_argument("--warnings-as-ok", action="store_true", help="the default (kept for old command lines)")
     export.add_argument("--fmi", type=int, choices=(2, 3), help="our FMUs as FMI 2.0 (the default) or FMI 3.0 in the "
-                        "archive (scene.fmi)")
+                        "archive, and the one FMU (--fmu) as FMI 2.0 or 3.0 (scene.fmi)")
     export.add_argument("--me", action="store_true", help="the FMUs as Model Exchange in one strongly coupled system "
                         "(OMSimulator's oms-sc integrates them as one by CVODE): with --ssp alone")
     export.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -53,9 +53,8 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("export: give --ssp FILE.ssp, --osp DIR, --fmu FILE.fmu or more than one")
     if args.fmu is not None and args.fmu.suffix.lower() != ".fmu":
         raise UsageError(f"export --fmu {args.fmu}: the file an FMU is written to ends in .fmu")
-    if args.fmu is not None and (args.me or args.fmi == 3):
-        raise UsageError(f"export --fmu: {'--me' if args.me else '--fmi 3'} is not offered yet: the system FMU is FMI 2.0 "
-                         "Co-Simulation (our coupling inside)")
+    if args.fmu is not None and args.me:
+        raise UsageError("export --fmu: --me is not offered yet: the system FMU is Co-Simulation (our coupling inside)")
     if args.fmi2_warnings and args.warnings_as_ok:
         raise UsageError("export: --fmi2-warnings and --warnings-as-ok contradict each other: give one")
     for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp),
@@ -83,7 +82,7 @@ def main(args: argparse.Namespace) -> int:
         exported = Exported([], [])
     if args.fmu is not None:
         from ..platform.run.portable import export_fmu
-        one = export_fmu(scene, args.fmu)
+        one = export_fmu(scene, args.fmu, fmi=scene.fmi)
         exported = Exported(exported.files + one.files, exported.lines + one.lines)
     print("\n".join(exported.lines))
     for path in exported.files:
@@ -92,8 +91,8 @@ def main(args: argparse.Namespace) -> int:
             print(f"written: {path} (SSP 1.0; our run settings in its annotation '{ANNOTATION}', which other tools "
                   "ignore)")
         elif path.suffix == ".fmu":
-            print(f"written: {path} (FMI 2.0 Co-Simulation, the whole scene: `cosim run {path.name}`, fmpy, fmusim, "
-                  "OMSimulator and any tool that imports an FMU run it)")
+            print(f"written: {path} (FMI {scene.fmi}.0 Co-Simulation, the whole scene: `cosim run {path.name}`, fmpy, "
+                  "fmusim, OMSimulator and any tool that imports an FMU run it)")
         elif path.suffix == ".lua":
             print(f"written: {path} (OMSimulator's script for it: `OMSimulator {path.name}` in its folder)")
         else:

@@ -57,13 +57,19 @@ class Outer:
     description: str = ""
 
 
-def system_binaries() -> dict[str, Path]:
-    """The system FMU's binaries by FMI 2.0 platform: linux64 always, win64 where the cross build
-    made it (build/win64/, or the wheel's lib/)."""
-    found = {"linux64": library_path("cosim_system.so")}
-    win64 = (LIB_DIR if INSTALLED else BUILD_DIR / "win64") / "cosim_system.dll"
-    if win64.exists():
-        found["win64"] = win64
+PLATFORMS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}  # each version's folders
+
+
+def system_binaries(fmi: int = 2) -> dict[str, Path]:
+    """The system FMU's binaries (FMI 2.0's cosim_system, FMI 3.0's cosim_system3) by the version's
+    platform folder: Linux's always, Windows' where the cross build made it (build/win64/, or the
+    wheel's lib/)."""
+    name = "cosim_system" if fmi == 2 else "cosim_system3"
+    linux, windows = PLATFORMS[fmi]
+    found = {linux: library_path(f"{name}.so")}
+    dll = (LIB_DIR if INSTALLED else BUILD_DIR / "win64") / f"{name}.dll"
+    if dll.exists():
+        found[windows] = dll
     return found
 
 
@@ -96,9 +102,10 @@ def _check(plan: Plan) -> FixedStep:
     return plan.control
 
 
-def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None) -> Path:
-    """`plan`'s system as one Co-Simulation FMU at `target` (FMI 2.0; Linux and, where built,
-    Windows binaries). Its default experiment is the plan's (start, stop time, regular step)."""
+def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fmi: int = 2) -> Path:
+    """`plan`'s system as one Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0 over the same
+    nested FMI 2.0 FMUs; Linux and, where built, Windows binaries. Its default experiment is the
+    plan's (start, stop time, regular step)."""
     control = _check(plan)
     structure = plan.structure
     target = Path(target)
@@ -112,17 +119,19 @@ def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None) ->
             for instance in execution.instances.values():
                 if instance.fmi3:
                     raise NotExportable(f"{instance.name}: an FMI 3.0 component ({instance.path.name}); the system "
-                                        "FMU nests FMI 2.0 FMUs: run the scene with fmi = 2", "fmi")
+                                        "FMU nests FMI 2.0 FMUs (offered as FMI 2.0 or 3.0): give it FMI 2.0 FMUs",
+                                        "fmi")
             folders = _nest_fmus(structure, resources)
             body, variables = _describe(plan, execution, folders, resources)
         guid = "{" + str(_uuid(body)) + "}"
         (resources / "system.txt").write_text(f"cosim-system 1\nguid {guid}\n{body}")
-        for platform, binary in system_binaries().items():
+        for platform, binary in system_binaries(fmi).items():
             folder = stage / "binaries" / platform
             folder.mkdir(parents=True)
             shutil.copyfile(binary, folder / f"{identifier}{binary.suffix}")
+        describe = _model_description if fmi == 2 else _model_description3
         (stage / "modelDescription.xml").write_bytes(
-            _model_description(model_name or structure.name, identifier, guid, plan, variables))
+            describe(model_name or structure.name, identifier, guid, plan, variables))
         target.parent.mkdir(parents=True, exist_ok=True)
         partial = target.with_name(target.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -154,7 +163,7 @@ def _nest_fmus(structure: SystemStructure, resources: Path) -> dict[Path, str]:
             for member in archive.namelist():
                 top = member.split("/")[0]
                 keep = top in ("modelDescription.xml", "resources") or member.startswith(
-                    ("binaries/linux64/", "binaries/win64/"))
+                    tuple(f"binaries/{platform}/" for platform in PLATFORMS[2]))
                 if keep and not member.endswith("/"):
                     archive.extract(member, resources / "fmus" / folder)
     return folders
@@ -279,4 +288,40 @@ def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, 
         if v.causality == "output":
             etree.SubElement(outputs, "Unknown", index=str(vr + 1))
             etree.SubElement(unknowns, "Unknown", index=str(vr + 1))
+    return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+
+
+_TYPES3 = {"r": "Float64", "i": "Int32", "b": "Boolean"}
+
+
+def _model_description3(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer]) -> bytes:
+    """FMI 3.0's description of the same variables (the same value references), and the independent
+    variable `time` after them."""
+    root = etree.Element("fmiModelDescription", fmiVersion="3.0", modelName=model_name, instantiationToken=guid,
+                         description=f"{model_name}: the whole system as one FMU, coupled inside by the cosim engine",
+                         generationTool="cosim (stewart platform co-simulation)", variableNamingConvention="flat")
+    etree.SubElement(root, "CoSimulation", modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
+                     canGetAndSetFMUState="false", canSerializeFMUState="false", hasEventMode="false",
+                     providesIntermediateUpdate="false", canReturnEarlyAfterIntermediateUpdate="false")
+    categories = etree.SubElement(root, "LogCategories")
+    for name in ("logStatusWarning", "logStatusError", "logAll"):
+        etree.SubElement(categories, "Category", name=name)
+    etree.SubElement(root, "DefaultExperiment", startTime=repr(plan.structure.experiment.start),
+                     stopTime=repr(float(plan.stop_time)), stepSize=repr(plan.control.step))
+    model_variables = etree.SubElement(root, "ModelVariables")
+    etree.SubElement(model_variables, "Float64", name="time", valueReference=str(len(variables)),
+                     causality="independent", variability="continuous", description="the simulation time")
+    for vr, v in enumerate(variables):
+        attributes = dict(name=v.name, valueReference=str(vr), causality=v.causality, variability=v.variability)
+        if v.description:
+            attributes["description"] = v.description
+        if v.start is not None:
+            attributes["start"] = v.start
+        etree.SubElement(model_variables, _TYPES3[v.kind], **attributes)
+    structure = etree.SubElement(root, "ModelStructure")
+    outputs = [str(vr) for vr, v in enumerate(variables) if v.causality == "output"]
+    for vr in outputs:
+        etree.SubElement(structure, "Output", valueReference=vr)
+    for vr in outputs:
+        etree.SubElement(structure, "InitialUnknown", valueReference=vr)
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)

@@ -1,9 +1,11 @@
-/* The system FMU's parts (system_fmu.c: its FMI 2.0 layer; system_read.c: its description read,
- * its nested FMUs loaded and the step kernel set up over them). */
+/* The system FMU's parts: system_fmu.c, the system's life cycle whatever the FMI version it is
+ * offered in (system_fmi2.c and system_fmi3.c: the FMI 2.0 and FMI 3.0 layers over it);
+ * system_read.c, its description read, its nested FMI 2.0 FMUs loaded and the step kernel set up
+ * over them. Statuses are FMI's (0 OK, 1 warning, 2 discard, 3 error, 4 fatal: the same in both). */
 #ifndef COSIM_SYSTEM_H
 #define COSIM_SYSTEM_H
 
-#include "fmi2Functions.h"
+#include "fmi2FunctionTypes.h"
 #include "kernel.h"
 
 enum { PHASE_INSTANTIATED, PHASE_INITIALIZATION, PHASE_STEPPING, PHASE_TERMINATED, PHASE_FAILED };
@@ -57,7 +59,9 @@ typedef struct { /* a variable of the outer FMU: one of an instance's */
 } Variable;
 
 struct System {
-    fmi2CallbackFunctions outer;
+    void (*log)(void *environment, const char *instance, int status, const char *category, const char *message);
+    void *environment;                 /* the importer's, passed back to log */
+    const char *api;                   /* "fmi2" or "fmi3": how the calls are named in messages */
     char *instance_name, *resources;
     int logging, phase;
     /* the description */
@@ -102,5 +106,29 @@ int build_kernel(System *s);
 
 /* Lets a nested FMU's binary go. */
 void library_close(void *library);
+
+/* ---- the life cycle (system_fmu.c), called by the FMI layers ---- */
+
+/* The system of the FMU whose resources `location` names (FMI 2.0's URI or FMI 3.0's path), its
+ * description's guid `token` (NULL: not checked), its nested instances instantiated with their
+ * values; NULL (the reason logged) where it cannot be. */
+System *system_new(const char *api, const char *instance, const char *token, const char *location, int logging,
+                   void (*log)(void *, const char *, int, const char *, const char *), void *environment);
+void system_free(System *s);
+/* 1 if `call` may be made now (ok), else 0 with the reason logged. */
+int system_allowed(System *s, const char *call, int ok);
+int system_setup(System *s, int tolerance_defined, double tolerance, double start, int stop_defined, double stop);
+int system_enter(System *s);
+int system_exit(System *s);
+int system_do_step(System *s, double t, double h);
+int system_terminate(System *s);
+int system_reset(System *s);
+double system_time(const System *s);
+/* A variable's value got or set through its instance: kind r (double), i (int), b (int, FMI 2.0's
+ * Boolean), s (const char *); `call` names the importer's call in a refusal. */
+int system_get(System *s, const char *call, char kind, unsigned vr, void *value);
+int system_set(System *s, const char *call, char kind, unsigned vr, const void *value);
+/* Where the importer's call is not offered: fmi2Error/fmi3Error with the reason logged. */
+int system_unsupported(System *s, const char *call);
 
 #endif

@@ -213,24 +213,30 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
-def export_fmu(scene: Scene, target: Path) -> Exported:
-    """The scene as ONE Co-Simulation FMU at `target` (cosim.engine.system_fmu): its FMUs nested,
-    coupled inside by our kernel exactly as `cosim run` couples them, its values, drives' design
-    and tables inside; what the export says about it. Raises SceneError for values the FMUs refuse."""
+def export_fmu(scene: Scene, target: Path, fmi: int = 2) -> Exported:
+    """The scene as ONE Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0
+    (cosim.engine.system_fmu): its FMUs nested (our FMI 2.0 ones, the models of the FMI 3.0 ones bit
+    for bit), coupled inside by our kernel exactly as `cosim run` couples them, its values, drives'
+    design and tables inside; what the export says about it. Raises SceneError for values the FMUs
+    refuse."""
     from ...engine import ParameterError
     from ...engine.settings import SettingsError
     from ...engine.system_fmu import system_binaries, write_system_fmu
     from .compile import compile_scene
     from .errors import scene_error
+    from .errors import SceneError
     try:
-        compiled = compile_scene(scene)
-        path = write_system_fmu(compiled.plan, target, model_name=scene.name)
-    except (ParameterError, SettingsError) as error:
+        compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
+        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi)
+    except ParameterError as error:
         raise scene_error(scene, error) from None
+    except SettingsError as error:  # what the one FMU cannot carry (a step control that chooses its steps)
+        key = f"coupling.{error.setting}" if error.setting else "coupling"
+        raise SceneError(f"{scene.document.where(key)}: {error}") from None
     plan = compiled.plan
     steps = sorted({h for h in (plan.control.step, plan.control.startup_step if plan.control.startup_time else None)
                     if h})
-    lines = [f"note: one FMI 2.0 Co-Simulation FMU ({', '.join(system_binaries())} binaries) holding the scene's "
+    lines = [f"note: one FMI {fmi}.0 Co-Simulation FMU ({', '.join(system_binaries(fmi))} binaries) holding the scene's "
              f"{len(plan.structure.components)} FMUs, coupled inside as `cosim run` couples them ({plan.algorithm.kind}, "
              f"extrapolation order {plan.algorithm.order}, steps of {', '.join(f'{h:g}' for h in steps)} s with its finer "
              f"start and edges); at a communication step that is a multiple of {plan.control.step:g} s its outputs are "
