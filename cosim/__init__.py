@@ -1,10 +1,11 @@
 """Co-simulation of an electrically driven 6-DOF Stewart platform (FMI 2.0, fmpy).
 
-The public API (cosim.api): `simulate`, `load`, `export_ssp`, `sweep`, `advise`; the command
+The public API (cosim.api): `simulate`, `load`, `export_ssp`, `export_fmu`, `sweep`, `advise`; the command
 line is `cosim` (or `python -m cosim`).
 """
 
-__all__ = ["Advice", "Run", "RunStopped", "Scene", "SceneError", "advise", "export_ssp", "load", "simulate", "sweep"]
+__all__ = ["Advice", "Run", "RunStopped", "Scene", "SceneError", "advise", "export_fmu", "export_ssp", "load", "simulate",
+           "sweep"]
 
 
 def __getattr__(name: str):

@@ -33,7 +33,8 @@ from .platform.scene import Scene, SceneError, load_scene
 
 SYSTEM_SUFFIXES = (".ssp", ".ssd", ".fmu")  # a system: an SSP, or one Co-Simulation FMU
 
-__all__ = ["Run", "Advice", "load", "simulate", "export_ssp", "sweep", "advise", "RunStopped", "SceneError", "Scene"]
+__all__ = ["Run", "Advice", "load", "simulate", "export_ssp", "export_fmu", "sweep", "advise", "RunStopped", "SceneError",
+           "Scene"]
 
 
 @dataclass
@@ -199,6 +200,17 @@ def export_ssp(scene: str | Path | Scene, path: str | Path, *, measure: bool = T
     from .platform.run.portable import export_scene
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
     return export_scene(loaded, ssp=Path(path), measure=measure).files[0]
+
+
+def export_fmu(scene: str | Path | Scene, path: str | Path, *, fmi: int = 2) -> Path:
+    """Writes a scene as ONE Co-Simulation FMU (FMI 2.0, or 3.0 with fmi=3; Linux and Windows
+    binaries): its FMUs nested and coupled inside as `simulate` couples them, its values and files
+    inside, so that any tool that imports an FMU runs the scene (`cosim export SCENE --fmu`; at a
+    communication step that is a multiple of the scene's step its outputs are `simulate`'s bit for
+    bit). Returns the FMU's path."""
+    from .platform.run.portable import export_fmu as write
+    loaded = scene if isinstance(scene, Scene) else load_scene(scene)
+    return write(loaded, Path(path), fmi=fmi).files[0]
 
 
 def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None = None,

@@ -16,11 +16,12 @@ if [ "$status" -eq 5 ]; then
   echo "pytest collected no tests: failing the run" >&2
 fi
 # Every shipped scene's export in the other tools (OMSimulator from ../shared/peers, libcosim, Ecos, fmpy.ssp) at the steps it wrote
-# for them; the FMUs under hostile use: random FMI call sequences under sanitizers, threads under
+# for them, and as one FMU in fmpy, fmusim, OMSimulator, libcosim and under Wine; the FMUs under hostile use: random FMI call sequences under sanitizers, threads under
 # TSan; and the wheel, installed outside the checkout, running a scene, its SSP and a cluster sweep.
 if [ "$#" -eq 0 ]; then
   tools=0
-  .venv/bin/python -m pytest -ra -m tools tests/platform/test_export_tools.py || tools=$?
+  .venv/bin/python -m pytest -ra -m tools tests/platform/test_export_tools.py tests/platform/test_system_fmu_tools.py \
+    || tools=$?
   if [ "$tools" -eq 5 ]; then echo "the tools stage collected no tests: failing the run" >&2; fi
   [ "$tools" -eq 0 ] || status=1
   bash scripts/fuzz.sh ci || status=1

@@ -101,6 +101,15 @@ def test_export_ssp_writes_the_scene_that_runs_alike(ssp):
     assert np.array_equal(scene["pose.z"], system["pose.z"])  # the same run, bit for bit
 
 
+def test_export_fmu_writes_the_scene_as_one_fmu_that_runs_alike(tmp_path):
+    """The brief scene as ONE FMU (FMI 2.0 and 3.0), run alone by simulate: the scene's run bit for bit."""
+    scene = cosim.simulate("meng_eq35", overrides=BRIEF)
+    for fmi in (2, 3):
+        fmu = cosim.export_fmu(cosim.load("meng_eq35", BRIEF), tmp_path / f"meng{fmi}.fmu", fmi=fmi)
+        alone = cosim.simulate(fmu)
+        assert np.array_equal(alone["time"], scene["time"]) and np.array_equal(alone["pose.z"], scene["pose.z"])
+
+
 def test_sweep_runs_a_sweep_file_and_refuses_two_kinds_of_cluster(tmp_path):
     from cosim.engine.artifacts import ROOT
     path = tmp_path / "brief.toml"

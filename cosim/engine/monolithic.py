@@ -265,10 +265,12 @@ def model_exchange_structure(structure: SystemStructure) -> SystemStructure:
 
 def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tuple[str, str]],
               names: Sequence[str] | None = None, output_interval: float | None = None,
-              relative_tolerance: float = RELATIVE_TOLERANCE) -> Outcome:
+              relative_tolerance: float = RELATIVE_TOLERANCE, progress: Sequence = ()) -> Outcome:
     """The structure's FMUs as one ODE under CVODE from its start to stop_time, `record` on the
     output grid (columns `names`, default component.variable). An FMU's refusal or the solver's
-    failure ends the results where they got (Outcome.failure)."""
+    failure ends the results where they got (Outcome.failure). `progress`: observers that show how
+    far it got (cosim.engine.observers.Progress, the co-simulation's bar), told every 100 rows."""
+    from types import SimpleNamespace
     from fmpy.sundials import CVodeSolver
     from .execution import RunFailed
     names = list(names) if names is not None else [f"{c}.{v}" for c, v in record]
@@ -276,6 +278,9 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
     start = time.perf_counter()
     system = MonolithicSystem(structure)
     rows, failure = [], None
+    run = SimpleNamespace(start_time=structure.experiment.start, stop_time=stop_time)  # as Progress reads a run
+    for observer in progress:
+        observer.start(run)
     try:
         t = structure.experiment.start
         next_event = system.first_event
@@ -319,10 +324,17 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
             if t >= target - 1e-12 * max(1.0, abs(t)):
                 rows.append([t, *system.outputs(record)])
                 grid += 1
+                if grid % 100 == 0:
+                    for observer in progress:
+                        observer.batch(run, SimpleNamespace(rows=np.array([[t]])))
+        for observer in progress:  # and where it ended
+            observer.batch(run, SimpleNamespace(rows=np.array([[t]])))
     except Stopped as stopped:
         failure = RunFailed(stopped, None)
     finally:
         system.free()
+        for observer in progress:
+            observer.finish(run)
     wall = time.perf_counter() - start
     result = np.array([tuple(r) for r in rows], dtype=[("time", float)] + [(n, float) for n in names])
     if failure is not None:

@@ -69,7 +69,8 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
         #                                                                         folder; Ctrl-C never lost in an FMU
         if plan.model_exchange:
             from .monolithic import integrate
-            outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval)
+            outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval,
+                                progress=[o for o in observers if isinstance(o, Progress)])
         else:
             outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
                               clock=plan.clock, observers=observers, advice=advice, real_time=plan.real_time)

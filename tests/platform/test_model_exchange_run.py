@@ -90,3 +90,21 @@ def test_the_model_exchange_export_is_one_strongly_coupled_system(tmp_path, caps
     assert "nested systems are not supported (an export of Model Exchange FMUs" in capsys.readouterr().err
     assert main(["export", "meng_eq35", "--osp", str(tmp_path / "osp"), "--me"]) == 2
     assert "export --me: an SSP archive alone" in capsys.readouterr().err
+
+
+def test_a_model_exchange_run_shows_how_far_it_got(tmp_path):
+    """`cosim run --me` shows its progress as a co-simulation does (the same observer): off a terminal
+    a line per `every` seconds with the fraction and the simulated time, ending at the stop time."""
+    import io
+    from dataclasses import replace
+    from cosim.engine.observers import Progress
+    from cosim.engine.monolithic import integrate
+    from cosim.platform.run.compile import compile_scene, model_exchange_plan
+    plan, _ = model_exchange_plan(compile_scene(load_scene("meng_eq35").changed({"scene.duration": 0.25})))
+    stream = io.StringIO()
+    outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval,
+                        progress=[Progress("meng_eq35", every=0.0, stream=stream)])
+    lines = stream.getvalue().splitlines()
+    assert outcome.failure is None and len(lines) >= 2
+    fractions = [float(line.split(": ")[1].split(" %")[0]) for line in lines]
+    assert fractions == sorted(fractions) and fractions[-1] == 100.0 and "t = 0.25 s" in lines[-1]
