@@ -11,6 +11,8 @@
  *   separated. With STEPS followed by r, the state at the half is kept (get, serialize) and, after the
  *   last step, deserialized, set back and the second half run again, printed after a line "replay". A
  *   step before initialization must be refused first. Exit 1 when a call fails, 2 on bad usage.
+ *   The environment's FMU_RUN_RESOURCES, if set, is the resource location given at instantiation
+ *   (FMI 2.0: a file URI; FMI 3.0: a path), otherwise none ("").
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -104,7 +106,8 @@ static int open_instance(const char *token) {
           load_fmi3GetFMUState() && load_fmi3SetFMUState() && load_fmi3FreeFMUState() &&
           load_fmi3SerializedFMUStateSize() && load_fmi3SerializeFMUState() && load_fmi3DeserializeFMUState()))
         return 0;
-    c = f_fmi3InstantiateCoSimulation("run", token, "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+    const char *resources = getenv("FMU_RUN_RESOURCES");
+    c = f_fmi3InstantiateCoSimulation("run", token, resources ? resources : "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
                                     log_message, NULL);
     return c != NULL;
 }
@@ -161,7 +164,9 @@ static int open_instance(const char *token) {
           load_fmi2GetFMUstate() && load_fmi2SetFMUstate() && load_fmi2FreeFMUstate() &&
           load_fmi2SerializedFMUstateSize() && load_fmi2SerializeFMUstate() && load_fmi2DeSerializeFMUstate()))
         return 0;
-    c = f_fmi2Instantiate("run", fmi2CoSimulation, token, "", &callbacks, fmi2False, fmi2False);
+    const char *resources = getenv("FMU_RUN_RESOURCES");
+    c = f_fmi2Instantiate("run", fmi2CoSimulation, token, resources ? resources : "", &callbacks, fmi2False,
+                          fmi2False);
     return c != NULL && f_fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK;
 }
 #endif

@@ -9,9 +9,9 @@ tracking):
 - Reference-FMUs' fmusim and OMSimulator (the FMU alone, its command line; ../shared/peers) and
   libcosim (libcosimpy): fmpy's outputs to the digits each writes (fmusim 16, OMSimulator 12) or
   gives (libcosim: bit for bit);
-- the FMI 2.0 win64 binary under Wine (fmpy's remoting, FMI 2.0 only, as an unprivileged user):
-  the Linux binary's outputs, to 1e-12 of each output's range (glibc's and MinGW's libm may differ
-  in the last bit: tests/models/test_win64.py).
+- the win64 binary under Wine, as the Linux binary, to 1e-12 of each output's range (glibc's and
+  MinGW's libm may differ in the last bit: tests/models/test_win64.py): FMI 2.0 through fmpy's
+  remoting (FMI 2.0 only, as an unprivileged user), both versions through tests/c/fmu_run.c.
 
 A stage of scripts/test.sh (pytest -m tools)."""
 
@@ -32,6 +32,8 @@ from cosim.engine.artifacts import ROOT
 from cosim.platform.run.accuracy import judge, probe_duration
 from cosim.platform.run.portable import converged, export_fmu
 from cosim.platform.run.runner import run_scene
+from models.test_win64 import WINE, harness, unprivileged, wine_env  # noqa: F401 (fixtures: the harness built for
+#                                                                      both systems, a Wine prefix)
 
 pytestmark = pytest.mark.tools
 
@@ -155,7 +157,6 @@ np.savez(folder + "/runs.npz", linux=simulate_fmu(linux_dir, **run),
 def test_under_wine_the_windows_binary_gives_the_linux_outputs(tmp_path_factory):
     """The Meng scene's FMU over its first 0.3 s at 1 ms: the system FMU's DLL nesting the models'
     DLLs, driven by fmpy's remoting under Wine, as its Linux binary."""
-    from models.test_win64 import WINE, unprivileged
     if WINE is None:
         pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
     import tempfile
@@ -180,3 +181,43 @@ def test_under_wine_the_windows_binary_gives_the_linux_outputs(tmp_path_factory)
         assert np.ptp(linux["torque[1]"]) > 1.0
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def harness_run(command: list[str], env: dict) -> np.ndarray:
+    done = subprocess.run(command, capture_output=True, text=True, env=env, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return np.array([[float(x) for x in line.split(",")] for line in done.stdout.splitlines() if line.strip()])
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_under_wine_each_versions_windows_binary_gives_the_linux_outputs(fmi, tmp_path, harness, wine_env):
+    """The Meng scene's FMU over 0.3 s at 1 ms through tests/c/fmu_run.c (FMI 2.0 and FMI 3.0 entry
+    points): the Windows DLL, nesting the models' DLLs, under Wine as the Linux binary, to 1e-12 of each
+    output's range. The resources are given as each version gives them (a file URI, a path)."""
+    import re
+    import zipfile
+    from fmpy import read_model_description
+    from cosim.engine.system_fmu import PLATFORMS
+    fmu = export_fmu(cosim.load("meng_eq35").changed({"scene.duration": 0.3}), tmp_path / "meng.fmu", fmi=fmi).files[0]
+    folder = tmp_path / "unpacked"
+    with zipfile.ZipFile(fmu) as archive:
+        archive.extractall(folder)
+    token = re.search(r'(?:guid|instantiationToken)="([^"]+)"', (folder / "modelDescription.xml").read_text()).group(1)
+    outputs = ",".join(str(v.valueReference) for v in read_model_description(str(folder)).modelVariables
+                       if v.causality == "output")
+    resources = folder / "resources"
+    on_linux = f"{resources.as_uri()}/" if fmi == 2 else f"{resources}/"
+    on_windows = f"file:///Z:{resources}/" if fmi == 2 else f"Z:{resources}/"
+    linux_dir, windows_dir = PLATFORMS[fmi]
+    common = [token, "0.001", "300", outputs]
+    linux = harness_run([str(harness["linux64", fmi]), str(folder / "binaries" / linux_dir / "meng.so"), *common],
+                        {**os.environ, "FMU_RUN_RESOURCES": on_linux})
+    if WINE is None:
+        pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
+    windows = harness_run([WINE, str(harness["win64", fmi]), str(folder / "binaries" / windows_dir / "meng.dll"),
+                           *common], {**wine_env, "FMU_RUN_RESOURCES": on_windows})
+    assert linux.shape == windows.shape == (301, 1 + len(outputs.split(",")))
+    scale = np.maximum(np.ptp(linux, axis=0), 1.0)
+    assert np.all(np.abs(windows - linux) <= 1e-12 * scale)
+    assert np.ptp(linux[:, 1:], axis=0).max() > 1.0  # the torques move
+
