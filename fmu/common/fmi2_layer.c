@@ -412,7 +412,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     int all_finite = 1;
     for (size_t i = 0; i < nvr; i++) {
 #if MODEL_MODEL_EXCHANGE
-        if (fmu_me_value(fmu, vr[i], &value[i])) { /* a continuous state or its derivative */
+        if (fmu->model_exchange && fmu_me_value(fmu, vr[i], &value[i])) { /* a state or its derivative (ME only) */
             all_finite = all_finite && isfinite(value[i]);
             continue;
         }

@@ -6,7 +6,7 @@ round-off of its fall, the drives as their inner step shrinks (their error falli
 1e-5 of each output's range), the trajectory's load pulses exactly at their edges (its time
 events), the cueing's washout what its exact steps converge to as they shrink and its MPC what
 they give (its solves time events). A Model Exchange instance refuses Co-Simulation's calls and
-the reverse; a configuration with events the FMU does not give (the PMSM drive's switching
+the reverse (and a Co-Simulation instance the Model Exchange states' value references); a configuration with events the FMU does not give (the PMSM drive's switching
 inverter) is refused at initialization with its reason."""
 
 from __future__ import annotations
@@ -154,6 +154,11 @@ def test_the_interfaces_refuse_each_others_calls(capsys):
     derivatives = cs.dll.fmi2GetDerivatives
     derivatives.argtypes, derivatives.restype = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t], ctypes.c_int
     assert derivatives(cs.component, None, 0) == 3
+    state = next(int(v.get("valueReference")) for v in description(fmu_path("mechanics", model_exchange=True)).iter()
+                 if v.get("name") == "ode.x[1]")  # a Model Exchange value reference, not in the CS description
+    assert me.getReal([state])[0] == me.getReal([state])[0]  # the ME instance answers it ...
+    with pytest.raises(Exception):
+        cs.getReal([state])  # ... the CS instance does not (FMI 2.0 section 2.1.2: a wrong reference is an error)
     log = capsys.readouterr().out
     assert "fmi2DoStep: this instance is Model Exchange" in log
     assert "fmi2GetDerivatives: this instance is Co-Simulation" in log
