@@ -168,12 +168,14 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     }
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
+    fmu->warned = 0;
     const fmi2Status status = model_completed_integrator_step(fmu);
     if (status == fmi2Error) {
         *terminateSimulation = fmi2True;
         fmu->s.phase = PHASE_ERROR;
     }
-    return status;
+    /* a warning logged (a leg past its stroke) is returned as fmi2DoStep returns it */
+    return status == fmi2OK && fmu->warned && !fmu->s.v.fmi_warnings_as_ok ? fmi2Warning : status;
 }
 
 int fmu_me_value(FmuInstance *fmu, unsigned vr, double *value) {

@@ -165,6 +165,28 @@ def test_the_interfaces_refuse_each_others_calls(capsys):
     me.terminate(), me.freeInstance(), cs.terminate(), cs.freeInstance()
 
 
+@pytest.mark.parametrize("as_ok", [False, True])
+def test_a_completed_step_returns_its_warning_as_a_step_does(as_ok, capsys):
+    """A leg past its stroke: fmi2CompletedIntegratorStep logs it and returns fmi2Warning, as the
+    Co-Simulation fmi2DoStep does, or fmi2OK with fmi.warnings_as_ok (the warning logged either way)."""
+    fmu, vr = instantiated("mechanics", True)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.setReal([vr["limit.leg_length_max"]], [1.6])  # the start pose's legs are longer: outside
+    fmu.setBoolean([vr["fmi.warnings_as_ok"]], [as_ok])
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.setTime(1e-3)
+    completed = fmu.dll.fmi2CompletedIntegratorStep
+    completed.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_int)]
+    completed.restype = ctypes.c_int
+    event, terminate = ctypes.c_int(0), ctypes.c_int(0)
+    assert completed(fmu.component, 1, ctypes.byref(event), ctypes.byref(terminate)) == (0 if as_ok else 1)
+    assert "is outside the stroke" in capsys.readouterr().out
+    fmu.terminate(), fmu.freeInstance()
+
+
 def test_each_mode_takes_the_calls_the_standard_allows_in_it(capsys):
     """FMI 2.0's Model Exchange state machine (section 3.2.3): after initialization an instance is
     in Event Mode, where states are not set and no integrator step is completed; in Continuous-Time
