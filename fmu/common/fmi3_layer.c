@@ -24,6 +24,8 @@
 
 #include "fmi3Functions.h"
 
+#include <ctype.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,20 +35,51 @@ typedef struct {
     fmi3InstanceEnvironment environment;
 } Logger;
 
-/* The FMI 2.0 layer escapes '%' for importers that treat the message as a format; FMI 3.0 passes it
- * as it is. */
+/* The FMI 2.0 calls FMI 3.0 names otherwise; any other fmi2X is fmi3X. */
+static const char *const RENAMED[][2] = {
+    {"fmi2GetReal", "fmi3GetFloat64"}, {"fmi2SetReal", "fmi3SetFloat64"}, {"fmi2GetInteger", "fmi3GetInt32"},
+    {"fmi2SetInteger", "fmi3SetInt32"}, {"fmi2GetFMUstate", "fmi3GetFMUState"}, {"fmi2SetFMUstate", "fmi3SetFMUState"},
+    {"fmi2FreeFMUstate", "fmi3FreeFMUState"}, {"fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize"},
+    {"fmi2SerializeFMUstate", "fmi3SerializeFMUState"}, {"fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"},
+    {"fmi2SetupExperiment", "fmi3EnterInitializationMode"}, {"fmi2NewDiscreteStates", "fmi3UpdateDiscreteStates"},
+    {"fmi2GetRealOutputDerivatives", "fmi3GetOutputDerivatives"},
+    {"fmi2SetRealInputDerivatives", "fmi3SetFloat64 (fmi.rate.*, fmi.curvature.*)"},
+    {"fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"}};
+
+/* The message as an FMI 3.0 importer reads it: each fmi2 call named as the FMI 3.0 call that reached
+ * it, and the FMI 2.0 layer's '%' escape (for importers that treat the message as a format) undone. */
+static void as_fmi3(const char *message, char *out, size_t size) {
+    size_t j = 0;
+    for (size_t i = 0; message[i] && j + 1 < size;) {
+        if (message[i] == '%' && message[i + 1] == '%') i++;
+        size_t n = 0; /* the length of an fmi2 call's name here, 0 if none */
+        if (strncmp(message + i, "fmi2", 4) == 0)
+            for (n = 4; isalnum((unsigned char)message[i + n]); n++) continue;
+        if (n == 0) {
+            out[j++] = message[i++];
+            continue;
+        }
+        const char *name = NULL;
+        for (size_t k = 0; k < sizeof RENAMED / sizeof RENAMED[0] && !name; k++)
+            if (strlen(RENAMED[k][0]) == n && strncmp(message + i, RENAMED[k][0], n) == 0) name = RENAMED[k][1];
+        char plain[96];
+        if (!name) { /* fmi2X: fmi3X */
+            snprintf(plain, sizeof plain, "fmi3%.*s", (int)(n - 4 < 80 ? n - 4 : 80), message + i + 4);
+            name = plain;
+        }
+        for (const char *c = name; *c && j + 1 < size; c++) out[j++] = *c;
+        i += n;
+    }
+    out[j] = '\0';
+}
+
 static void log_through(fmi2ComponentEnvironment environment, fmi2String instance_name, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     (void)instance_name;
     const Logger *logger = (const Logger *)environment;
     if (!logger || !logger->log) return;
     char plain[2048];
-    size_t j = 0;
-    for (size_t i = 0; message[i] && j + 1 < sizeof plain; i++) {
-        if (message[i] == '%' && message[i + 1] == '%') i++;
-        plain[j++] = message[i];
-    }
-    plain[j] = '\0';
+    as_fmi3(message, plain, sizeof plain);
     logger->log(logger->environment, (fmi3Status)status, category, plain);
 }
 

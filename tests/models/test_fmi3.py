@@ -124,11 +124,12 @@ def test_wrong_use_of_the_fmi3_layer_is_refused_with_its_reason(slave):
     with pytest.raises(FMICallException):  # a step before initialization
         fmu.doStep(0.0, 1e-3)
     assert "illegal call sequence" in log[-1]
+    assert "fmi3DoStep" in log[-1] and "fmi2" not in log[-1]  # the call the importer made, by its FMI 3.0 name
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
     with pytest.raises(FMICallException):  # a Float64 read as an Int32
         fmu.getInt32([vr["pose_ref.x"]])
-    assert "is of type Real, not Integer" in log[-1]
+    assert "is of type Real, not Integer" in log[-1] and "fmi3GetInt32" in log[-1]
     with pytest.raises(FMICallException):  # no Float32 variables
         fmu.getFloat32([vr["pose_ref.x"]])
     assert "no Float32 variables" in log[-1]
