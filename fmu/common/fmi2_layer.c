@@ -59,7 +59,7 @@ static int check_settable(FmuInstance *fmu, const char *call, int vr, double val
                       call, var->name);
             return 0;
         }
-        if (fmu->model_exchange && fmu->continuous_time_mode &&
+        if (fmu->model_exchange && fmu->s.continuous_time_mode &&
             !(var->causality == FMU_INPUT && var->variability == FMU_CONTINUOUS)) {
             LOG_ERROR(fmu, "%s: '%s' is not a continuous input; it can be set in Event Mode, not in Continuous-Time "
                       "Mode (fmi2EnterEventMode first)", call, var->name);
@@ -373,7 +373,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     model_initialize(fmu);
     fmu->s.input_previous_valid = 0; /* the FMU's own extrapolation starts with the first step */
     fmu->s.phase = PHASE_STEP_COMPLETE; /* Model Exchange: in Event Mode */
-    fmu->continuous_time_mode = 0;
+    fmu->s.continuous_time_mode = 0;
     outputs_computed(fmu);
     if (!outputs_finite(fmu, "fmi2ExitInitializationMode")) {
         fmu->s.phase = PHASE_ERROR;

@@ -3,7 +3,7 @@
  * its derivatives (the model's model_derivatives, the right-hand side its Co-Simulation integrates
  * itself). The same instance life cycle, variables, FMU states and checks as fmi2_layer.c's;
  * after initialization an instance is in Event Mode or Continuous-Time Mode, both the layer's
- * PHASE_STEP_COMPLETE, told apart by fmu->continuous_time_mode: the calls Model Exchange adds are
+ * PHASE_STEP_COMPLETE, told apart by fmu->s.continuous_time_mode: the calls Model Exchange adds are
  * allowed in the modes of the standard's state machine (FMI 2.0, section 3.2.3).
  * The shipped models have no state events as Model Exchange (a part with them, such as the PMSM
  * drive's switching inverter, is refused at initialization with its reason): zero event
@@ -29,7 +29,7 @@ static int me_allowed_in(FmuInstance *fmu, const char *call, int phases, int mod
                   "Exchange)", call);
         return 0;
     }
-    const int mode = fmu->continuous_time_mode ? CONTINUOUS_TIME_MODE : EVENT_MODE;
+    const int mode = fmu->s.continuous_time_mode ? CONTINUOUS_TIME_MODE : EVENT_MODE;
     if (fmu->s.phase == PHASE_STEP_COMPLETE && !(modes & mode)) {
         LOG_ERROR(fmu, "%s: not allowed in %s (FMI 2.0's Model Exchange state machine)", call,
                   mode == EVENT_MODE ? "Event Mode (fmi2EnterContinuousTimeMode first)"
@@ -129,7 +129,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!me_allowed(fmu, "fmi2EnterEventMode", ME_PHASES)) return fmi2Error;
-    fmu->continuous_time_mode = 0;
+    fmu->s.continuous_time_mode = 0;
     return fmi2OK;
 }
 
@@ -153,7 +153,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
     FmuInstance *fmu = (FmuInstance *)c;
     if (!me_allowed_in(fmu, "fmi2EnterContinuousTimeMode", ME_PHASES, EVENT_MODE)) return fmi2Error;
-    fmu->continuous_time_mode = 1;
+    fmu->s.continuous_time_mode = 1;
     return fmi2OK;
 }
 

@@ -23,6 +23,8 @@ typedef enum {
 
 typedef struct {
     int phase;                             /* FmuPhase */
+    int continuous_time_mode;              /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event
+                                            * Mode (part of an FMU state: a state restores its mode) */
     double time;                           /* communication point reached */
     double input_time;                     /* time at which the inputs were last set */
     double stop_time;                      /* fmi2SetupExperiment's stop time, if defined */
@@ -53,7 +55,6 @@ typedef struct FmuInstance {
     void (*free_model_data)(struct FmuInstance *fmu, void *data);
     int model_exchange;                    /* instantiated as fmi2ModelExchange (fmi2_me.c) */
     int lazy_outputs_stale;                /* MODEL_LAZY_OUTPUTS: not computed since the outputs were */
-    int continuous_time_mode;              /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event Mode */
     int n_real_outputs;                    /* the Real outputs, checked finite after every step */
     int real_outputs[VR_COUNT];
     int n_real_inputs;                     /* the Real inputs: a step extrapolates, keeps aside and */

@@ -80,6 +80,10 @@ static int snapshot_valid(FmuInstance *fmu, const char *call) {
         LOG_ERROR(fmu, "%s: the state's phase %d is not one of FMI 2.0's", call, phase);
         return 0;
     }
+    if (s->continuous_time_mode != 0 && s->continuous_time_mode != (fmu->model_exchange ? 1 : 0)) {
+        LOG_ERROR(fmu, "%s: the state's mode %d is not one of this instance's", call, s->continuous_time_mode);
+        return 0;
+    }
     if (!isfinite(s->time) || !isfinite(s->input_time) || !isfinite(s->stop_time) ||
         !isfinite(s->input_previous_time) || (s->input_previous_valid != 0 && s->input_previous_valid != 1)) {
         LOG_ERROR(fmu, "%s: the state's time is not finite", call);

@@ -187,6 +187,36 @@ def test_a_completed_step_returns_its_warning_as_a_step_does(as_ok, capsys):
     fmu.terminate(), fmu.freeInstance()
 
 
+def test_a_state_comes_back_in_the_mode_it_was_taken_in(capsys):
+    """An FMU state taken in Continuous-Time Mode, set back after the instance went to Event Mode,
+    restores Continuous-Time Mode with it (fmusim's --initial-fmu-state-file relies on it): states are
+    set and an integrator step completed at once, as before the state was taken."""
+    fmu, _ = instantiated("mechanics", True)
+    x = np.zeros(17)  # the mechanics' states (MODEL_N_STATES)
+    pointer, n = x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(x)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.getContinuousStates(pointer, n)
+    state = fmu.getFMUstate()
+    fmu.enterEventMode()
+    fmu.setFMUstate(state)
+    fmu.setTime(1e-3)
+    fmu.setContinuousStates(pointer, n)  # Continuous-Time Mode's calls, allowed at once
+    fmu.completedIntegratorStep()
+    fmu.enterEventMode()
+    again = fmu.getFMUstate()  # and one taken in Event Mode comes back in Event Mode
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.setFMUstate(again)
+    fmu.newDiscreteStates()
+    fmu.freeFMUstate(state), fmu.freeFMUstate(again)
+    assert "not allowed" not in capsys.readouterr().out
+    fmu.terminate(), fmu.freeInstance()
+
+
 def test_each_mode_takes_the_calls_the_standard_allows_in_it(capsys):
     """FMI 2.0's Model Exchange state machine (section 3.2.3): after initialization an instance is
     in Event Mode, where states are not set and no integrator step is completed; in Continuous-Time
