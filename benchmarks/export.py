@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import sys
 import time
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -80,7 +81,7 @@ def container_fmu(scene, step: float, folder: Path) -> Path:
     time_variable = ModelVariable(type="Float64", variability="continuous", name="time", causality="independent",
                                   valueReference=len(names))
     description = ModelDescription(fmiVersion="3.0", modelName=f"{scene.path.stem}_container",
-                                   instantiationToken="{" + str(__import__("uuid").uuid4()) + "}",
+                                   instantiationToken="{" + str(uuid.uuid4()) + "}",
                                    coSimulation=CoSimulation(modelIdentifier="container_fmu",
                                                              fixedInternalStepSize=step),
                                    defaultExperiment=DefaultExperiment(stopTime=str(scene.duration), stepSize=str(step)),

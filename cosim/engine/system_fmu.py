@@ -175,7 +175,6 @@ def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resour
     kernel's own setup (what `cosim run` steps) and the instances' descriptions."""
     structure, kernel, coupling = plan.structure, execution.kernel, execution.coupling
     names = coupling.names
-    index = {n: k for k, n in enumerate(names)}
     fmu_list = list(folders)
     lines = [f"start {_number(structure.experiment.start)}",
              f"algorithm {kernel.setup.gauss_seidel} {kernel.setup.order} {plan.algorithm.initial_sweeps} "
@@ -219,7 +218,7 @@ def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resour
     feeds = [kernel.feeds[f] for f in range(len(kernel.feedthrough_plan))]
     lines.append(f"feeds {len(feeds)} " + " ".join(f"{f.instance} {f.first} {f.n_inputs} {f.n_outputs}" for f in feeds))
     lines.append(f"feed_indices {len(kernel.feed_indices)} " + " ".join(str(int(v)) for v in kernel.feed_indices))
-    variables = _outer_variables(plan, execution, index)
+    variables = _outer_variables(plan, execution, kernel.index)  # by the kernel's own instance indices
     lines.append(f"variables {len(variables)}")
     lines += [f"{v.instance} {v.kind} {v.vr}" for v in variables]
     lines.append("end")
