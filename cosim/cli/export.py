@@ -1,7 +1,8 @@
-"""`cosim export SCENE --ssp FILE.ssp --osp DIR --fmu FILE.fmu [--set KEY=VALUE] [--duration S]`: the
-scene's whole system (or a variant of it) for other FMI tools, as an SSP 1.0 archive and/or an OSP
-configuration (libcosim), each tool's step measured by its master in our engine, and/or as ONE
-Co-Simulation FMU with our coupling inside (cosim.platform.run.portable).
+"""`cosim export SCENE --ssp FILE.ssp --osp DIR --fmu FILE.fmu [--me] [--set KEY=VALUE] [--duration S]`:
+the scene's whole system (or a variant of it) for other FMI tools, as an SSP 1.0 archive and/or an
+OSP configuration (libcosim), each tool's step measured by its master in our engine, and/or as ONE
+Co-Simulation FMU with our coupling inside, or (--me) ONE Model Exchange FMU with the connections
+inside its derivatives (cosim.platform.run.portable).
 
 `cosim export-check SYSTEM.ssp` (export_check, below): the step each other tool gets for any SSP
 system (one of ours, a user's own, a peer's demo), measured as `cosim export` measures a scene's: each tool's master
@@ -37,8 +38,9 @@ def add(commands) -> argparse.ArgumentParser:
     export.add_argument("--warnings-as-ok", action="store_true", help="the default (kept for old command lines)")
     export.add_argument("--fmi", type=int, choices=(2, 3), help="our FMUs as FMI 2.0 (the default) or FMI 3.0 in the "
                         "archive, and the one FMU (--fmu) as FMI 2.0 or 3.0 (scene.fmi)")
-    export.add_argument("--me", action="store_true", help="the FMUs as Model Exchange in one strongly coupled system "
-                        "(OMSimulator's oms-sc integrates them as one by CVODE): with --ssp alone")
+    export.add_argument("--me", action="store_true", help="with --fmu: the whole scene as ONE Model Exchange FMU (the "
+                        "connections inside its derivatives: any tool's solver integrates the coupled platform); "
+                        "with --ssp: the FMUs as Model Exchange in one strongly coupled system (OMSimulator's oms-sc)")
     export.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="a key of the scene as `cosim run --set` takes it (step, 'mechanics.parameters.\"platform."
                              "mass\"', ...): the variant exported, the file unchanged")
@@ -53,8 +55,6 @@ def main(args: argparse.Namespace) -> int:
         raise UsageError("export: give --ssp FILE.ssp, --osp DIR, --fmu FILE.fmu or more than one")
     if args.fmu is not None and args.fmu.suffix.lower() != ".fmu":
         raise UsageError(f"export --fmu {args.fmu}: the file an FMU is written to ends in .fmu")
-    if args.fmu is not None and args.me:
-        raise UsageError("export --fmu: --me is not offered yet: the system FMU is Co-Simulation (our coupling inside)")
     if args.fmi2_warnings and args.warnings_as_ok:
         raise UsageError("export: --fmi2-warnings and --warnings-as-ok contradict each other: give one")
     for option, folder in (("--ssp", args.ssp.parent if args.ssp else None), ("--osp", args.osp),
@@ -69,10 +69,15 @@ def main(args: argparse.Namespace) -> int:
         if value is not None:
             overrides[key], given[key] = value, label
     scene = load_scene(args.scene, overrides, given)
-    if args.me:
+    if args.me and args.fmu is not None:
+        if args.osp is not None or args.ssp is not None or args.scene_step:
+            raise UsageError("export --fmu FILE --me: the one Model Exchange FMU alone (no --ssp, --osp or "
+                             "--scene-step with it)")
+        exported = Exported([], [])
+    elif args.me:
         if args.osp is not None or args.ssp is None or args.fmi == 3 or args.scene_step:
             raise UsageError("export --me: an SSP archive alone (--ssp), FMI 2.0, no step to measure (libcosim and Ecos "
-                             "run no Model Exchange)")
+                             "run no Model Exchange), or the one Model Exchange FMU (--fmu FILE --me)")
         from ..platform.run.portable import export_model_exchange
         exported = export_model_exchange(scene, args.ssp, fmi2_warnings=args.fmi2_warnings)
     elif args.ssp is not None or args.osp is not None:
@@ -82,7 +87,7 @@ def main(args: argparse.Namespace) -> int:
         exported = Exported([], [])
     if args.fmu is not None:
         from ..platform.run.portable import export_fmu
-        one = export_fmu(scene, args.fmu, fmi=scene.fmi)
+        one = export_fmu(scene, args.fmu, fmi=scene.fmi, model_exchange=args.me)
         exported = Exported(exported.files + one.files, exported.lines + one.lines)
     print("\n".join(exported.lines))
     for path in exported.files:
@@ -91,7 +96,8 @@ def main(args: argparse.Namespace) -> int:
             print(f"written: {path} (SSP 1.0; our run settings in its annotation '{ANNOTATION}', which other tools "
                   "ignore)")
         elif path.suffix == ".fmu":
-            print(f"written: {path} (FMI {scene.fmi}.0 Co-Simulation, the whole scene: `cosim run {path.name}`, fmpy, "
+            interface = "Model Exchange" if args.me else "Co-Simulation"
+            print(f"written: {path} (FMI {scene.fmi}.0 {interface}, the whole scene: `cosim run {path.name}`, fmpy, "
                   "fmusim, OMSimulator and any tool that imports an FMU run it)")
         elif path.suffix == ".lua":
             print(f"written: {path} (OMSimulator's script for it: `OMSimulator {path.name}` in its folder)")

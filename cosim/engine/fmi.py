@@ -164,6 +164,10 @@ class FmuInstance:
         self.time = 0.0
         self.fmi_seconds = 0.0  # wall time spent inside FMI calls (for the master-overhead share)
         self.fmi3 = str(self.model_description.fmiVersion).startswith("3")
+        if self.model_description.coSimulation is None:
+            raise FmuError(instance_name, "instantiation", 0.0,
+                           [LogMessage("error", "", f"{self.path.name}: this FMU is Model Exchange only (its "
+                                       "modelDescription.xml): a co-simulation steps Co-Simulation FMUs", 0.0)])
         self.clock = None  # a function giving the instance's time while a native loop runs it
         if self.fmi3:
             self.fmu = _slave3()(guid=self.model_description.guid, unzipDirectory=str(self.unzip_dir),

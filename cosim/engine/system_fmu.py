@@ -55,6 +55,7 @@ class Outer:
     kind: str
     start: str | None
     description: str = ""
+    derivative_of: int | None = None  # a state's derivative: the state's index among the variables
 
 
 PLATFORMS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}  # each version's folders
@@ -92,21 +93,27 @@ def _value_text(kind: str, value) -> str:
     return _token(str(value))
 
 
-def _check(plan: Plan) -> FixedStep:
+def _check(plan: Plan, model_exchange: bool) -> FixedStep:
     if plan.model_exchange:
-        raise NotExportable("the system FMU is Co-Simulation with our coupling inside: a Model Exchange run "
-                            "(--me) cannot be exported as one", "model_exchange")
+        raise NotExportable("write_system_fmu takes the system's co-simulation plan (its FMUs as Co-Simulation); "
+                            "model_exchange=True makes the FMU Model Exchange", "model_exchange")
+    if model_exchange and not isinstance(plan.control, FixedStep):  # the coupling's order is all it takes
+        return FixedStep(plan.output_interval or plan.structure.experiment.step)
     if not isinstance(plan.control, FixedStep):
         raise NotExportable("the system FMU steps the run's fixed-step plan inside each communication step: set "
                             "step_control = fixed (a controlled step chooses its steps as it goes)", "step_control")
     return plan.control
 
 
-def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fmi: int = 2) -> Path:
+def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fmi: int = 2,
+                     model_exchange: bool = False) -> Path:
     """`plan`'s system as one Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0 over the same
     nested FMI 2.0 FMUs; Linux and, where built, Windows binaries. Its default experiment is the
-    plan's (start, stop time, regular step)."""
-    control = _check(plan)
+    plan's (start, stop time, regular step). model_exchange: a Model Exchange FMU instead, the
+    nested FMUs' continuous states its own and the connections carried inside its derivatives
+    (cosim/engine/kernel/system_me.c); every FMU of the system must offer Model Exchange (ours do,
+    through their twins in build/fmus_me/)."""
+    control = _check(plan, model_exchange)
     structure = plan.structure
     target = Path(target)
     identifier = "".join(c if c.isalnum() or c == "_" else "_" for c in target.stem) or "system"
@@ -122,16 +129,18 @@ def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fm
                                         "FMU nests FMI 2.0 FMUs (offered as FMI 2.0 or 3.0): give it FMI 2.0 FMUs",
                                         "fmi")
             folders = _nest_fmus(structure, resources)
-            body, variables = _describe(plan, execution, folders, resources)
+            states = _states(structure) if model_exchange else {}
+            body, variables = _describe(plan, control, execution, folders, resources, states)
         guid = "{" + str(_uuid(body)) + "}"
-        (resources / "system.txt").write_text(f"cosim-system 1\nguid {guid}\n{body}")
+        interface = "me" if model_exchange else "cs"
+        (resources / "system.txt").write_text(f"cosim-system 1\nguid {guid}\ninterfaces 1 {interface}\n{body}")
         for platform, binary in system_binaries(fmi).items():
             folder = stage / "binaries" / platform
             folder.mkdir(parents=True)
             shutil.copyfile(binary, folder / f"{identifier}{binary.suffix}")
         describe = _model_description if fmi == 2 else _model_description3
         (stage / "modelDescription.xml").write_bytes(
-            describe(model_name or structure.name, identifier, guid, plan, variables))
+            describe(model_name or structure.name, identifier, guid, plan, variables, model_exchange))
         target.parent.mkdir(parents=True, exist_ok=True)
         partial = target.with_name(target.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -169,10 +178,26 @@ def _nest_fmus(structure: SystemStructure, resources: Path) -> dict[Path, str]:
     return folders
 
 
-def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resources: Path
-              ) -> tuple[str, list[Outer]]:
-    """system.txt (after its GUID line) and the outer variables, from the live execution: the
-    kernel's own setup (what `cosim run` steps) and the instances' descriptions."""
+def _states(structure: SystemStructure) -> dict[str, list[tuple[str, int, str, int]]]:
+    """Each component's continuous states as Model Exchange, in its description's order: the
+    state's name and value reference, its derivative's name and value reference; NotExportable naming a component whose FMU has no Model Exchange."""
+    from .errors import UsageError
+    from .monolithic import model_exchange_structure
+    try:
+        twins = model_exchange_structure(structure)
+    except UsageError as error:
+        raise NotExportable(f"{error}: the Model Exchange FMU needs every component as Model Exchange",
+                            "model_exchange") from None
+    return {component.name: [(d.variable.derivative.name, d.variable.derivative.valueReference, d.variable.name,
+                              d.variable.valueReference) for d in loaded(component.fmu)[0].derivatives]
+            for component in twins.components}
+
+
+def _describe(plan: Plan, control: FixedStep, execution: Execution, folders: dict[Path, str], resources: Path,
+              states: dict[str, list[tuple[str, int, str, int]]]) -> tuple[str, list[Outer]]:
+    """system.txt (after its interfaces line) and the outer variables, from the live execution: the
+    kernel's own setup (what `cosim run` steps) and the instances' descriptions; `states`, each
+    component's continuous states where the FMU is Model Exchange."""
     structure, kernel, coupling = plan.structure, execution.kernel, execution.coupling
     names = coupling.names
     fmu_list = list(folders)
@@ -180,9 +205,9 @@ def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resour
              f"algorithm {kernel.setup.gauss_seidel} {kernel.setup.order} {plan.algorithm.initial_sweeps} "
              f"{int(plan.algorithm.zero_start)}",
              f"clock {kernel.clock}"]
-    runs = fixed_runs(plan.control, structure.experiment.start, plan.stop_time)
+    runs = fixed_runs(control, structure.experiment.start, plan.stop_time)
     lines.append(f"plan {len(runs)} " + " ".join(f"{_number(h)} {n}" for h, n in runs))
-    lines.append(f"step {_number(plan.control.step)}")
+    lines.append(f"step {_number(control.step)}")
     lines.append(f"fmus {len(fmu_list)}")
     for path in fmu_list:
         description = loaded(path)[0]
@@ -197,6 +222,7 @@ def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resour
         lines.append(f" inputs {c.n_inputs} " + " ".join(
             f"{c.input_vrs[i]} {c.feed_source[i]} {c.feed_index[i]}" for i in range(c.n_inputs)))
         lines.append(f" flags {c.rate_order} {c.interpolating} {c.extrapolating}")
+        lines.append(f" states {len(states.get(name, ()))}")
         values = []
         for variable, value in component.parameters.items():
             kind = _KINDS.get(instance.variables[variable].type) if variable in instance.variables else None
@@ -218,16 +244,18 @@ def _describe(plan: Plan, execution: Execution, folders: dict[Path, str], resour
     feeds = [kernel.feeds[f] for f in range(len(kernel.feedthrough_plan))]
     lines.append(f"feeds {len(feeds)} " + " ".join(f"{f.instance} {f.first} {f.n_inputs} {f.n_outputs}" for f in feeds))
     lines.append(f"feed_indices {len(kernel.feed_indices)} " + " ".join(str(int(v)) for v in kernel.feed_indices))
-    variables = _outer_variables(plan, execution, kernel.index)  # by the kernel's own instance indices
+    variables = _outer_variables(plan, execution, kernel.index, states)  # by the kernel's own instance indices
     lines.append(f"variables {len(variables)}")
     lines += [f"{v.instance} {v.kind} {v.vr}" for v in variables]
     lines.append("end")
     return "\n".join(lines) + "\n", variables
 
 
-def _outer_variables(plan: Plan, execution: Execution, index: dict[str, int]) -> list[Outer]:
+def _outer_variables(plan: Plan, execution: Execution, index: dict[str, int],
+                     states: dict[str, list[tuple[str, int, str, int]]]) -> list[Outer]:
     """The recorded outputs, then per component its inputs that no connection feeds and its
-    parameters (not the FMI layer's own fmi.* switches), with the system's values as starts."""
+    parameters (not the FMI layer's own fmi.* switches), with the system's values as starts; then
+    (Model Exchange) each component's continuous states and their derivatives."""
     structure = plan.structure
     names = list(plan.names) if plan.names is not None else [f"{c}.{v}" for c, v in plan.record]
     variables = [Outer(n, "output", "continuous", index[c], execution.instances[c].vr(v), "r", None)
@@ -252,23 +280,41 @@ def _outer_variables(plan: Plan, execution: Execution, index: dict[str, int]) ->
                 if kind == "b" else str(int(start))
             variables.append(Outer(f"{component.name}.{v.name}", causality, variability, index[component.name],
                                    v.valueReference, kind, text, v.description or ""))
+    for name, parts in states.items():
+        for state, state_vr, derivative, derivative_vr in parts:
+            variables.append(Outer(f"{name}.{state}", "local", "continuous", index[name], state_vr, "r", None,
+                                   f"{name}'s continuous state {state}"))
+        first = len(variables) - len(parts)
+        for k, (state, state_vr, derivative, derivative_vr) in enumerate(parts):
+            variables.append(Outer(f"der({name}.{state})", "local", "continuous", index[name], derivative_vr, "r",
+                                   None, f"the time derivative of {name}.{state}", derivative_of=first + k))
     return variables
 
 
-def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer]) -> bytes:
+def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer],
+                       model_exchange: bool = False) -> bytes:
+    how = ("as one ODE, the connections carried inside its derivatives" if model_exchange
+           else "coupled inside by the cosim engine")
     root = etree.Element("fmiModelDescription", fmiVersion="2.0", modelName=model_name, guid=guid,
-                         description=f"{model_name}: the whole system as one FMU, coupled inside by the cosim engine",
+                         description=f"{model_name}: the whole system as one FMU, {how}",
                          generationTool="cosim (stewart platform co-simulation)",
                          variableNamingConvention="flat", numberOfEventIndicators="0")
-    etree.SubElement(root, "CoSimulation", modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
-                     canBeInstantiatedOnlyOncePerProcess="false", canNotUseMemoryManagementFunctions="true",
-                     canGetAndSetFMUstate="false", canSerializeFMUstate="false")
+    if model_exchange:
+        etree.SubElement(root, "ModelExchange", modelIdentifier=identifier, completedIntegratorStepNotNeeded="false",
+                         canBeInstantiatedOnlyOncePerProcess="false", canNotUseMemoryManagementFunctions="true",
+                         canGetAndSetFMUstate="false", canSerializeFMUstate="false")
+    else:
+        etree.SubElement(root, "CoSimulation", modelIdentifier=identifier,
+                         canHandleVariableCommunicationStepSize="true", canBeInstantiatedOnlyOncePerProcess="false",
+                         canNotUseMemoryManagementFunctions="true", canGetAndSetFMUstate="false",
+                         canSerializeFMUstate="false")
     categories = etree.SubElement(root, "LogCategories")
     for name in ("logStatusWarning", "logStatusError", "logAll"):
         etree.SubElement(categories, "Category", name=name)
     start = plan.structure.experiment.start
     etree.SubElement(root, "DefaultExperiment", startTime=repr(start), stopTime=repr(float(plan.stop_time)),
-                     stepSize=repr(plan.control.step))
+                     stepSize=repr(_output_step(plan, model_exchange)),
+                     **({"tolerance": repr(ME_TOLERANCE)} if model_exchange else {}))
     model_variables = etree.SubElement(root, "ModelVariables")
     for vr, v in enumerate(variables):
         attributes = dict(name=v.name, valueReference=str(vr), causality=v.causality, variability=v.variability)
@@ -280,33 +326,58 @@ def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, 
         typed = etree.SubElement(element, _TYPES[v.kind])
         if v.start is not None:
             typed.set("start", v.start)
+        if v.derivative_of is not None:
+            typed.set("derivative", str(v.derivative_of + 1))
     structure = etree.SubElement(root, "ModelStructure")
     outputs = etree.SubElement(structure, "Outputs")
-    unknowns = etree.SubElement(structure, "InitialUnknowns")
     for vr, v in enumerate(variables):
         if v.causality == "output":
             etree.SubElement(outputs, "Unknown", index=str(vr + 1))
+    if model_exchange:
+        derivatives = etree.SubElement(structure, "Derivatives")
+        for vr, v in enumerate(variables):
+            if v.derivative_of is not None:
+                etree.SubElement(derivatives, "Unknown", index=str(vr + 1))
+    unknowns = etree.SubElement(structure, "InitialUnknowns")
+    for vr, v in enumerate(variables):  # outputs, states and derivatives: all calculated (FMI 2.0, 2.2.8)
+        if v.causality == "output" or (v.causality == "local" and model_exchange):
             etree.SubElement(unknowns, "Unknown", index=str(vr + 1))
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
 _TYPES3 = {"r": "Float64", "i": "Int32", "b": "Boolean"}
+ME_TOLERANCE = 1e-6  # the Model Exchange FMU's default experiment's relative tolerance (docs/guide/system-fmu.md)
 
 
-def _model_description3(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer]) -> bytes:
+def _output_step(plan: Plan, model_exchange: bool) -> float:
+    """The default experiment's step: the Co-Simulation's communication step (the plan's step), or
+    where the importer's solver steps itself, the plan's output interval."""
+    if model_exchange:
+        return plan.output_interval or plan.structure.experiment.step
+    return plan.control.step
+
+
+def _model_description3(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer],
+                        model_exchange: bool = False) -> bytes:
     """FMI 3.0's description of the same variables (the same value references), and the independent
     variable `time` after them."""
     root = etree.Element("fmiModelDescription", fmiVersion="3.0", modelName=model_name, instantiationToken=guid,
                          description=f"{model_name}: the whole system as one FMU, coupled inside by the cosim engine",
                          generationTool="cosim (stewart platform co-simulation)", variableNamingConvention="flat")
-    etree.SubElement(root, "CoSimulation", modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
-                     canGetAndSetFMUState="false", canSerializeFMUState="false", hasEventMode="false",
-                     providesIntermediateUpdate="false", canReturnEarlyAfterIntermediateUpdate="false")
+    if model_exchange:
+        etree.SubElement(root, "ModelExchange", modelIdentifier=identifier, canGetAndSetFMUState="false",
+                         canSerializeFMUState="false", needsCompletedIntegratorStep="true")
+    else:
+        etree.SubElement(root, "CoSimulation", modelIdentifier=identifier,
+                         canHandleVariableCommunicationStepSize="true", canGetAndSetFMUState="false",
+                         canSerializeFMUState="false", hasEventMode="false", providesIntermediateUpdate="false",
+                         canReturnEarlyAfterIntermediateUpdate="false")
     categories = etree.SubElement(root, "LogCategories")
     for name in ("logStatusWarning", "logStatusError", "logAll"):
         etree.SubElement(categories, "Category", name=name)
     etree.SubElement(root, "DefaultExperiment", startTime=repr(plan.structure.experiment.start),
-                     stopTime=repr(float(plan.stop_time)), stepSize=repr(plan.control.step))
+                     stopTime=repr(float(plan.stop_time)), stepSize=repr(_output_step(plan, model_exchange)),
+                     **({"tolerance": repr(ME_TOLERANCE)} if model_exchange else {}))
     model_variables = etree.SubElement(root, "ModelVariables")
     etree.SubElement(model_variables, "Float64", name="time", valueReference=str(len(variables)),
                      causality="independent", variability="continuous", description="the simulation time")
@@ -316,11 +387,17 @@ def _model_description3(model_name: str, identifier: str, guid: str, plan: Plan,
             attributes["description"] = v.description
         if v.start is not None:
             attributes["start"] = v.start
+        if v.derivative_of is not None:
+            attributes["derivative"] = str(v.derivative_of)  # the state's value reference
         etree.SubElement(model_variables, _TYPES3[v.kind], **attributes)
     structure = etree.SubElement(root, "ModelStructure")
-    outputs = [str(vr) for vr, v in enumerate(variables) if v.causality == "output"]
-    for vr in outputs:
-        etree.SubElement(structure, "Output", valueReference=vr)
-    for vr in outputs:
-        etree.SubElement(structure, "InitialUnknown", valueReference=vr)
+    for vr, v in enumerate(variables):
+        if v.causality == "output":
+            etree.SubElement(structure, "Output", valueReference=str(vr))
+    for vr, v in enumerate(variables):
+        if v.derivative_of is not None:
+            etree.SubElement(structure, "ContinuousStateDerivative", valueReference=str(vr))
+    for vr, v in enumerate(variables):  # outputs, states and derivatives: all calculated
+        if v.causality == "output" or (v.causality == "local" and model_exchange):
+            etree.SubElement(structure, "InitialUnknown", valueReference=str(vr))
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)

@@ -207,7 +207,6 @@ def test_parameters_are_passed_on_to_the_instance_whose_they_are(exported):
 
 def test_the_export_refuses_what_it_cannot_write_in_one_line(tmp_path):
     for extra, says in ((["--fmu", str(tmp_path / "x.zip")], "ends in .fmu"),
-                        (["--fmu", str(tmp_path / "x.fmu"), "--me"], "--me is not offered yet"),
                         (["--fmu", str(tmp_path / "x.fmu"), "--set", "coupling.step_control=doubling"],
                          "step_control")):
         done = subprocess.run([sys.executable, "-m", "cosim", "export", str(SCENE), *extra], capture_output=True,

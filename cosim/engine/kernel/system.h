@@ -30,6 +30,16 @@ typedef struct { /* a nested FMU's binary and its functions */
     fmi2GetBooleanTYPE *get_boolean;
     fmi2GetStringTYPE *get_string;
     void *set_input_derivatives, *get_output_derivatives, *do_step, *get_state, *set_state, *free_state;
+    /* Model Exchange (bound where the system is offered as Model Exchange) */
+    fmi2SetTimeTYPE *set_time;
+    fmi2SetContinuousStatesTYPE *set_states;
+    fmi2GetContinuousStatesTYPE *get_states;
+    fmi2GetNominalsOfContinuousStatesTYPE *get_nominals;
+    fmi2GetDerivativesTYPE *get_derivatives;
+    fmi2EnterEventModeTYPE *enter_event_mode;
+    fmi2NewDiscreteStatesTYPE *new_discrete_states;
+    fmi2EnterContinuousTimeModeTYPE *enter_continuous_time_mode;
+    fmi2CompletedIntegratorStepTYPE *completed_integrator_step;
 } Nested;
 
 typedef struct { /* a value a component is given at instantiation */
@@ -50,6 +60,7 @@ typedef struct { /* one nested instance */
     fmi2CallbackFunctions callbacks;
     int n_values;
     Value *values;
+    int n_states, first_state; /* its continuous states in the system's (Model Exchange) */
 } Inner;
 
 typedef struct { /* a variable of the outer FMU: one of an instance's */
@@ -64,6 +75,13 @@ struct System {
     const char *api;                   /* "fmi2" or "fmi3": how the calls are named in messages */
     char *instance_name, *resources;
     int logging, phase;
+    int offers_co_simulation, offers_model_exchange; /* the interfaces its modelDescription.xml declares */
+    int model_exchange;                /* this instance is Model Exchange */
+    int continuous_time_mode;          /* Model Exchange after initialization: 1 Continuous-Time Mode, 0 Event Mode */
+    int stale;                         /* Model Exchange: time, states or values changed since the connections were carried */
+    int n_states;                      /* every instance's continuous states, one after another */
+    double me_time;                    /* Model Exchange: the time last set */
+    const char *refusal;               /* why the call being checked is refused (NULL: its phase) */
     /* the description */
     double start, regular_step;
     int n_runs, run, run_left; /* the step plan: runs of equal steps, the current one and its steps left */
@@ -111,12 +129,18 @@ void library_close(void *library);
 
 /* The system of the FMU whose resources `location` names (FMI 2.0's URI or FMI 3.0's path), its
  * description's guid `token` (NULL: not checked), its nested instances instantiated with their
- * values; NULL (the reason logged) where it cannot be. */
+ * values, as Model Exchange where model_exchange; NULL (the reason logged) where it cannot be. */
 System *system_new(const char *api, const char *instance, const char *token, const char *location, int logging,
-                   void (*log)(void *, const char *, int, const char *, const char *), void *environment);
+                   int model_exchange, void (*log)(void *, const char *, int, const char *, const char *), void *environment);
 void system_free(System *s);
 /* 1 if `call` may be made now (ok), else 0 with the reason logged. */
 int system_allowed(System *s, const char *call, int ok);
+/* 1 if the instance is Model Exchange (model_exchange 1) or Co-Simulation (0) as the call needs; 1
+ * if a Model Exchange instance after initialization is in Continuous-Time Mode (continuous_time 1)
+ * or Event Mode (0) as the call needs (FMI's state machine); else 0, the reason kept for
+ * system_allowed's refusal. */
+int system_interface_is(System *s, int model_exchange);
+int system_mode_is(System *s, int continuous_time);
 int system_setup(System *s, int tolerance_defined, double tolerance, double start, int stop_defined, double stop);
 int system_enter(System *s);
 int system_exit(System *s);
@@ -128,6 +152,24 @@ double system_time(const System *s);
  * Boolean), s (const char *); `call` names the importer's call in a refusal. */
 int system_get(System *s, const char *call, char kind, unsigned vr, void *value);
 int system_set(System *s, const char *call, char kind, unsigned vr, const void *value);
+/* ---- Model Exchange (system_me.c): the instances' states end to end, the connections carried at
+ * each evaluation ---- */
+
+/* Every connection's output to its input, sweep after sweep in the coupling's order until no input
+ * changes, where time, states or values changed since the last time (s->stale). */
+int system_me_carry(System *s);
+int system_me_set_time(System *s, double time);
+int system_me_set_states(System *s, const double x[], size_t n);
+int system_me_get_states(System *s, double x[], size_t n);
+int system_me_get_nominals(System *s, double nominals[], size_t n);
+int system_me_get_derivatives(System *s, double derivatives[], size_t n);
+int system_me_enter_event_mode(System *s);
+/* Every instance's discrete states updated (its own iteration through), the connections carried;
+ * *next the earliest next time event of any (inf: none). */
+int system_me_new_discrete_states(System *s, int *terminate, int *states_changed, double *next);
+int system_me_enter_continuous_time_mode(System *s);
+int system_me_completed_integrator_step(System *s, int *enter_event_mode, int *terminate);
+
 /* Where the importer's call is not offered: fmi2Error/fmi3Error with the reason logged. */
 int system_unsupported(System *s, const char *call);
 

@@ -1,5 +1,6 @@
-/* The system FMU's FMI 2.0 Co-Simulation API: each call checked against the FMU's phase and passed
- * to the system's life cycle (system_fmu.c). */
+/* The system FMU's FMI 2.0 API, Co-Simulation or (where exported so) Model Exchange: each call
+ * checked against the FMU's phase and passed to the system's life cycle (system_fmu.c, system_me.c). */
+#include <math.h>
 #include <stdlib.h>
 
 #include "fmi2Functions.h"
@@ -18,6 +19,10 @@ typedef struct { /* the instance an importer holds: the system and the importer'
 #define SYSTEM(c, call, ok) System *s = (c) ? ((Instance *)(c))->system : NULL; \
     if (!system_allowed(s, call, s && (ok))) return fmi2Error
 
+#define CO_SIMULATION(s) system_interface_is(s, 0)
+#define MODEL_EXCHANGE(s) system_interface_is(s, 1)
+#define mode_is system_mode_is
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
@@ -26,14 +31,14 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     Instance *instance = calloc(1, sizeof *instance);
     if (!instance) return NULL;
     instance->callbacks = *functions;
-    if (fmuType != fmi2CoSimulation) {
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
         log_fmi2(&instance->callbacks, instanceName, fmi2Error, "logStatusError",
-                 "fmi2Instantiate: this FMU is Co-Simulation only");
+                 "fmi2Instantiate: fmuType is neither fmi2ModelExchange nor fmi2CoSimulation");
         free(instance);
         return NULL;
     }
-    instance->system = system_new("fmi2", instanceName, fmuGUID, fmuResourceLocation, loggingOn == fmi2True, log_fmi2,
-                                  &instance->callbacks);
+    instance->system = system_new("fmi2", instanceName, fmuGUID, fmuResourceLocation, loggingOn == fmi2True,
+                                  fmuType == fmi2ModelExchange, log_fmi2, &instance->callbacks);
     if (!instance->system) {
         free(instance);
         return NULL;
@@ -66,7 +71,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    SYSTEM(c, "fmi2DoStep", s->phase == PHASE_STEPPING);
+    SYSTEM(c, "fmi2DoStep", s->phase == PHASE_STEPPING && CO_SIMULATION(s));
     return (fmi2Status)system_do_step(s, currentCommunicationPoint, communicationStepSize);
 }
 
@@ -191,4 +196,80 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind kind, fmi2String *value) {
     (void)kind, (void)value;
     UNSUPPORTED("fmi2GetStringStatus");
+}
+
+/* ---- Model Exchange (system_me.c) ---- */
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    SYSTEM(c, "fmi2SetTime", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s));
+    return (fmi2Status)system_me_set_time(s, time);
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    SYSTEM(c, "fmi2SetContinuousStates", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) && mode_is(s, 1));
+    return (fmi2Status)system_me_set_states(s, x, nx);
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    SYSTEM(c, "fmi2GetContinuousStates", (s->phase == PHASE_STEPPING || s->phase == PHASE_INITIALIZATION ||
+                                          s->phase == PHASE_TERMINATED) && MODEL_EXCHANGE(s));
+    return (fmi2Status)system_me_get_states(s, x, nx);
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    SYSTEM(c, "fmi2GetNominalsOfContinuousStates", s->phase != PHASE_FAILED && MODEL_EXCHANGE(s));
+    return (fmi2Status)system_me_get_nominals(s, x_nominal, nx);
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    SYSTEM(c, "fmi2GetDerivatives", (s->phase == PHASE_STEPPING || s->phase == PHASE_TERMINATED) && MODEL_EXCHANGE(s));
+    return (fmi2Status)system_me_get_derivatives(s, derivatives, nx);
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    (void)eventIndicators;
+    SYSTEM(c, "fmi2GetEventIndicators", (s->phase == PHASE_STEPPING || s->phase == PHASE_INITIALIZATION) &&
+                                        MODEL_EXCHANGE(s));
+    if (ni != 0) {
+        say(s, fmi2Error, "logStatusError", "fmi2GetEventIndicators: %zu values, and the system has no event indicators",
+            ni);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    SYSTEM(c, "fmi2EnterEventMode", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s));
+    return (fmi2Status)system_me_enter_event_mode(s);
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    SYSTEM(c, "fmi2NewDiscreteStates", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) && mode_is(s, 0) && info);
+    int terminate, changed;
+    double next;
+    const fmi2Status status = (fmi2Status)system_me_new_discrete_states(s, &terminate, &changed, &next);
+    info->newDiscreteStatesNeeded = fmi2False; /* each instance was iterated through */
+    info->terminateSimulation = terminate ? fmi2True : fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
+    info->nextEventTimeDefined = next < INFINITY ? fmi2True : fmi2False;
+    info->nextEventTime = next < INFINITY ? next : 0.0;
+    return status;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    SYSTEM(c, "fmi2EnterContinuousTimeMode", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) && mode_is(s, 0));
+    return (fmi2Status)system_me_enter_continuous_time_mode(s);
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    SYSTEM(c, "fmi2CompletedIntegratorStep", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) && mode_is(s, 1) &&
+                                             enterEventMode && terminateSimulation);
+    int event, terminate;
+    const fmi2Status status = (fmi2Status)system_me_completed_integrator_step(s, &event, &terminate);
+    *enterEventMode = event ? fmi2True : fmi2False;
+    *terminateSimulation = terminate ? fmi2True : fmi2False;
+    return status;
 }

@@ -1,9 +1,12 @@
-/* The system FMU's FMI 3.0 Co-Simulation API: each call checked against the FMU's phase and passed
+/* The system FMU's FMI 3.0 API, Co-Simulation or (where exported so) Model Exchange: each call
+ * checked against the FMU's phase and passed
  * to the system's life cycle (system_fmu.c), over the same nested FMI 2.0 FMUs as its FMI 2.0 API.
  * Float64, Int32, Boolean and String scalars; the independent variable `time` at the value
  * reference after the system's variables. No event mode, intermediate update or early return (a
- * step always completes), no FMU state, no Model Exchange or Scheduled Execution: each of those
- * calls is refused with the reason logged (its modelDescription.xml says so). */
+ * step always completes), no FMU state, no Scheduled Execution: each of those calls is refused with
+ * the reason logged (its modelDescription.xml says so). Offered as Model Exchange (system_me.c) where
+ * the export made it so. */
+#include <math.h>
 #include <stdlib.h>
 
 #include "fmi3Functions.h"
@@ -46,7 +49,24 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         free(instance);
         return NULL;
     }
-    instance->system = system_new("fmi3", instanceName, instantiationToken, resourcePath, loggingOn, log_fmi3,
+    instance->system = system_new("fmi3", instanceName, instantiationToken, resourcePath, loggingOn, 0, log_fmi3,
+                                  instance);
+    if (!instance->system) {
+        free(instance);
+        return NULL;
+    }
+    return instance;
+}
+
+fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
+                                          fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
+                                          fmi3InstanceEnvironment instanceEnvironment,
+                                          fmi3LogMessageCallback logMessage) {
+    (void)visible;
+    Instance *instance = calloc(1, sizeof *instance);
+    if (!instance) return NULL;
+    instance->log = logMessage, instance->environment = instanceEnvironment;
+    instance->system = system_new("fmi3", instanceName, instantiationToken, resourcePath, loggingOn, 1, log_fmi3,
                                   instance);
     if (!instance->system) {
         free(instance);
@@ -85,7 +105,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean noSetFMUStatePriorToCurrentPoint, fmi3Boolean *eventHandlingNeeded,
                       fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    SYSTEM(instance, "fmi3DoStep", s->phase == PHASE_STEPPING);
+    SYSTEM(instance, "fmi3DoStep", s->phase == PHASE_STEPPING && system_interface_is(s, 0));
     const int status = system_do_step(s, currentCommunicationPoint, communicationStepSize);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
@@ -173,17 +193,108 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference valueRe
     EACH(system_set(s, "fmi3SetString", 's', valueReferences[i], &values[i]));
 }
 
+/* ---- Model Exchange (system_me.c) ---- */
+
+#define MODEL_EXCHANGE(s) system_interface_is(s, 1)
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
+    SYSTEM(instance, "fmi3EnterEventMode", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s));
+    return (fmi3Status)system_me_enter_event_mode(s);
+}
+
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                    fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
+                                    fmi3Float64 *nextEventTime) {
+    SYSTEM(instance, "fmi3UpdateDiscreteStates", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) &&
+                                                 system_mode_is(s, 0));
+    int terminate, changed;
+    double next;
+    const fmi3Status status = (fmi3Status)system_me_new_discrete_states(s, &terminate, &changed, &next);
+    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False; /* each instance was iterated through */
+    if (terminateSimulation) *terminateSimulation = terminate ? fmi3True : fmi3False;
+    if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
+    if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = changed ? fmi3True : fmi3False;
+    if (nextEventTimeDefined) *nextEventTimeDefined = next < INFINITY ? fmi3True : fmi3False;
+    if (nextEventTime) *nextEventTime = next < INFINITY ? next : 0.0;
+    return status;
+}
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
+    SYSTEM(instance, "fmi3EnterContinuousTimeMode", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) &&
+                                                    system_mode_is(s, 0));
+    return (fmi3Status)system_me_enter_continuous_time_mode(s);
+}
+
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    SYSTEM(instance, "fmi3CompletedIntegratorStep", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) &&
+                                                    system_mode_is(s, 1) && enterEventMode && terminateSimulation);
+    int event, terminate;
+    const fmi3Status status = (fmi3Status)system_me_completed_integrator_step(s, &event, &terminate);
+    *enterEventMode = event ? fmi3True : fmi3False;
+    *terminateSimulation = terminate ? fmi3True : fmi3False;
+    return status;
+}
+
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
+    SYSTEM(instance, "fmi3SetTime", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s));
+    return (fmi3Status)system_me_set_time(s, time);
+}
+
+fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
+                                   size_t nContinuousStates) {
+    SYSTEM(instance, "fmi3SetContinuousStates", s->phase == PHASE_STEPPING && MODEL_EXCHANGE(s) &&
+                                                system_mode_is(s, 1));
+    return (fmi3Status)system_me_set_states(s, continuousStates, nContinuousStates);
+}
+
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
+                                             size_t nContinuousStates) {
+    SYSTEM(instance, "fmi3GetContinuousStateDerivatives", (s->phase == PHASE_STEPPING ||
+                                                           s->phase == PHASE_TERMINATED) && MODEL_EXCHANGE(s));
+    return (fmi3Status)system_me_get_derivatives(s, derivatives, nContinuousStates);
+}
+
+fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
+    (void)eventIndicators;
+    SYSTEM(instance, "fmi3GetEventIndicators", (s->phase == PHASE_STEPPING || s->phase == PHASE_INITIALIZATION) &&
+                                               MODEL_EXCHANGE(s));
+    if (nEventIndicators != 0) {
+        say(s, fmi2Error, "logStatusError", "fmi3GetEventIndicators: %zu values, and the system has no event "
+            "indicators", nEventIndicators);
+        return fmi3Error;
+    }
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
+    SYSTEM(instance, "fmi3GetContinuousStates", (s->phase == PHASE_STEPPING || s->phase == PHASE_INITIALIZATION ||
+                                                 s->phase == PHASE_TERMINATED) && MODEL_EXCHANGE(s));
+    return (fmi3Status)system_me_get_states(s, continuousStates, nContinuousStates);
+}
+
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
+                                             size_t nContinuousStates) {
+    SYSTEM(instance, "fmi3GetNominalsOfContinuousStates", s->phase != PHASE_FAILED && MODEL_EXCHANGE(s));
+    return (fmi3Status)system_me_get_nominals(s, nominals, nContinuousStates);
+}
+
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
+    SYSTEM(instance, "fmi3GetNumberOfEventIndicators", nEventIndicators != NULL);
+    *nEventIndicators = 0;
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
+    SYSTEM(instance, "fmi3GetNumberOfContinuousStates", nContinuousStates != NULL);
+    *nContinuousStates = (size_t)(s->model_exchange ? s->n_states : 0);
+    return fmi3OK;
+}
+
 /* ---- what this FMU does not offer ---- */
 
-fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
-                                          fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
-                                          fmi3InstanceEnvironment instanceEnvironment,
-                                          fmi3LogMessageCallback logMessage) {
-    (void)instanceName;
-    (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn, (void)instanceEnvironment,
-        (void)logMessage;
-    return NULL;
-}
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
                                                fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
                                                fmi3InstanceEnvironment instanceEnvironment,
@@ -194,9 +305,6 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
     (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn, (void)instanceEnvironment,
         (void)logMessage, (void)clockUpdate, (void)lockPreemption, (void)unlockPreemption;
     return NULL;
-}
-fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    return UNSUPPORTED(instance, "fmi3EnterEventMode");
 }
 fmi3Status fmi3GetFloat32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           fmi3Float32 values[], size_t nValues) {
@@ -403,57 +511,6 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
 }
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
     return UNSUPPORTED(instance, "fmi3EvaluateDiscreteStates");
-}
-fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discreteStatesNeedUpdate,
-                                    fmi3Boolean* terminateSimulation, fmi3Boolean* nominalsOfContinuousStatesChanged,
-                                    fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined,
-                                    fmi3Float64* nextEventTime) {
-    (void)discreteStatesNeedUpdate, (void)terminateSimulation, (void)nominalsOfContinuousStatesChanged,
-        (void)valuesOfContinuousStatesChanged, (void)nextEventTimeDefined, (void)nextEventTime;
-    return UNSUPPORTED(instance, "fmi3UpdateDiscreteStates");
-}
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    return UNSUPPORTED(instance, "fmi3EnterContinuousTimeMode");
-}
-fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-                                       fmi3Boolean* enterEventMode, fmi3Boolean* terminateSimulation) {
-    (void)noSetFMUStatePriorToCurrentPoint, (void)enterEventMode, (void)terminateSimulation;
-    return UNSUPPORTED(instance, "fmi3CompletedIntegratorStep");
-}
-fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
-    (void)time;
-    return UNSUPPORTED(instance, "fmi3SetTime");
-}
-fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
-                                   size_t nContinuousStates) {
-    (void)continuousStates, (void)nContinuousStates;
-    return UNSUPPORTED(instance, "fmi3SetContinuousStates");
-}
-fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
-                                             size_t nContinuousStates) {
-    (void)derivatives, (void)nContinuousStates;
-    return UNSUPPORTED(instance, "fmi3GetContinuousStateDerivatives");
-}
-fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
-    (void)eventIndicators, (void)nEventIndicators;
-    return UNSUPPORTED(instance, "fmi3GetEventIndicators");
-}
-fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
-    (void)continuousStates, (void)nContinuousStates;
-    return UNSUPPORTED(instance, "fmi3GetContinuousStates");
-}
-fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
-                                             size_t nContinuousStates) {
-    (void)nominals, (void)nContinuousStates;
-    return UNSUPPORTED(instance, "fmi3GetNominalsOfContinuousStates");
-}
-fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t* nEventIndicators) {
-    (void)nEventIndicators;
-    return UNSUPPORTED(instance, "fmi3GetNumberOfEventIndicators");
-}
-fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t* nContinuousStates) {
-    (void)nContinuousStates;
-    return UNSUPPORTED(instance, "fmi3GetNumberOfContinuousStates");
 }
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
     return UNSUPPORTED(instance, "fmi3EnterStepMode");

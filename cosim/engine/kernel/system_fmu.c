@@ -92,8 +92,9 @@ static int instantiate_inners(System *s) {
         inner->callbacks.allocateMemory = calloc;
         inner->callbacks.freeMemory = free;
         inner->callbacks.componentEnvironment = inner;
-        inner->component = n->instantiate(inner->name, fmi2CoSimulation, n->guid, n->resources_uri, &inner->callbacks,
-                                          fmi2False, s->logging ? fmi2True : fmi2False);
+        inner->component = n->instantiate(inner->name, s->model_exchange ? fmi2ModelExchange : fmi2CoSimulation, n->guid,
+                                          n->resources_uri, &inner->callbacks, fmi2False,
+                                          s->logging ? fmi2True : fmi2False);
         if (!inner->component) {
             say(s, fmi2Error, "logStatusError", "%s: its FMU did not instantiate", inner->name);
             return 0;
@@ -135,10 +136,12 @@ static char *copy(const char *text) {
 }
 
 System *system_new(const char *api, const char *instance, const char *token, const char *location, int logging,
-                   void (*log)(void *, const char *, int, const char *, const char *), void *environment) {
+                   int model_exchange, void (*log)(void *, const char *, int, const char *, const char *),
+                   void *environment) {
     System *s = calloc(1, sizeof *s);
     if (!s) return NULL;
     s->api = api, s->log = log, s->environment = environment, s->logging = logging;
+    s->model_exchange = model_exchange;
     s->instance_name = copy(instance ? instance : "");
     s->resources = location_folder(location, calloc);
     if (!s->instance_name || !s->resources) {
@@ -165,6 +168,18 @@ System *system_new(const char *api, const char *instance, const char *token, con
         system_free(s);
         return NULL;
     }
+    if (model_exchange && !s->offers_model_exchange) {
+        say(s, fmi2Error, "logStatusError", "%sInstantiate: this FMU is Co-Simulation only (its modelDescription.xml)",
+            api);
+        system_free(s);
+        return NULL;
+    }
+    if (!model_exchange && !s->offers_co_simulation) {
+        say(s, fmi2Error, "logStatusError", "%sInstantiate: this FMU is Model Exchange only (its modelDescription.xml)",
+            api);
+        system_free(s);
+        return NULL;
+    }
     if (!instantiate_inners(s)) {
         system_free(s);
         return NULL;
@@ -179,7 +194,11 @@ int system_allowed(System *s, const char *call, int ok) {
     static const char *phases[] = {"instantiated, not initialized", "in initialization mode", "stepping",
                                    "terminated", "failed"};
     if (!s) return 0;
-    if (!ok) say(s, fmi2Error, "logStatusError", "%s is not allowed now: the FMU is %s", call, phases[s->phase]);
+    if (!ok && s->refusal)
+        say(s, fmi2Error, "logStatusError", "%s is not allowed: %s", call, s->refusal);
+    else if (!ok)
+        say(s, fmi2Error, "logStatusError", "%s is not allowed now: the FMU is %s", call, phases[s->phase]);
+    s->refusal = NULL;
     return ok;
 }
 
@@ -196,8 +215,24 @@ int system_allowed(System *s, const char *call, int ok) {
         }                                                                                          \
     } while (0)
 
+int system_interface_is(System *s, int model_exchange) {
+    if (s->model_exchange != model_exchange)
+        s->refusal = s->model_exchange ? "this instance is Model Exchange, the call Co-Simulation's"
+                                       : "this instance is Co-Simulation, the call Model Exchange's";
+    return s->model_exchange == model_exchange;
+}
+
+int system_mode_is(System *s, int continuous_time) {
+    const int ok = s->phase != PHASE_STEPPING || s->continuous_time_mode == continuous_time;
+    if (!ok)
+        s->refusal = s->continuous_time_mode ? "the instance is in Continuous-Time Mode (EnterEventMode first)"
+                                             : "the instance is in Event Mode (EnterContinuousTimeMode first)";
+    return ok;
+}
+
 int system_setup(System *s, int tolerance_defined, double tolerance, double start, int stop_defined, double stop) {
     s->start = start;
+    s->me_time = start;
     for (int k = 0; k < s->n_instances; k++) {
         Inner *inner = &s->inners[k];
         if (s->fmus[inner->fmu].setup_experiment(inner->component, tolerance_defined ? fmi2True : fmi2False, tolerance,
@@ -212,6 +247,7 @@ int system_setup(System *s, int tolerance_defined, double tolerance, double star
 int system_enter(System *s) {
     EVERY_INNER(s, enter_initialization);
     s->phase = PHASE_INITIALIZATION;
+    s->stale = 1;
     return OK;
 }
 
@@ -231,6 +267,14 @@ static int kernel_failed(System *s) {
 }
 
 int system_exit(System *s) {
+    if (s->model_exchange) { /* the connections carried into the initial values; then Event Mode */
+        if (system_me_carry(s) != OK) return ERROR;
+        EVERY_INNER(s, exit_initialization);
+        s->continuous_time_mode = 0;
+        s->stale = 1;
+        s->phase = PHASE_STEPPING;
+        return OK;
+    }
     EVERY_INNER(s, exit_initialization);
     for (int k = 0; k < s->n_instances; k++) s->kernel.instance_time[k] = s->start;
     s->run = 0;
@@ -241,7 +285,7 @@ int system_exit(System *s) {
     return OK;
 }
 
-double system_time(const System *s) { return s->kernel.instance_time[s->clock]; }
+double system_time(const System *s) { return s->model_exchange ? s->me_time : s->kernel.instance_time[s->clock]; }
 
 /* The plan's next step: its runs in turn, then the regular step. */
 static double plan_step(System *s) {
@@ -306,6 +350,7 @@ int system_reset(System *s) {
             return ERROR;
         }
     s->phase = PHASE_INSTANTIATED;
+    s->continuous_time_mode = 0;
     return OK;
 }
 
@@ -322,6 +367,9 @@ static const Variable *variable(System *s, unsigned vr, char kind, const char *c
 int system_get(System *s, const char *call, char kind, unsigned vr, void *value) {
     const Variable *v = variable(s, vr, kind, call);
     if (!v) return ERROR;
+    if (s->model_exchange && (s->phase == PHASE_INITIALIZATION || s->phase == PHASE_STEPPING) &&
+        system_me_carry(s) != OK) /* an output of the present time, states and inputs */
+        return ERROR;
     const Inner *inner = &s->inners[v->instance];
     const Nested *n = &s->fmus[inner->fmu];
     return kind == 'r' ? n->get_real(inner->component, &v->vr, 1, value)
@@ -333,6 +381,7 @@ int system_get(System *s, const char *call, char kind, unsigned vr, void *value)
 int system_set(System *s, const char *call, char kind, unsigned vr, const void *value) {
     const Variable *v = variable(s, vr, kind, call);
     if (!v) return ERROR;
+    s->stale = 1;
     const Inner *inner = &s->inners[v->instance];
     const Nested *n = &s->fmus[inner->fmu];
     return kind == 'r' ? n->set_real(inner->component, &v->vr, 1, value)

@@ -217,6 +217,16 @@ static int load_nested(System *s, Nested *n, const char *folder, const char *ide
     BIND(s, n, get_state, "fmi2GetFMUstate");
     BIND(s, n, set_state, "fmi2SetFMUstate");
     BIND(s, n, free_state, "fmi2FreeFMUstate");
+    if (!s->offers_model_exchange) return 1;
+    BIND(s, n, set_time, "fmi2SetTime");
+    BIND(s, n, set_states, "fmi2SetContinuousStates");
+    BIND(s, n, get_states, "fmi2GetContinuousStates");
+    BIND(s, n, get_nominals, "fmi2GetNominalsOfContinuousStates");
+    BIND(s, n, get_derivatives, "fmi2GetDerivatives");
+    BIND(s, n, enter_event_mode, "fmi2EnterEventMode");
+    BIND(s, n, new_discrete_states, "fmi2NewDiscreteStates");
+    BIND(s, n, enter_continuous_time_mode, "fmi2EnterContinuousTimeMode");
+    BIND(s, n, completed_integrator_step, "fmi2CompletedIntegratorStep");
     return 1;
 }
 
@@ -291,6 +301,11 @@ static int read_instances(System *s, Reader *r) {
         in->rate_order = (int)integer(r);
         in->interpolating = (int)integer(r);
         in->extrapolating = (int)integer(r);
+        expect(r, "states"); /* its continuous states as Model Exchange */
+        inner->n_states = (int)integer(r);
+        inner->first_state = s->n_states;
+        if (inner->n_states < 0) fail(r);
+        s->n_states += inner->n_states;
         read_values(s, r, inner);
     }
     if (r->failed) return 0;
@@ -391,6 +406,15 @@ static int read_parts(System *s, Reader *r, const char *guid) {
     const char *own = token(r);
     if (r->failed) return READ_FAILED;
     if (guid && strcmp(own, guid) != 0) return READ_FOREIGN;
+    expect(r, "interfaces"); /* what its modelDescription.xml declares: cs, me or both */
+    const long n_interfaces = integer(r);
+    for (long i = 0; !r->failed && i < n_interfaces && i < 2; i++) {
+        const char *offered = token(r);
+        if (strcmp(offered, "cs") == 0) s->offers_co_simulation = 1;
+        else if (strcmp(offered, "me") == 0) s->offers_model_exchange = 1;
+        else fail(r);
+    }
+    if (n_interfaces < 1 || n_interfaces > 2) fail(r);
     expect(r, "start");
     s->start = real(r);
     expect(r, "algorithm");

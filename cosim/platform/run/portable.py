@@ -213,12 +213,13 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
-def export_fmu(scene: Scene, target: Path, fmi: int = 2) -> Exported:
+def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = False) -> Exported:
     """The scene as ONE Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0
     (cosim.engine.system_fmu): its FMUs nested (our FMI 2.0 ones, the models of the FMI 3.0 ones bit
     for bit), coupled inside by our kernel exactly as `cosim run` couples them, its values, drives'
-    design and tables inside; what the export says about it. Raises SceneError for values the FMUs
-    refuse."""
+    design and tables inside; what the export says about it. model_exchange: one Model Exchange FMU
+    instead (the same FMUs' states as its own, the connections carried inside its derivatives).
+    Raises SceneError for values the FMUs refuse."""
     from ...engine import ParameterError
     from ...engine.settings import SettingsError
     from ...engine.system_fmu import system_binaries, write_system_fmu
@@ -227,13 +228,15 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2) -> Exported:
     from .errors import SceneError
     try:
         compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
-        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi)
+        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange)
     except ParameterError as error:
         raise scene_error(scene, error) from None
     except SettingsError as error:  # what the one FMU cannot carry (a step control that chooses its steps)
         key = f"coupling.{error.setting}" if error.setting else "coupling"
         raise SceneError(f"{scene.document.where(key)}: {error}") from None
     plan = compiled.plan
+    if model_exchange:
+        return Exported([path], model_exchange_lines(scene, plan, fmi))
     steps = sorted({h for h in (plan.control.step, plan.control.startup_step if plan.control.startup_time else None)
                     if h})
     lines = [f"note: one FMI {fmi}.0 Co-Simulation FMU ({', '.join(system_binaries(fmi))} binaries) holding the scene's "
@@ -248,6 +251,24 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2) -> Exported:
         lines.append("note: the FMU runs the cueing's reference as it comes: the guard that holds it within the "
                      "platform's envelope in `cosim run` is not inside it")
     return Exported([path], lines)
+
+
+def model_exchange_lines(scene: Scene, plan, fmi: int) -> list[str]:
+    """What the one Model Exchange FMU export says of itself."""
+    from ...engine.system_fmu import ME_TOLERANCE, system_binaries
+    lines = [f"note: one FMI {fmi}.0 Model Exchange FMU ({', '.join(system_binaries(fmi))} binaries) holding the "
+             f"scene's {len(plan.structure.components)} FMUs as one ODE: their continuous states its own, every "
+             "connection carried inside each evaluation of its derivatives (no coupling delay: the importer's solver "
+             "integrates the coupled platform), their time events its own",
+             f"note: its default experiment: relative tolerance {ME_TOLERANCE:g} (docs/guide/system-fmu.md: what "
+             "it holds against the scene's converged co-simulation), outputs every "
+             f"{plan.output_interval or plan.structure.experiment.step:g} s; its variables: the recorded outputs, the "
+             "unconnected inputs and parameters (as the Co-Simulation FMU's), and each component's states and their "
+             "derivatives as 'component.ode.x[k]'"]
+    if scene.vehicle is not None:
+        lines.append("note: the FMU runs the cueing's reference as it comes: the guard that holds it within the "
+                     "platform's envelope in `cosim run` is not inside it")
+    return lines
 
 
 def export_scene(scene: Scene, ssp=None, osp=None, measure: bool = True, fmi2_warnings: bool = False,
