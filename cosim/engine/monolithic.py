@@ -10,6 +10,12 @@ in as many sweeps as its longest chain), then each FMU gives its derivatives. Ti
 next event time, from fmi2NewDiscreteStates) end an integration interval; the solver restarts
 after each. Results are recorded on the output grid (the plan's interval, else the experiment's
 step), each FMU told of the completed step there.
+
+`cosim run SCENE --me` (integrate_plan) integrates the scene as ONE Model Exchange FMU
+(cosim.engine.system_fmu), whose binary carries the connections in C: a system of one FMU, so the
+carrying here is then empty. A system that is Model Exchange FMUs as they are (`cosim run FILE.fmu`
+on one, an SSP of them) is carried here; tests/engine/test_system_fmu_me.py holds the two to the
+same derivatives bit for bit.
 """
 
 from __future__ import annotations
@@ -37,6 +43,7 @@ _libc.calloc.restype = ctypes.c_void_p
 _libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
 _libc.free.argtypes = [ctypes.c_void_p]
 _STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
+_DOUBLES = ctypes.POINTER(ctypes.c_double)
 RELATIVE_TOLERANCE = 1e-8  # CVODE's, the absolute one per state as much of its size (at least 1)
 
 
@@ -61,6 +68,7 @@ class MonolithicSystem:
         self.structure = structure
         self.messages: list[tuple[str, LogMessage]] = []
         self.members: dict[str, _Member] = {}
+        self._reads: dict[tuple, list] = {}  # per record: each FMU's references and their places in it
         self.fmi_seconds = 0.0
         self._callbacks = []
         self.time = structure.experiment.start
@@ -148,6 +156,8 @@ class MonolithicSystem:
 
     def propagate(self, sweeps: int = 10) -> None:
         """Every connection's output to its input, until no input changes."""
+        if not self._connections:  # one FMU (a system FMU carries its own inside)
+            return
         start, last = time.perf_counter(), None
         try:
             for _ in range(sweeps):
@@ -166,10 +176,20 @@ class MonolithicSystem:
         finally:
             self.fmi_seconds += time.perf_counter() - start
 
+    def _refused(self, member: _Member, call: str) -> Stopped:
+        said = "; ".join(m.text for s, m in self.messages if s == member.name and m.status in ("error", "fatal"))
+        return Stopped(f"{member.name}: {call} failed at t = {self.time:.9g} s: {said or 'the FMU gave no reason'}")
+
     def set_time(self, t: float) -> None:
+        """Every FMU's time (straight into its function, as the right-hand side's calls)."""
         self.time = t
-        for member in self.members.values():
-            self._call(member, "fmi2SetTime", member.fmu.setTime, t)
+        start = time.perf_counter()
+        try:
+            for member in self.members.values():
+                if member.fmu.dll.fmi2SetTime(member.fmu.component, t) > 1:
+                    raise self._refused(member, "fmi2SetTime")
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
 
     @staticmethod
     def _pointer(values: np.ndarray):
@@ -184,22 +204,47 @@ class MonolithicSystem:
                 self._call(member, "fmi2SetContinuousStates", member.fmu.setContinuousStates, self._pointer(part), n)
         self.propagate()
 
+    def _each_part(self, call: str, name: str, pointer) -> None:
+        """Every FMU's part of the vector at `pointer` (its states, their derivatives: `name` the
+        fmpy method) passed to or filled by it in place: the solver's right-hand side, called
+        straight into each FMU's function (fmpy's own wrapper costs more than the call)."""
+        start = time.perf_counter()
+        base = None
+        try:
+            for member in self.members.values():
+                n = member.states.stop - member.states.start
+                if not n:
+                    continue
+                part = pointer
+                if member.states.start:  # a later FMU's part: its place in the vector
+                    base = base or ctypes.cast(pointer, ctypes.c_void_p).value
+                    part = ctypes.cast(base + 8 * member.states.start, _DOUBLES)
+                if getattr(member.fmu.dll, call)(member.fmu.component, part, n) > 1:
+                    raise self._refused(member, call)
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
+
     def _gathered(self, call: str, name: str) -> np.ndarray:
-        """Every FMU's states (or their derivatives: `name` the fmpy method) end to end."""
-        out = np.zeros(self.size)
-        for member in self.members.values():
-            n = member.states.stop - member.states.start
-            if n:
-                part = np.empty(n)
-                self._call(member, call, getattr(member.fmu, name), self._pointer(part), n)
-                out[member.states] = part
-        return out
+        out = np.zeros(max(self.size, 1))
+        self._each_part(call, name, self._pointer(out))
+        return out[:self.size]
 
     def states(self) -> np.ndarray:
         return self._gathered("fmi2GetContinuousStates", "getContinuousStates")
 
     def derivatives(self) -> np.ndarray:
         return self._gathered("fmi2GetDerivatives", "getDerivatives")
+
+    def set_states_at(self, pointer) -> None:
+        """set_states from the solver's vector in place."""
+        self._each_part("fmi2SetContinuousStates", "setContinuousStates", pointer)
+        self.propagate()
+
+    def states_into(self, pointer) -> None:
+        self._each_part("fmi2GetContinuousStates", "getContinuousStates", pointer)
+
+    def derivatives_into(self, pointer) -> None:
+        self._each_part("fmi2GetDerivatives", "getDerivatives", pointer)
 
     def event(self, enter: bool = True) -> float:
         """Every FMU through Event Mode (entered unless it is there: after initialization); the
@@ -222,15 +267,35 @@ class MonolithicSystem:
         return following
 
     def completed_step(self) -> None:
-        for member in self.members.values():
-            _, terminate = self._call(member, "fmi2CompletedIntegratorStep", member.fmu.completedIntegratorStep)
-            if terminate:
-                raise Stopped(f"{member.name}: asked to terminate at t = {self.time:.9g} s")
+        start = time.perf_counter()
+        event, terminate = ctypes.c_int(0), ctypes.c_int(0)
+        try:
+            for member in self.members.values():
+                if member.fmu.dll.fmi2CompletedIntegratorStep(member.fmu.component, 1, ctypes.byref(event),
+                                                              ctypes.byref(terminate)) > 1:
+                    raise self._refused(member, "fmi2CompletedIntegratorStep")
+                if terminate.value:
+                    raise Stopped(f"{member.name}: asked to terminate at t = {self.time:.9g} s")
+        finally:
+            self.fmi_seconds += time.perf_counter() - start
 
     def outputs(self, record: Sequence[tuple[str, str]]) -> list[float]:
+        """The recorded values, one fmi2GetReal per FMU."""
         start = time.perf_counter()
+        key = tuple(record)
+        if key not in self._reads:
+            places: dict[str, tuple[list[int], list[int]]] = {}
+            for k, (c, v) in enumerate(record):
+                references, positions = places.setdefault(c, ([], []))
+                references.append(self.members[c].references[v])
+                positions.append(k)
+            self._reads[key] = [(self.members[c], r, p) for c, (r, p) in places.items()]
+        values = [0.0] * len(record)
         try:
-            return [self.members[c].fmu.getReal([self.members[c].references[v]])[0] for c, v in record]
+            for member, references, positions in self._reads[key]:
+                for position, value in zip(positions, member.fmu.getReal(references)):
+                    values[position] = value
+            return values
         finally:
             self.fmi_seconds += time.perf_counter() - start
 
@@ -242,6 +307,39 @@ class MonolithicSystem:
                 pass
             member.fmu.freeInstance()
         self.members = {}
+
+
+SYSTEM = "system"  # the one Model Exchange FMU's component in integrate_plan
+
+
+def integrate_plan(plan, progress: Sequence = ()) -> Outcome:
+    """A co-simulation plan's system (`cosim run --me`) as ONE Model Exchange FMU
+    (cosim.engine.system_fmu: the connections carried inside its derivatives, in C) integrated by
+    CVODE as `integrate` integrates any system: the right-hand side one call into the FMU. Its
+    results are named as the plan's; each message is its component's again. A system of Model
+    Exchange FMUs only (a lone one: `cosim run FILE.fmu`) is integrated as it is."""
+    import tempfile
+    from dataclasses import replace
+    from .structure import Component
+    from .system_fmu import write_system_fmu
+    from .fmi import loaded
+    progress = list(progress)
+    if all(loaded(c.fmu)[0].coSimulation is None for c in plan.structure.components):  # Model Exchange FMUs as
+        return integrate(plan.structure, plan.stop_time, plan.record, plan.names,  # they are (a lone one's run)
+                         plan.output_interval, progress=progress)
+    names = list(plan.names) if plan.names is not None else [f"{c}.{v}" for c, v in plan.record]
+    with tempfile.TemporaryDirectory(prefix="cosim-me-") as folder:
+        fmu = write_system_fmu(replace(plan, model_exchange=False), Path(folder) / "system.fmu",
+                               model_exchange=True)
+        one = replace(plan.structure, components=[Component(SYSTEM, fmu)], connections=[])
+        outcome = integrate(one, plan.stop_time, [(SYSTEM, n) for n in names], names, plan.output_interval,
+                            progress=progress)
+    components = {c.name for c in plan.structure.components}
+    messages = []
+    for _, message in outcome.messages:  # "mechanics: t = ... leg 4 ..." is mechanics' own
+        whose, _, text = message.text.partition(": ")
+        messages.append((whose, replace(message, text=text)) if whose in components else (plan.structure.name, message))
+    return replace(outcome, messages=messages)
 
 
 def model_exchange_structure(structure: SystemStructure) -> SystemStructure:
@@ -288,13 +386,13 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
         holder = np.ascontiguousarray(x) if system.size else np.zeros(1)
 
         def get_x(pointer, n):
-            np.ctypeslib.as_array(pointer, (n,))[:] = system.states()
+            system.states_into(pointer)
 
         def set_x(pointer, n):
-            system.set_states(np.ctypeslib.as_array(pointer, (n,)).copy())
+            system.set_states_at(pointer)
 
         def get_dx(pointer, n):
-            np.ctypeslib.as_array(pointer, (n,))[:] = system.derivatives()
+            system.derivatives_into(pointer)
 
         def nominals(pointer, n):
             np.ctypeslib.as_array(pointer, (n,))[:] = np.maximum(np.abs(holder), 1.0)
@@ -315,8 +413,8 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
                 _, _, t = solver.step(t, goal)
             except RuntimeError as error:
                 raise Stopped(f"the solver failed at t = {system.time:.9g} s: {error}") from None
-            system.set_time(t)
-            system.set_states(system.states())
+            system.set_time(t)  # the solver's states at t are set (CVodeSolver.step)
+            system.propagate()
             system.completed_step()
             if t >= next_event - 1e-12 * max(1.0, abs(t)):
                 next_event = system.event()

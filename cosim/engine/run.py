@@ -49,7 +49,7 @@ class Plan:
     clock: str | None = None
     divergence: float | None = 0.05
     real_time: RealTime | None = None
-    model_exchange: bool = False  # the structure's FMUs as Model Exchange under one solver (cosim.engine.monolithic)
+    model_exchange: bool = False  # the structure as one Model Exchange FMU under one solver (monolithic.integrate_plan)
 
 
 def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progress: bool = False,
@@ -68,9 +68,8 @@ def run(plan: Plan, out: Path | None = None, stem: str | None = None, *, progres
     with folder_lock(out) if out is not None else nullcontext(), deferred():  # one run's files at a time in a
         #                                                                         folder; Ctrl-C never lost in an FMU
         if plan.model_exchange:
-            from .monolithic import integrate
-            outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval,
-                                progress=[o for o in observers if isinstance(o, Progress)])
+            from .monolithic import integrate_plan
+            outcome = integrate_plan(plan, progress=[o for o in observers if isinstance(o, Progress)])
         else:
             outcome = execute(plan.structure, plan.algorithm, plan.control, plan.stop_time, plan.record, plan.names,
                               clock=plan.clock, observers=observers, advice=advice, real_time=plan.real_time)
@@ -197,10 +196,12 @@ def system_plan(structure: SystemStructure, overrides: Mapping[str, str] | None 
                 stop_time: float | None = None) -> Plan:
     """The plan of any system by its settings (the overrides over them, names as in
     cosim.engine.settings), until its DefaultExperiment's stop unless `stop_time` says."""
+    from .fmi import loaded
     algorithm, control = system_settings(structure.settings, structure.experiment.step, overrides)
     record, names = recording(structure)
+    model_exchange = all(loaded(c.fmu)[0].coSimulation is None for c in structure.components)  # ME FMUs only
     return Plan(structure, algorithm, control, structure.experiment.stop if stop_time is None else stop_time, record,
-                names, output_interval(structure.settings))
+                names, output_interval(structure.settings), model_exchange=model_exchange)
 
 
 def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None = None,
@@ -221,6 +222,9 @@ def run_system(structure: SystemStructure, overrides: Mapping[str, str] | None =
     where = source or structure.name
     try:
         plan = system_plan(structure, overrides, stop_time)
+        if real_time is not None and plan.model_exchange:
+            raise SspError(f"{where}: its FMUs are Model Exchange, integrated by one solver as fast as it goes: "
+                           "not paced or streamed")
         if real_time is not None:
             plan = replace(plan, real_time=real_time)
 

@@ -1,9 +1,10 @@
 """One FMU as a system (`cosim run FILE.fmu`, `cosim.simulate("x.fmu")`): a Co-Simulation FMU (FMI
 2.0 or 3.0) run alone by the same engine as any SSP system, its parameters and inputs at their start
 values, every Real output recorded under its own name; its DefaultExperiment gives the start, the stop
-and the step (a run's settings, `--set step=...`, and `--duration` over them). What cannot be run
-(no such file, not an FMU, no Co-Simulation interface, no output) is one line, an SspError naming
-the file."""
+and the step (a run's settings, `--set step=...`, and `--duration` over them). A Model Exchange FMU
+(FMI 2.0; such as `cosim export SCENE --fmu FILE --me`) is integrated by CVODE instead
+(cosim.engine.monolithic), its outputs on the same grid. What cannot be run (no such file, not an
+FMU, neither interface, no output) is one line, an SspError naming the file."""
 
 from __future__ import annotations
 
@@ -31,16 +32,15 @@ def fmu_system(path: str | Path) -> SystemStructure:
     except Exception as error:  # fmpy's reasons: no modelDescription.xml, invalid XML, ...
         raise SspError(f"{path}: not an FMU that can be read: {str(error).splitlines()[0] if str(error) else error!r}") \
             from None
-    if description.coSimulation is None:
-        raise SspError(f"{path}: the FMU has no Co-Simulation interface (Model Exchange only): a system runs "
-                       "Co-Simulation FMUs (a scene's Model Exchange run: cosim run SCENE --me)")
+    if description.coSimulation is None and description.modelExchange is None:
+        raise SspError(f"{path}: the FMU declares neither Co-Simulation nor Model Exchange")
     outputs = [v.name for v in description.modelVariables if v.causality == "output" and v.type == "Real"]
     if not outputs:
         raise SspError(f"{path}: the FMU has no Real output to record")
     unrecordable = [n for n in outputs if any(c.isspace() or c == "=" for c in n)]
     if unrecordable:
         raise SspError(f"{path}: output '{unrecordable[0]}' has a name this run cannot record (white space or '=')")
-    name = description.coSimulation.modelIdentifier
+    name = (description.coSimulation or description.modelExchange).modelIdentifier
     experiment = description.defaultExperiment
     start = _number(experiment.startTime if experiment else None, 0.0)
     stop = _number(experiment.stopTime if experiment else None, start + 1.0)

@@ -61,7 +61,6 @@ def _zip(path, members: dict[str, str]):
     (lambda tmp: _zip(tmp / "empty.fmu", {"readme.txt": "x"}), "not an FMU that can be read"),
     (lambda tmp: _zip(tmp / "broken.fmu", {"modelDescription.xml": "<fmiModelDescription"}),
      "not an FMU that can be read"),
-    (lambda tmp: fmu_path("mechanics", model_exchange=True), "no Co-Simulation interface"),
 ])
 def test_what_is_not_a_runnable_fmu_is_one_line(tmp_path, capsys, make, message):
     path = make(tmp_path)

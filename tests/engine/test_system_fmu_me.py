@@ -103,15 +103,15 @@ def test_its_derivatives_are_the_monolithic_systems_bit_for_bit(exported, tmp_pa
     """The connections are carried inside every evaluation: at the start, and at states of our own
     (the start's, each scaled by 1 +- 1 %) at two times, its derivatives are those of the same FMUs
     with Python carrying the connections (cosim.engine.monolithic), to the last bit."""
-    from cosim.engine.monolithic import MonolithicSystem
-    from cosim.platform.run.compile import compile_scene, model_exchange_plan
+    from cosim.engine.monolithic import MonolithicSystem, model_exchange_structure
+    from cosim.platform.run.compile import compile_scene
     scene, fmus, _ = exported
     description = read_model_description(str(fmus[2]))
     n = description.numberOfContinuousStates
     ours = FMU2Model(guid=description.guid, unzipDirectory=extract(str(fmus[2]), str(tmp_path / "unpacked")),
                      modelIdentifier=description.modelExchange.modelIdentifier, instanceName="platform")
     ours.instantiate()
-    theirs = MonolithicSystem(model_exchange_plan(compile_scene(scene))[0].structure)
+    theirs = MonolithicSystem(model_exchange_structure(compile_scene(scene).plan.structure))
     try:
         assert n == theirs.size > 60  # the mechanics' and six drives' states
         ours.setupExperiment(startTime=0.0)
@@ -201,6 +201,22 @@ def test_calls_in_the_wrong_interface_or_mode_are_refused_with_the_reason(export
         assert np.all(np.isfinite(x)) and np.ptp(x) > 0
     finally:
         fmu.freeInstance()
+
+
+def test_cosim_run_integrates_it_as_it_runs_the_scene_as_model_exchange(exported, tmp_path):
+    """`cosim run FILE.fmu` on the exported FMU and `cosim run SCENE --me` (which integrates the same
+    FMU, written for the run) give the same results bit for bit."""
+    import pyarrow.csv
+    scene, fmus, _ = exported
+    for args, folder in (([str(fmus[2])], "fmu"), ([str(SCENE), "--me"], "scene")):
+        done = subprocess.run([sys.executable, "-m", "cosim", "run", *args, "--duration", "0.3", "--no-plots",
+                               "--out", str(tmp_path / folder)], capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stdout + done.stderr
+    lone = pyarrow.csv.read_csv(tmp_path / "fmu" / "meng2.csv")
+    whole = pyarrow.csv.read_csv(tmp_path / "scene" / "meng_eq35.csv")
+    assert lone.num_rows == whole.num_rows == 301
+    for name in ("time", "pose.z", "torque[1]", "current.q[6]"):
+        assert np.array_equal(lone[name].to_numpy(), whole[name].to_numpy()), name
 
 
 def test_the_model_exchange_export_refuses_what_it_cannot_write_in_one_line(tmp_path):

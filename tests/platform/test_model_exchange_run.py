@@ -98,12 +98,11 @@ def test_a_model_exchange_run_shows_how_far_it_got(tmp_path):
     import io
     from dataclasses import replace
     from cosim.engine.observers import Progress
-    from cosim.engine.monolithic import integrate
+    from cosim.engine.monolithic import integrate_plan
     from cosim.platform.run.compile import compile_scene, model_exchange_plan
     plan, _ = model_exchange_plan(compile_scene(load_scene("meng_eq35").changed({"scene.duration": 0.25})))
     stream = io.StringIO()
-    outcome = integrate(plan.structure, plan.stop_time, plan.record, plan.names, plan.output_interval,
-                        progress=[Progress("meng_eq35", every=0.0, stream=stream)])
+    outcome = integrate_plan(plan, progress=[Progress("meng_eq35", every=0.0, stream=stream)])
     lines = stream.getvalue().splitlines()
     assert outcome.failure is None and len(lines) >= 2
     fractions = [float(line.split(": ")[1].split(" %")[0]) for line in lines]

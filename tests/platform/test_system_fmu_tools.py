@@ -231,3 +231,114 @@ def test_under_wine_each_versions_windows_binary_gives_the_linux_outputs(fmi, tm
     assert np.all(np.abs(windows - linux) <= 1e-12 * scale)
     assert np.ptp(linux[:, 1:], axis=0).max() > 1.0  # the torques move
 
+
+
+# -- the scene as ONE Model Exchange FMU (`cosim export SCENE --fmu FILE --me`, issue 61) ----------
+
+class ExportedMe:
+    """A shipped scene's probe as one Model Exchange FMU, its converged co-simulation and the
+    tolerance its default experiment gives the importer's solver."""
+
+    def __init__(self, scene, fmu: Path, fmi: int):
+        from fmpy import read_model_description
+        self.scene, self.fmu, self.fmi = scene, fmu, fmi
+        self.reference = converged(scene, scene.duration)
+        self.names = [n for n in self.reference.dtype.names if n != "time"]
+        self.tolerance = float(read_model_description(str(fmu)).defaultExperiment.tolerance)
+
+
+@pytest.fixture(scope="module")
+def exported_me(request, tmp_path_factory) -> ExportedMe:
+    name, fmi = request.param
+    scene = cosim.load(name)
+    scene = scene.changed({"scene.duration": probe_duration(scene)})
+    fmu = tmp_path_factory.mktemp(f"{name}_me") / f"{name}.fmu"
+    export_fmu(scene, fmu, fmi=fmi, model_exchange=True)
+    return ExportedMe(scene, fmu, fmi)
+
+
+def each_me(cases):
+    return pytest.mark.parametrize("exported_me", cases, indirect=True, ids=[f"{n}-fmi{f}-me" for n, f in cases])
+
+
+def fmusim_table(out: Path, step: float) -> np.ndarray:
+    return on_the_grid(np.genfromtxt(out, delimiter=",", names=True, deletechars=""), step)
+
+
+def on_the_grid(table: np.ndarray, step: float) -> np.ndarray:
+    """A Model Exchange run's rows at the output points (fmusim and fmpy write a row before and after
+    each time event too): one row per point, the last written there."""
+    ticks = np.round(table["time"] / step)
+    on = np.abs(table["time"] - ticks * step) <= 1e-9
+    return table[on & np.r_[ticks[1:] != ticks[:-1], True]]
+
+
+def within(exported: ExportedMe, rows: np.ndarray) -> None:
+    assert len(rows) == round(exported.scene.duration / exported.scene.step) + 1
+    verdict = judge(exported.scene, rows, exported.reference)
+    assert verdict.within, verdict
+
+
+def fmusim_me(binary: list[str], fmu: str, exported: ExportedMe, out: str, env=None) -> None:
+    done = subprocess.run([*binary, "--interface-type", "me", "--solver", "cvode", "--tolerance",
+                           repr(exported.tolerance), "--stop-time", repr(exported.scene.duration), "--output-interval",
+                           repr(exported.scene.step), "--output-file", out, fmu],
+                          capture_output=True, text=True, timeout=900, env=env)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+
+
+@each_me(EVERY)
+def test_fmusims_cvode_integrates_it_within_the_scenes_tolerances(exported_me, tmp_path):
+    from peers import fmusim
+    fmusim_me([str(fmusim())], str(exported_me.fmu), exported_me, str(tmp_path / "out.csv"))
+    within(exported_me, fmusim_table(tmp_path / "out.csv", exported_me.scene.step))
+
+
+@each_me(EVERY)
+def test_fmpys_cvode_integrates_it_within_the_scenes_tolerances(exported_me):
+    result = simulate_fmu(str(exported_me.fmu), fmi_type="ModelExchange", solver="CVode",
+                          relative_tolerance=exported_me.tolerance, stop_time=exported_me.scene.duration,
+                          output_interval=exported_me.scene.step, output=exported_me.names)
+    within(exported_me, on_the_grid(result, exported_me.scene.step))
+
+
+@each_me(FMI2)
+def test_omsimulators_cvode_integrates_it_within_the_scenes_tolerances(exported_me, tmp_path):
+    """The FMU alone on OMSimulator's command line (its CVODE, steps up to the output interval).
+    OMSimulator b3cd458 imports FMI 3.0 Co-Simulation only ("Unsupported FMI version: 3" for Model
+    Exchange): the FMI 2.0 export."""
+    from peers import omsimulator
+    done = subprocess.run([str(omsimulator()), "--mode=me", "--solver=cvode", f"--tolerance={exported_me.tolerance!r}",
+                           f"--stopTime={exported_me.scene.duration!r}", f"--stepSize={exported_me.scene.step!r}",
+                           "--resultFile=out.csv", str(exported_me.fmu)],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=900)
+    log = done.stdout + done.stderr
+    assert done.returncode == 0 and "error:" not in log, log[-3000:]
+    out = tmp_path / "out.csv"
+    header = [name.strip().strip('"') for name in out.open().readline().split(",")]
+    wanted = ("time", *exported_me.names)
+    data = np.loadtxt(out, delimiter=",", skiprows=1, usecols=[header.index(name) for name in wanted], ndmin=2)
+    rows = np.zeros(len(data), dtype=[(name, float) for name in wanted])
+    for k, name in enumerate(wanted):
+        rows[name] = data[:, k]
+    within(exported_me, on_the_grid(rows, exported_me.scene.step))
+
+
+@each_me(EVERY)
+def test_under_wine_fmusim_exe_integrates_its_windows_binary_as_on_linux(exported_me, tmp_path, wine_env):
+    """Reference-FMUs' fmusim.exe under Wine on the FMU's win64 binary (nesting the models' DLLs):
+    within the scene's tolerances, and the outputs of Linux's fmusim to 1e-4 of each one's range (the
+    same solver and FMU; glibc's and MinGW's libm differ in the last bit, and CVODE's step choices
+    grow that to a few times its relative tolerance, 1e-6: 1.2e-5 of the torques' range measured)."""
+    from peers import fmusim
+    if WINE is None:
+        pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
+    windows = Path(str(fmusim()) + ".exe")
+    fmusim_me([WINE, str(windows)], f"Z:{exported_me.fmu}", exported_me, f"Z:{tmp_path / 'windows.csv'}", wine_env)
+    fmusim_me([str(fmusim())], str(exported_me.fmu), exported_me, str(tmp_path / "linux.csv"))
+    step = exported_me.scene.step
+    on_windows, on_linux = fmusim_table(tmp_path / "windows.csv", step), fmusim_table(tmp_path / "linux.csv", step)
+    within(exported_me, on_windows)
+    for name in exported_me.names:
+        scale = max(float(np.ptp(on_linux[name])), 1e-300)
+        assert np.max(np.abs(on_windows[name] - on_linux[name])) <= 1e-4 * scale, name

@@ -225,7 +225,7 @@ def model_exchange_plan(compiled: CompiledScene) -> tuple[Plan, str]:
     --me`): no coupling, the reference a co-simulation is judged against; a component without a
     Model Exchange FMU (a user's drive) is one line (UsageError)."""
     from ...engine.monolithic import RELATIVE_TOLERANCE, model_exchange_structure
-    structure = model_exchange_structure(compiled.plan.structure)
-    return (replace(compiled.plan, structure=structure, model_exchange=True),
-            f"run as one system of Model Exchange FMUs under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): "
-            "no coupling, no macro step")
+    model_exchange_structure(compiled.plan.structure)  # every component has a Model Exchange FMU, or one line
+    return (replace(compiled.plan, model_exchange=True),
+            "run as one Model Exchange FMU of the scene's FMUs (the connections carried inside its derivatives) "
+            f"under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): no coupling, no macro step")
