@@ -145,6 +145,11 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     model_time_event(fmu);
     const double next = model_next_time_event(fmu);
     if (isfinite(next)) info->nextEventTimeDefined = fmi2True, info->nextEventTime = next;
+    /* A time event changes the right-hand side (a pulse's edge, a table's corner, the MPC's new plan):
+     * the importer's solver is told to take the states afresh and restart there, as the standard
+     * has it after a change of states (Reference-FMUs' fmusim, for one, lets CVODE step on past an
+     * event otherwise, on a solution of the right-hand side before it). */
+    info->valuesOfContinuousStatesChanged = fmi2True;
 #endif
     fmu->outputs_stale = 1; /* what the event changed (a pulse's edge, a new solve) shows in the outputs */
     return fmi2OK;

@@ -240,3 +240,17 @@ void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, dou
     out[3] = (12 * y0 + 6 * m0 - 12 * y1 + 6 * m1) / (h * h * h);
 }
 
+
+/* The first row's time after t (INFINITY: none). */
+double fmu_table_next_row(const FmuTable *table, double t) {
+    const int n = table->rows;
+    if (n == 0 || t >= table->time[n - 1]) return INFINITY;
+    if (t < table->time[0]) return table->time[0];
+    int lo = 0, hi = n - 1; /* time[lo] <= t < time[hi] */
+    while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (table->time[mid] <= t) lo = mid;
+        else hi = mid;
+    }
+    return table->time[hi];
+}

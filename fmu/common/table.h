@@ -27,4 +27,8 @@ void fmu_table_free(FmuInstance *fmu, FmuTable *table);
  * with the slopes above); the end values held before the first and after the last row. */
 void fmu_table_at(const FmuTable *table, int c, int interpolation, double t, double out[4]);
 
+/* The time of the first row after t (INFINITY: none): where a linear interpolation has a corner, a
+ * time event for a Model Exchange solver. */
+double fmu_table_next_row(const FmuTable *table, double t);
+
 #endif

@@ -488,8 +488,13 @@ void model_time_event(FmuInstance *fmu) {
     if (mpc_of(fmu)) mpc_time_event(fmu, mpc_of(fmu));
 }
 
-/* The MPC's next solve, a period after the last; at a time too large for the period to show in it
- * (a start near the largest double), the next time there is: an event time is always after now. */
+/* The MPC's next solve, a period after the last, or the vehicle table's next row (a corner of its
+ * linear interpolation, which a Model Exchange solver would otherwise step over), whichever comes
+ * first; at a time too large for the period to show in it (a start near the largest double), the
+ * next time there is: an event time is always after now. */
 double model_next_time_event(FmuInstance *fmu) {
-    return mpc_of(fmu) ? fmax(mpc_next_solve(fmu), nextafter(fmu->s.time, INFINITY)) : INFINITY;
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    double next = mpc_of(fmu) ? mpc_next_solve(fmu) : INFINITY;
+    if (data && data->vehicle) next = fmin(next, fmu_table_next_row(data->vehicle, fmu->s.time));
+    return isfinite(next) ? fmax(next, nextafter(fmu->s.time, INFINITY)) : INFINITY;
 }
