@@ -309,11 +309,14 @@ def test_the_washout_is_what_its_exact_steps_converge_to():
 def test_the_mpc_is_what_its_co_simulation_gives():
     """The MPC cueing through the car drive's braking (5 s, 250 solves): its solves time events of
     the Model Exchange FMU, its motion and perception integrated by CVODE between them, give the
-    Co-Simulation's exact steps at 1 ms to 1e-6 of each output's range."""
-    outputs = POSE_REF + POSE_REF_RATE + [f"mpc.perceived_error.specific_force.{a}" for a in "xyz"]
+    Co-Simulation's exact steps at 1 ms to 1e-6 of each output's range; the perceived angular-rate
+    errors to 1e-4 of theirs (measured 1.9-4.3e-5, the same at a 0.25 ms step: a difference between
+    the two that is not the step's, not yet explained)."""
+    rates = [f"mpc.perceived_error.angular_rate.{a}" for a in "xyz"]
+    outputs = POSE_REF + POSE_REF_RATE + [f"mpc.perceived_error.specific_force.{a}" for a in "xyz"] + rates
     me, (cs,), scale = cueing_runs(2, 5.0, (1e-3,), outputs)
     for o in outputs:
-        assert np.abs(me[o] - cs[o]).max() < 1e-6 * scale[o], o
+        assert np.abs(me[o] - cs[o]).max() < (1e-4 if o in rates else 1e-6) * scale[o], o
 
 
 @pytest.mark.parametrize("algorithm", (1, 2))
