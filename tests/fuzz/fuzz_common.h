@@ -104,6 +104,16 @@ static void after(int status, int success_state) {
     else possible |= S_ERROR;
 }
 
+/* Where setting these references may succeed: Model Exchange's Continuous-Time Mode takes
+ * continuous inputs only (its other variables in Event Mode). */
+static int settable_states(const unsigned *vrs, size_t nvr) {
+    for (size_t i = 0; vrs && i < nvr; i++)
+        if (vrs[i] >= 1 && vrs[i] < VR_COUNT &&
+            !(fmu_variables[vrs[i]].causality == FMU_INPUT && fmu_variables[vrs[i]].variability == FMU_CONTINUOUS))
+            return S_SET & ~S_CONTINUOUS;
+    return S_SET;
+}
+
 static void on_alarm(int signum) {
     (void)signum;
     char text[160];

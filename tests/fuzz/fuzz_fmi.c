@@ -95,16 +95,6 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     if (verbose) fprintf(stderr, "    log: %s\n", message);
 }
 
-/* Where setting these references may succeed: Model Exchange's Continuous-Time Mode takes
- * continuous inputs only (its other variables in Event Mode). */
-static int settable_states(const fmi2ValueReference *vrs, size_t nvr) {
-    for (size_t i = 0; i < nvr; i++)
-        if (vrs[i] >= 1 && vrs[i] < VR_COUNT &&
-            !(fmu_variables[vrs[i]].causality == FMU_INPUT && fmu_variables[vrs[i]].variability == FMU_CONTINUOUS))
-            return S_SET & ~S_CONTINUOUS;
-    return S_SET;
-}
-
 /* ---- one sequence ---- */
 static void run_sequence(int max_calls) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};

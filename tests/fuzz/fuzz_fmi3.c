@@ -4,7 +4,11 @@
  * value counts that do not match), of the types they have none of, fmi3DoStep's out-pointers, output
  * derivatives, FMU state with altered serialized bytes, and the event, clock and Model Exchange
  * functions a Co-Simulation FMU without event mode refuses. The oracle is FMI 3.0's Co-Simulation
- * state machine without event mode: instantiated, initialization mode, step mode, terminated. */
+ * state machine without event mode: instantiated, initialization mode, step mode, terminated. A
+ * model with Model Exchange (MODEL_MODEL_EXCHANGE) is instantiated as that in half the sequences,
+ * which then make Model Exchange's calls (times, states of every size, Event and Continuous-Time
+ * Mode, discrete-state updates) in place of steps, by FMI 3.0's Model Exchange state machine; each
+ * interface's own calls on the other's instance are never allowed. */
 #include "fuzz_common.h"
 
 #include "fmi3Functions.h"
@@ -16,10 +20,99 @@ static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3Stri
 
 #define S_STEP S_STEP_COMPLETE
 
+static int model_exchange; /* this sequence's instance is Model Exchange */
+static int for_cs(int states) { return model_exchange ? 0 : states; }
+static int for_me(int states) { return model_exchange ? states : 0; }
+
+/* One of Model Exchange's calls (on a Co-Simulation instance: each is refused), by FMI 3.0's Model
+ * Exchange state machine; *time: the instance's time as the calls so far set it (NAN: unknown). */
+static void model_exchange_call(fmi3Instance c, double *time) {
+    enum { N = MODEL_N_STATES > 0 ? MODEL_N_STATES : 1 };
+    double x[N], dx[N];
+    const size_t n = pick(10) ? (size_t)MODEL_N_STATES : (size_t)pick(N + 2); /* the wrong size now and then */
+    const size_t fits = n <= (size_t)N ? n : (size_t)N;
+    fmi3Status status;
+    switch (pick(12)) {
+    case 0: {
+        const double t = (isnan(*time) ? 0.0 : *time) + (pick(8) ? 1e-3 * uniform() : hostile_real());
+        status = fmi3SetTime(c, t);
+        judge("fmi3SetTime", status, for_me(S_EVENT | S_CONTINUOUS));
+        if (status == fmi3OK) *time = t;
+        after(status, 0);
+        break;
+    }
+    case 1:
+        for (int k = 0; k < N; k++) x[k] = 0.0;
+        fmi3GetContinuousStates(c, x, MODEL_N_STATES);
+        for (int k = 0; k < N; k++) x[k] = pick(4) ? x[k] * (1.0 + 1e-3 * (uniform() - 0.5)) : hostile_real();
+        status = fmi3SetContinuousStates(c, n <= (size_t)N ? x : NULL, n);
+        judge("fmi3SetContinuousStates", status, for_me(S_CONTINUOUS));
+        after(status, 0);
+        break;
+    case 2:
+        status = fmi3GetContinuousStates(c, pick(20) ? x : NULL, fits);
+        judge("fmi3GetContinuousStates", status, for_me(S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR | S_INIT));
+        break;
+    case 3:
+        status = fmi3GetContinuousStateDerivatives(c, pick(20) ? dx : NULL, fits);
+        judge("fmi3GetContinuousStateDerivatives", status, for_me(S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR));
+        if (status == fmi3OK)
+            for (size_t k = 0; k < fits; k++)
+                if (!isfinite(dx[k]))
+                    violation("fmi3GetContinuousStateDerivatives", "a derivative returned with fmi3OK is not finite");
+        break;
+    case 4:
+        status = pick(2) ? fmi3GetEventIndicators(c, dx, (size_t)pick(2))
+                         : fmi3GetNominalsOfContinuousStates(c, dx, fits);
+        judge("fmi3GetEventIndicators/NominalsOfContinuousStates", status,
+              for_me(S_INSTANTIATED | S_INIT | S_EVENT | S_CONTINUOUS | S_TERMINATED | S_ERROR));
+        break;
+    case 5: {
+        size_t count = 12345;
+        const int states = pick(2);
+        status = states ? fmi3GetNumberOfContinuousStates(c, pick(20) ? &count : NULL)
+                        : fmi3GetNumberOfEventIndicators(c, pick(20) ? &count : NULL);
+        judge("fmi3GetNumberOfContinuousStates/EventIndicators", status, for_me(S_ANY));
+        if (status == fmi3OK && count != (states ? (size_t)MODEL_N_STATES : 0))
+            violation("fmi3GetNumberOfContinuousStates/EventIndicators", "a count that is not the model's");
+        break;
+    }
+    case 6:
+        status = fmi3EnterEventMode(c);
+        judge("fmi3EnterEventMode", status, for_me(S_EVENT | S_CONTINUOUS));
+        after(status, S_EVENT);
+        break;
+    case 7: case 8: {
+        fmi3Boolean update, terminate, nominals, values, defined;
+        fmi3Float64 next = NAN;
+        status = fmi3UpdateDiscreteStates(c, &update, &terminate, &nominals, &values, &defined, &next);
+        judge("fmi3UpdateDiscreteStates", status, for_me(S_EVENT));
+        if (status == fmi3OK && defined && !isnan(*time) && !(next > *time))
+            violation("fmi3UpdateDiscreteStates", "the next time event is not after the time now");
+        after(status, 0);
+        break;
+    }
+    case 9:
+        status = fmi3EnterContinuousTimeMode(c);
+        judge("fmi3EnterContinuousTimeMode", status, for_me(S_EVENT));
+        after(status, S_CONTINUOUS);
+        break;
+    default: {
+        fmi3Boolean enter, terminate;
+        status = fmi3CompletedIntegratorStep(c, fmi3True, pick(20) ? &enter : NULL, &terminate);
+        judge("fmi3CompletedIntegratorStep", status, for_me(S_CONTINUOUS));
+        after(status, 0);
+    }
+    }
+}
+
 static void run_sequence(int max_calls) {
-    fmi3Instance c = fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, "", fmi3False, pick(2) != 0, fmi3False,
-                                                 pick(2) != 0, NULL, 0, NULL, log_message, NULL);
-    if (!c) { violation("fmi3InstantiateCoSimulation", "returned NULL for a valid token"); return; }
+    model_exchange = MODEL_MODEL_EXCHANGE && pick(2);
+    fmi3Instance c = model_exchange
+        ? fmi3InstantiateModelExchange("fuzz", MODEL_GUID, "", fmi3False, pick(2) != 0, NULL, log_message)
+        : fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, "", fmi3False, pick(2) != 0, fmi3False, pick(2) != 0, NULL,
+                                      0, NULL, log_message, NULL);
+    if (!c) { violation("fmi3Instantiate", "returned NULL for a valid token"); return; }
     if (pick(10) == 0) { /* what a Co-Simulation FMU without event mode must refuse */
         calls++;
         if (fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, "", fmi3False, fmi3False, fmi3True, fmi3False, NULL, 0,
@@ -39,7 +132,7 @@ static void run_sequence(int max_calls) {
     fmi3FMUState states[3] = {NULL, NULL, NULL};
     fmi3Byte *bytes = NULL;
     size_t n_bytes = 0;
-    double time = 0.0;
+    double time = 0.0, start = 0.0; /* the instance's time (NAN: unknown to the oracle), its start */
     for (int k = 0; k < max_calls; k++) {
         fmi3ValueReference vrs[4];
         double reals[4];
@@ -52,26 +145,33 @@ static void run_sequence(int max_calls) {
         for (size_t i = 0; i < nvr; i++) vrs[i] = random_vr();
         switch (pick(20)) {
         case 0: case 1:
-            status = fmi3EnterInitializationMode(c, pick(2), pick(2) ? 1e-6 : hostile_real(),
-                                                 pick(4) ? 0.0 : hostile_real(), pick(3) == 0,
+        {
+            const double tolerance = pick(2) ? 1e-6 : hostile_real(), start_time = pick(4) ? 0.0 : hostile_real();
+            status = fmi3EnterInitializationMode(c, pick(2), tolerance, start_time, pick(3) == 0,
                                                  pick(2) ? 10.0 : hostile_real());
             judge("fmi3EnterInitializationMode", status, S_INSTANTIATED);
+            if (status == fmi3OK) start = start_time;
             after(status, S_INIT);
             break;
+        }
         case 2: case 3:
             status = fmi3ExitInitializationMode(c);
             judge("fmi3ExitInitializationMode", status, S_INIT);
-            after(status, S_STEP);
-            time = 0.0;
+            after(status, model_exchange ? S_EVENT : S_STEP);
+            time = start;
             break;
         case 4: case 5: case 6: {
+            if (model_exchange || pick(8) == 0) { /* Model Exchange's calls (on Co-Simulation: refused) */
+                model_exchange_call(c, &time);
+                break;
+            }
             const double h = pick(4) ? 1e-3 * (1 + pick(5)) : hostile_real();
             const double t = pick(8) ? time : hostile_real();
             fmi3Boolean event = fmi3True, terminate = fmi3True, early = fmi3True;
             fmi3Float64 last = NAN;
             const int null_pointer = pick(20) == 0;
             status = fmi3DoStep(c, t, h, fmi3False, &event, &terminate, null_pointer ? NULL : &early, &last);
-            judge("fmi3DoStep", status, S_STEP);
+            judge("fmi3DoStep", status, for_cs(S_STEP));
             if (status <= fmi3Warning) {
                 if (null_pointer) violation("fmi3DoStep", "accepted a NULL out-pointer");
                 if (event || terminate || early || !isfinite(last))
@@ -84,7 +184,7 @@ static void run_sequence(int max_calls) {
         case 7: case 8:
             for (size_t i = 0; i < nvr; i++) reals[i] = (vrs[i] >= 1 && vrs[i] < VR_COUNT) ? value_for((int)vrs[i]) : hostile_real();
             status = fmi3SetFloat64(c, pick(20) ? vrs : NULL, nvr, pick(20) ? reals : NULL, nvalues);
-            judge("fmi3SetFloat64", status, nvalues == nvr ? S_SET : 0);
+            judge("fmi3SetFloat64", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
             after(status, 0);
             break;
         case 9: {
@@ -103,7 +203,7 @@ static void run_sequence(int max_calls) {
                 booleans[i] = pick(2) != 0;
             }
             status = pick(2) ? fmi3SetInt32(c, vrs, nvr, ints, nvalues) : fmi3SetBoolean(c, vrs, nvr, booleans, nvalues);
-            judge("fmi3SetInt32/Boolean", status, nvalues == nvr ? S_SET : 0);
+            judge("fmi3SetInt32/Boolean", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
             after(status, 0);
             break;
         case 11:
@@ -116,7 +216,7 @@ static void run_sequence(int max_calls) {
             fmi3String out[5];
             if (pick(2)) {
                 status = fmi3SetString(c, vrs, nvr, text, nvalues);
-                judge("fmi3SetString", status, nvalues == nvr ? S_SET : 0);
+                judge("fmi3SetString", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
             } else {
                 status = fmi3GetString(c, vrs, nvr, out, nvalues);
                 judge("fmi3GetString", status, nvalues == nvr ? S_GET : 0);
@@ -137,7 +237,7 @@ static void run_sequence(int max_calls) {
             fmi3Float64 out[5];
             for (size_t i = 0; i < nvr; i++) order[i] = pick(4);
             status = fmi3GetOutputDerivatives(c, vrs, nvr, order, out, nvalues);
-            judge("fmi3GetOutputDerivatives", status, nvalues == nvr ? S_GET : 0);
+            judge("fmi3GetOutputDerivatives", status, nvalues == nvr ? for_cs(S_GET) : 0);
             after(status, 0);
             break;
         }
@@ -149,7 +249,7 @@ static void run_sequence(int max_calls) {
                 if (!states[slot]) break;
                 status = fmi3SetFMUState(c, states[slot]);
                 judge("fmi3SetFMUState", status, S_ANY);
-                if (status == fmi3OK) possible = S_ANY; /* the state's own phase: unknown to the oracle */
+                if (status == fmi3OK) possible = S_ANY, time = NAN; /* the state's own phase and time: unknown */
                 break;
             default: status = fmi3FreeFMUState(c, &states[slot]); judge("fmi3FreeFMUState", status, S_ANY);
             }
@@ -177,24 +277,20 @@ static void run_sequence(int max_calls) {
             judge("fmi3DeserializeFMUState", status, S_ANY);
             break;
         }
-        case 18: { /* event mode, clocks, Model Exchange: never */
-            fmi3Float64 x[2];
-            size_t count;
-            switch (pick(5)) {
-            case 0: status = fmi3EnterEventMode(c); break;
-            case 1: status = fmi3EnterStepMode(c); break;
-            case 2: status = fmi3GetContinuousStates(c, x, 2); break;
-            case 3: status = fmi3GetNumberOfEventIndicators(c, &count); break;
-            default: status = fmi3EnterConfigurationMode(c);
+        case 18: { /* Co-Simulation's event mode, clocks, configuration: never */
+            switch (pick(3)) {
+            case 0: status = fmi3EnterStepMode(c); break;
+            case 1: status = fmi3EnterConfigurationMode(c); break;
+            default: status = model_exchange ? fmi3EnterStepMode(c) : fmi3EnterEventMode(c);
             }
-            judge("an event, clock or Model Exchange function", status, 0);
+            judge("an event, clock or configuration function", status, 0);
             break;
         }
         default: {
             const int which = pick(4);
             if (which == 0) {
                 status = fmi3Terminate(c);
-                judge("fmi3Terminate", status, S_STEP | S_STEP_FAILED);
+                judge("fmi3Terminate", status, S_STEP | S_STEP_FAILED | S_EVENT | S_CONTINUOUS);
                 after(status, S_TERMINATED);
             } else if (which == 1) {
                 status = fmi3Reset(c);
