@@ -96,6 +96,10 @@ typedef struct {
 
 /* The header line: 'time', then each of the names at most once; the arrays for `rows` rows. */
 static int read_header(Reading *r, FmuTable *table, char *line, long rows) {
+    if (!strchr(line, ',') && strchr(line, ';')) { /* a spreadsheet set to a decimal comma saves these */
+        TABLE_ERROR(r, "%s", "the columns are separated by ';': separate them by ',' (and write numbers with '.')");
+        return 0;
+    }
     char *cursor = line, *field = next_field(&cursor);
     if (!field || strcmp(trim(field), "time") != 0) {
         TABLE_ERROR(r, "%s", "the first column must be 'time'");
@@ -192,6 +196,8 @@ FmuTable *fmu_table_read(FmuInstance *fmu, int vr, const char *given_path, const
     int ok = 1, row = 0;
     while (ok && fgets(line, sizeof line, file)) {
         r.number++;
+        if (r.number == 1 && strncmp(line, "\xEF\xBB\xBF", 3) == 0) /* UTF-8's byte order mark (Excel's CSV) */
+            memmove(line, line + 3, strlen(line + 3) + 1);
         if (is_blank_or_comment(line)) continue;
         if (!strchr(line, '\n') && !feof(file)) {
             TABLE_ERROR(&r, "line longer than %d bytes", TABLE_LINE_MAX - 1);

@@ -238,6 +238,19 @@ def test_a_recorded_drive_runs_as_the_same_motion_given_through_the_inputs(cuein
     assert np.abs(from_inputs[:, 4]).max() > 0.01  # the braking tilted it
 
 
+def test_an_excel_csv_is_read_as_the_plain_one(cueing, tmp_path):
+    """A table saved by Excel (a UTF-8 byte order mark, CRLF line ends) drives the cueing exactly as
+    the same table written plainly."""
+    plain = (ROOT / "examples/vehicle/drive.csv").read_text().splitlines()[1:400]  # its comment line left out
+    files = {"plain.csv": "\n".join(plain) + "\n", "excel.csv": "\ufeff" + "\r\n".join(plain) + "\r\n"}
+    runs = []
+    for name, text in files.items():
+        (tmp_path / name).write_bytes(text.encode("utf-8"))
+        instance = cueing({"vehicle.file": str(tmp_path / name)})
+        runs.append([instance.get("pose_ref.x") for _ in range(300) if instance.do_step(0.01) is None])
+    assert np.ptp(runs[0]) > 0.01 and runs[0] == runs[1]
+
+
 @pytest.mark.parametrize("text, message", [
     ("time,specific_force.w\n0,1\n", ":1: column 'specific_force.w' is unknown (use specific_force.x, specific_force.y, "
                                      "specific_force.z, angular_rate.x, angular_rate.y, angular_rate.z, each once)"),
@@ -245,6 +258,7 @@ def test_a_recorded_drive_runs_as_the_same_motion_given_through_the_inputs(cuein
     ("time,specific_force.x\n0,1\n0.1,fast\n", ":3: expected 2 finite numbers separated by commas"),
     ("time,angular_rate.z\n", ": no rows after the header"),
     ("speed,angular_rate.z\n0,1\n", ":1: the first column must be 'time'"),
+    ("time;specific_force.x\n0;1\n", ":1: the columns are separated by ';': separate them by ','"),
 ])
 def test_bad_vehicle_tables_are_one_line_each(cueing, tmp_path, text, message):
     path = tmp_path / "drive.csv"
