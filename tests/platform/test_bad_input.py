@@ -300,6 +300,9 @@ VEHICLE_ROWS = [f"{0.01 * k:g},{0.5 * (k > 5):g},0,9.81,0,0,0" for k in range(40
     (lambda rows: rows[:5] + ["0.05,0,,9.8,0,0,0"] + rows[6:], "finite numbers"),                    # an empty cell
     (lambda rows: rows[:2] + ["0.01,0,0,9.8,0,0,1e300"] + rows[3:],                                   # no vehicle's
      "angular_rate.z = 1e+300 rad/s at t = 0.01 s is beyond any vehicle's motion (at most 100 rad/s)"),
+    (lambda rows: [rows[0].replace("angular_rate.z", "specific_force.x"), *rows[1:]],                # a column twice
+     "column 'specific_force.x' is repeated"),
+    (lambda rows: [r.replace(",", ";") for r in rows], "the columns are separated by ';'"),           # a decimal comma's
 ])
 @pytest.mark.parametrize("command", ["run", "tune"])
 def test_a_bad_vehicle_table_is_one_line_through_run_and_tune(tmp_path, capsys, break_it, reason, command):
@@ -314,6 +317,29 @@ def test_a_bad_vehicle_table_is_one_line_through_run_and_tune(tmp_path, capsys, 
     assert code == 2 and len(err.splitlines()) == 1, err
     assert f"{scene}:8: motion.vehicle: rejected by cueing: vehicle.file {tmp_path / 'drive.csv'}:" in err
     assert reason in err
+
+
+MPC_SCENE = '[scene]\nduration = 0.3\n\n[drive]\nkind = "pmsm"\n\n[motion]\nvehicle = "drive.csv"\n\n' \
+            '[cueing]\nalgorithm = "mpc"\n\n[cueing.parameters]\n'
+
+
+@pytest.mark.parametrize("values, line, key, reason", [
+    ('"mpc.period" = 4.0\n', 14, '"mpc.period"', "mpc.horizon = 3 s is shorter than its 12 intervals"),
+    ('"mpc.period" = 0.0205\n', 14, '"mpc.period"', "which is no whole number of the scene's steps of 0.001 s"),
+    ('"mpc.weight.angular_rate" = 0\n"mpc.weight.specific_force" = 0.0\n', 15, '"mpc.weight.specific_force"',
+     "both 0: the MPC would have nothing felt to bring close"),
+])
+def test_what_the_mpc_cannot_mean_is_one_line_at_its_key(tmp_path, capsys, values, line, key, reason):
+    """An MPC period longer than its horizon's intervals allow (named at the period the scene sets,
+    not at the horizon it leaves to the FMU), one that is no whole number of steps, both weights of
+    what is felt 0: each one line at the scene's line of the key, exit 2."""
+    (tmp_path / "drive.csv").write_text("\n".join([VEHICLE_HEADER, *VEHICLE_ROWS]) + "\n")
+    scene = tmp_path / "car.toml"
+    scene.write_text(MPC_SCENE + values)
+    code = main(["run", str(scene), "--no-plots", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"error: {scene}:{line}:") and f'cueing.parameters.{key}' in err and reason in err, err
 
 
 @pytest.mark.parametrize("command", ["run", "tune"])

@@ -71,11 +71,16 @@ def scene_error(scene: Scene, error: Exception) -> SceneError | None:
     if isinstance(error, FmuError) and error.call.startswith(("fmi2Instantiate", "fmi2Set", "fmi2Enter", "fmi2Exit",
                                                              "fmi2Setup")):
         detail = "; ".join(m.text for m in error.messages) or "the FMU logged no reason"
-        # the variable the FMU names (quoted, or opening its message), if it is one of its variables
+        # the variable the FMU names (opening its message, or quoted), if it is one of its variables: a
+        # table's fault opens with the file's parameter, and may quote a column named as an input
+        # (of several it names, such as mpc.horizon against mpc.period, the first the scene sets)
         fmu = component_fmu(scene, error.instance)
         names = set(variables(fmu)) if fmu is not None else set()
-        named = next((m.group(1) for m in (re.search(r"'([^']+)'", detail), re.match(r"([\w.\[\]]+)[ :]", detail))
-                      if m is not None and m.group(1) in names), None)
+        found = [m.group(1) for m in (re.match(r"([\w.\[\]]+)[ :]", detail), re.search(r"'([^']+)'", detail),
+                                      *re.finditer(r"([\w.\[\]]+) =", detail))
+                 if m is not None and m.group(1) in names]
+        named = next((n for n in found if line_of(scene.text, *scene_key(error.instance, n))), found[0] if found
+                     else None)
         where = located(scene, error.instance, named) if named else f"{scene.path}"
         return SceneError(f"{where}: rejected by {error.instance}: {detail}")
     if isinstance(error, NoStep):

@@ -82,6 +82,8 @@ def derive(scene: Scene) -> dict[str, Any]:
                        out["cueing_parameters"]["gravity"])
     out["head"] = tuple(float(c) for c in doc.value("cueing", "head"))
     out["cueing_algorithm"] = doc.value("cueing", "algorithm")
+    if out["vehicle"] is not None and out["cueing_algorithm"] == "mpc":
+        _mpc_checks(doc, out["cueing_parameters"], float(doc.value("scene", "step")))
     out["cueing_ranges"] = _cueing_ranges(doc)
     out["cueing_search"] = tuple(int(doc.value("cueing.tune", k)) for k in ("iterations", "population", "seed"))
     out["pulses"] = _pulses(doc)
@@ -234,6 +236,25 @@ def _vehicle(doc: Document) -> Path | None:
         raise doc.fail("motion.vehicle", f"gives the pose reference through motion cueing, and [{posed[0]}] gives one "
                        "too: keep one", given)
     return (doc.path.parent / given).resolve()
+
+
+def _mpc_checks(doc: Document, given: Mapping[str, Any], step: float) -> None:
+    """What the MPC cueing would take silently and cannot mean: a solve period that is no whole
+    number of the scene's steps (the solves would drift against the steps that carry them), and
+    both weights of what is felt 0 (nothing to be close to: the platform stands still)."""
+    defaults = {v.name: v.start for v in variables(fmu_path("cueing")).values()}
+    value = lambda name: float(given.get(name, defaults[name]))  # noqa: E731
+    period = value("mpc.period")
+    if abs(period / step - round(period / step)) > 1e-9 * period / step or round(period / step) < 1:
+        key = 'cueing.parameters."mpc.period"' if "mpc.period" in given else "scene.step"
+        raise doc.fail(key, f"the MPC solves every mpc.period = {period:g} s, which is no whole number of the scene's "
+                       f"steps of {step:g} s: make it one", given.get("mpc.period", step))
+    tracked = ("mpc.weight.specific_force", "mpc.weight.angular_rate")  # what is felt; the rest hold it back
+    if all(value(name) == 0.0 for name in tracked):
+        zeroed = next((name for name in tracked if name in given), tracked[0])
+        raise doc.fail(f'cueing.parameters."{zeroed}"', "mpc.weight.specific_force and mpc.weight.angular_rate are "
+                       "both 0: the MPC would have nothing felt to bring close and hold the platform still (give one "
+                       "a weight > 0)", 0.0)
 
 
 def _cueing_ranges(doc: Document) -> dict[str, tuple[float, float]] | None:
