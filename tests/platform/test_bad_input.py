@@ -389,3 +389,20 @@ def test_a_reference_the_platform_cannot_take_is_refused_before_its_run(tmp_path
     assert err.count("\n") == 1 and "tilted.toml:7: the reference takes leg" in err, err
     assert "its roll reaches 5 rad (286 deg): a scene's angles are radians" in err
     assert not list((tmp_path / "out").glob("*.csv"))
+
+
+@pytest.mark.parametrize("scale, says", [
+    (1.0, "the drive ends at 0.39 s, the scene at 0.5 s: its last row is held for the rest"),
+    (1000.0, "its rows are 10 apart and it ends at 390: are its times milliseconds?"),
+])
+def test_a_drive_that_fits_its_scene_badly_is_said_in_the_report(tmp_path, scale, says):
+    """A vehicle's drive shorter than its scene (its last row held), or one timed in milliseconds
+    (the scene would cue its first instants alone): what a user may mean, so said, not refused,
+    at the scene's motion.vehicle line."""
+    rows = [",".join([f"{float(r.split(',')[0]) * scale:g}", *r.split(",")[1:]]) for r in VEHICLE_ROWS]
+    (tmp_path / "drive.csv").write_text("\n".join([VEHICLE_HEADER, *rows]) + "\n")
+    scene = tmp_path / "car.toml"
+    scene.write_text('[scene]\nduration = 0.5\n\n[drive]\nkind = "pmsm"\n\n[motion]\nvehicle = "drive.csv"\n')
+    import cosim
+    remarks = cosim.simulate(scene).report.remarks
+    assert any(f"{scene}:8: motion.vehicle: {says}" in remark for remark in remarks), remarks

@@ -46,10 +46,37 @@ def compile_scene(scene: Scene) -> CompiledScene:
     mechanics, drives = scene_values(scene)
     fmus = drive_fmus(scene)
     legs, tuning, notes = scene_design(scene, (mechanics, drives), fmus)
+    notes = [*notes, *vehicle_notes(scene)]
     record, algorithm = scene_record(scene, fmus), scene_algorithm(scene)
     structure = _wire(scene, legs, mechanics, fmus, record, algorithm)
     plan = Plan(structure, algorithm, scene.control, scene.duration, *record, scene.output_interval, clock="mechanics")
     return CompiledScene(scene, mechanics, fmus, legs, tuning, notes, structure, plan)
+
+
+def vehicle_notes(scene: Scene) -> list[str]:
+    """What a vehicle's drive that fits its scene badly makes of the run, said where a user may mean
+    it: a drive that ends before the scene (its last row held: the car as it was, cued as standing
+    or cruising), and one whose times look like milliseconds (the scene would cue its first instants
+    alone). The table's faults are the cueing FMU's to refuse (its file and line)."""
+    if scene.vehicle is None:
+        return []
+    try:
+        with open(scene.vehicle, encoding="utf-8-sig", errors="replace") as file:
+            times = [float(line.split(",", 1)[0]) for line in file
+                     if line.strip() and not line.lstrip().startswith("#") and line[:1].strip(" -.0123456789") == ""]
+    except (OSError, ValueError):
+        return []
+    if len(times) < 2:
+        return []
+    last, spacing = times[-1], (times[-1] - times[0]) / (len(times) - 1)
+    where = f"{scene.document.where('motion.vehicle')}: motion.vehicle"
+    if spacing >= 1.0 and last >= 100 * scene.duration:
+        return [f"{where}: its rows are {spacing:g} apart and it ends at {last:g}: are its times milliseconds? the "
+                "scene reads them as seconds (divide them by 1000)"]
+    if last < scene.duration:
+        return [f"{where}: the drive ends at {last:g} s, the scene at {scene.duration:g} s: its last row is held "
+                "for the rest"]
+    return []
 
 
 DRIVE_WORDS = {"pmsm": "PMSM drives", "linear": "linear motors"}
