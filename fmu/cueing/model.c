@@ -124,7 +124,12 @@ double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate) { return 
 double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t) {
     const ModelData *data = (const ModelData *)fmu->model_data;
     const int recorded = data && data->vehicle && data->vehicle->column_of[k] >= 0;
-    return motion(fmu, k, recorded ? t : t_now, NULL);
+    const double seen = recorded ? fmin(t, t_now + fmu->s.v.mpc_preview) : t_now; /* read ahead: a recording's */
+    const double last = motion(fmu, k, seen, NULL);
+    const double decay = fmu->s.v.mpc_prediction_decay;
+    if (t <= seen || !(decay > 0.0)) return last; /* what it read, or the last of it held */
+    const double rest = k == 2 ? fmu->s.v.gravity : 0.0; /* standing: gravity's specific force alone */
+    return rest + (last - rest) * exp(-(t - seen) / decay);
 }
 
 static MpcData *mpc_of(const FmuInstance *fmu) {

@@ -7,8 +7,9 @@
 
 /* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t, its rate into *rate (model.c). */
 double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
-/* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t as the MPC predicts it: the
- * recorded motion where vehicle.file gives it (its future known), else the input now, held. */
+/* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t as the MPC predicts it at t_now:
+ * the recorded motion (vehicle.file) up to mpc.preview ahead of now, the input now for a live drive;
+ * beyond, the last of it held or (mpc.prediction_decay) returning to rest. */
 double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
 
 typedef struct MpcData MpcData;

@@ -172,6 +172,12 @@ X(Real, mpc_period, "mpc.period", parameter, fixed, "s", 0.02, FMU_POSITIVE, FMU
   "MPC: time between two solves (each a QP over the horizon; the acceleration it gives is held until the next)") \
 X(Real, mpc_horizon, "mpc.horizon", parameter, fixed, "s", 3.0, FMU_POSITIVE, FMU_INF, \
   "MPC: how far it looks ahead (12 intervals, the first mpc.period long, growing evenly)") \
+X(Real, mpc_preview, "mpc.preview", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
+  "MPC: how far ahead of now it reads a recorded drive (vehicle.file): foresight, which a live drive does not give " \
+  "(0: none, as live); the motion beyond it is predicted from the last it read (mpc.prediction_decay)") \
+X(Real, mpc_prediction_decay, "mpc.prediction_decay", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
+  "MPC: the vehicle's motion beyond what it reads, predicted from the last it read: held (0), or returning to rest " \
+  "(no acceleration, no rotation) with this time constant") \
 MPC_WEIGHT(X, specific_force, "s4/m2", 1.0, "MPC: weight of the perceived specific force's error (per axis)") \
 MPC_WEIGHT(X, angular_rate, "s2/rad2", 30.0, "MPC: weight of the perceived angular rate's error (per axis)") \
 MPC_WEIGHT(X, position, "1/m2", 1.0, "MPC: weight of the platform's translation from neutral (the washout)") \

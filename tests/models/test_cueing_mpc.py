@@ -154,3 +154,31 @@ def test_settings_it_cannot_run_are_refused(values, says):
         assert says in str(error.value)
     finally:
         instance.free()
+
+
+def braking_table(folder) -> str:
+    """A recorded drive: cruise, then braking at 6 m/s^2 from t = 2 s for 2 s (rows every 10 ms)."""
+    t = np.arange(0.0, 6.0 + 1e-9, 0.01)
+    u = at_rest(t)
+    u[(t >= 2.0) & (t < 4.0), 0] = -6.0
+    path = folder / "braking.csv"
+    np.savetxt(path, np.column_stack([t, u]), delimiter=",", header="time," + ",".join(INPUTS), comments="",
+               fmt="%.10g")
+    return str(path)
+
+
+@pytest.mark.parametrize("preview", [0.0, 3.0])
+def test_it_reads_a_recorded_drive_only_as_far_ahead_as_its_preview(preview, tmp_path):
+    """mpc.preview is foresight of a recorded drive: with 3 s the platform surges and pitches ahead
+    of the car's braking at 2 s (what the occupant feels while the car still cruises); with 0, as a
+    live drive comes, it stands at neutral until the braking is under way (to round-off), then cues
+    it (mpc.prediction_decay predicting on from what it read)."""
+    table = braking_table(tmp_path)
+    t, poses, _, _ = run({"vehicle.file": table, "mpc.preview": preview}, at_rest, 3.0, h=2e-3)
+    before, after = t < 2.0, (t > 2.2) & (t < 3.0)
+    moved_before = max(np.abs(poses[before, 0]).max(), np.abs(poses[before, 4]).max())
+    if preview == 0.0:
+        assert moved_before < 1e-9, moved_before
+    else:
+        assert np.abs(poses[before, 0]).max() > 0.02 and np.degrees(np.abs(poses[before, 4]).max()) > 1.0
+    assert np.abs(poses[after, 0]).max() > 0.02  # the braking is cued either way

@@ -274,9 +274,10 @@ POSE_REF_RATE = [f"pose_ref_rate.{dof}" for dof in ("x", "y", "z", "roll", "pitc
 
 
 def cueing_runs(algorithm: int, stop: float, steps: tuple[float, ...], outputs: list[str]):
-    """The cueing on the car drive: Model Exchange by CVODE (rtol 1e-10), and Co-Simulation at each
-    communication step; each output on 1001 points, and its range in the Co-Simulation run."""
-    values = {"vehicle.file": DRIVE, "algorithm": algorithm}
+    """The cueing on the car drive (the MPC reading it 3 s ahead): Model Exchange by CVODE (rtol
+    1e-10), and Co-Simulation at each communication step; each output on 1001 points, and its range
+    in the Co-Simulation run."""
+    values = {"vehicle.file": DRIVE, "algorithm": algorithm, **({"mpc.preview": 3.0} if algorithm == 2 else {})}
     grid = np.linspace(0.0, stop, 1001)
     me = simulate_fmu(str(fmu_path("cueing", model_exchange=True)), fmi_type="ModelExchange", solver="CVode",
                       relative_tolerance=1e-10, stop_time=stop, output_interval=stop / 1000, output=outputs,
@@ -322,7 +323,8 @@ def test_the_mpc_is_what_its_co_simulation_gives():
 @pytest.mark.parametrize("algorithm", (1, 2))
 def test_fmusims_cvode_follows_the_vehicles_table_through_its_corners(algorithm, tmp_path):
     """Reference-FMUs' fmusim (CVODE, no maximum step, restarted only where an event says the states
-    changed) on the cueing through the car drive's first 8 s (cruise, braking, lane change): the
+    changed) on the cueing through the car drive's first 8 s (cruise, braking, lane change; the MPC
+    reading it 3 s ahead): the
     table's rows (the corners of its linear interpolation) and the MPC's solves are time events after
     which the solver restarts, so at fmusim's relative tolerance 1e-6 the reference pose is the
     Co-Simulation's at 1 ms to 1e-3 of each channel's range (before, CVODE stepped on past the
@@ -332,12 +334,13 @@ def test_fmusims_cvode_follows_the_vehicles_table_through_its_corners(algorithm,
     stop, out = 8.0, tmp_path / "fmusim.csv"
     done = subprocess.run([str(fmusim()), "--interface-type", "me", "--solver", "cvode", "--tolerance", "1e-6",
                            "--stop-time", repr(stop), "--output-interval", "0.01", "--start-value", "vehicle.file",
-                           DRIVE, "--start-value", "algorithm", str(algorithm), "--output-file", str(out),
+                           DRIVE, "--start-value", "algorithm", str(algorithm), "--start-value", "mpc.preview", "3",
+                           "--output-file", str(out),
                            str(fmu_path("cueing", model_exchange=True))], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     me = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
     cs = simulate_fmu(str(fmu_path("cueing")), stop_time=stop, step_size=1e-3, output_interval=1e-3,
-                      output=POSE_REF, start_values={"vehicle.file": DRIVE, "algorithm": algorithm})
+                      output=POSE_REF, start_values={"vehicle.file": DRIVE, "algorithm": algorithm, "mpc.preview": 3.0})
     for o in POSE_REF:
         scale = np.ptp(cs[o])
         if scale > 0:

@@ -236,7 +236,7 @@ def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
     limits["limit.joint_angle"] -= float(mechanics_value(mechanics_values, "limit.joint_margin"))  # the guard's
     return {"vehicle.file": scene.vehicle, "algorithm": CUEING_ALGORITHMS[scene.cueing_algorithm], **neutral,
             "gravity": float(np.linalg.norm(gravity_of(mechanics_values))), **joints, **limits,
-            **scene.cueing_parameters}
+            "mpc.preview": scene.cueing_preview, **scene.cueing_parameters}
 
 
 def scene_algorithm(scene: Scene) -> Algorithm:

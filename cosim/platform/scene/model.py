@@ -98,6 +98,7 @@ class Scene:
     vehicle: Path | None = field(init=False)  # [motion] vehicle: the pose reference from motion cueing
     cueing_parameters: dict[str, Any] = field(init=False)  # [cueing.parameters]
     cueing_algorithm: str = field(init=False)  # [cueing] algorithm: "classical" or "mpc"
+    cueing_preview: float = field(init=False)  # [cueing] preview: seconds of the recording the MPC reads ahead [s]
     head: tuple[float, float, float] = field(init=False)  # [cueing] head: the occupant's head, platform frame [m]
     cueing_ranges: dict[str, tuple[float, float]] | None = field(init=False)  # [cueing.tune] ranges
     cueing_search: tuple[int, int, int] = field(init=False)  # [cueing.tune] iterations, population, seed

@@ -82,6 +82,10 @@ def derive(scene: Scene) -> dict[str, Any]:
                        out["cueing_parameters"]["gravity"])
     out["head"] = tuple(float(c) for c in doc.value("cueing", "head"))
     out["cueing_algorithm"] = doc.value("cueing", "algorithm")
+    out["cueing_preview"] = float(doc.value("cueing", "preview"))
+    if "mpc.preview" in out["cueing_parameters"]:
+        raise doc.fail('cueing.parameters."mpc.preview"', "is the scene's [cueing] preview: give it there",
+                       out["cueing_parameters"]["mpc.preview"])
     if out["vehicle"] is not None and out["cueing_algorithm"] == "mpc":
         _mpc_checks(doc, out["cueing_parameters"], float(doc.value("scene", "step")))
     out["cueing_ranges"] = _cueing_ranges(doc)
