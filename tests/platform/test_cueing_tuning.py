@@ -84,7 +84,7 @@ def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     gain = float(re.search(r"tilt.gain = ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["tilt.gain"] == pytest.approx(gain, rel=1e-3)
     assert tuned.cueing_parameters["translation.x.gain"] == 0.5  # the scene's own values kept
-    assert "# 3 deg/s" in (tmp_path / "out" / "short_tuned.toml").read_text()  # and its comments
+    assert "# 2.5 deg/s: a margin" in (tmp_path / "out" / "short_tuned.toml").read_text()  # and its comments
     assert np.isfinite(cosim.simulate(tuned)["pose.x"]).all()
 
 
