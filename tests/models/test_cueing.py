@@ -212,14 +212,22 @@ def test_wrong_parameters_are_refused_by_name(cueing, name, value):
 DRIVE = ROOT / "examples" / "vehicle" / "drive.csv"
 
 
-def test_the_shipped_drive_is_what_its_generator_writes():
+def test_the_shipped_drives_are_what_their_generator_writes():
+    """drive.csv, slalom.csv, emergency_stop.csv: each what examples/vehicle/drive.py makes, and each
+    the vehicle of its shipped scene."""
     import importlib.util
+    from cosim.platform.scene import load_scene
     spec = importlib.util.spec_from_file_location("drive", ROOT / "examples" / "vehicle" / "drive.py")
     generator = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(generator)
-    shipped = np.loadtxt(DRIVE, delimiter=",", comments="#", skiprows=2)
-    assert DRIVE.read_text().splitlines()[1] == ",".join(generator.COLUMNS)
-    np.testing.assert_allclose(shipped, generator.drive(), rtol=1e-9, atol=1e-12)
+    for name, (make, _) in generator.DRIVES.items():
+        path = ROOT / "examples" / "vehicle" / name
+        shipped = np.loadtxt(path, delimiter=",", comments="#", skiprows=2)
+        assert path.read_text().splitlines()[1] == ",".join(generator.COLUMNS)
+        np.testing.assert_allclose(shipped, make(), rtol=1e-9, atol=1e-12)
+    for scene, drive_file in (("car_drive", "drive.csv"), ("slalom", "slalom.csv"),
+                              ("emergency_stop", "emergency_stop.csv")):
+        assert load_scene(ROOT / "examples" / "vehicle" / f"{scene}.toml").vehicle.name == drive_file
 
 
 def test_a_recorded_drive_runs_as_the_same_motion_given_through_the_inputs(cueing):
