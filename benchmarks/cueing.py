@@ -53,7 +53,7 @@ def main() -> None:
              "|---|---|---|---|---|---|---|"]
     for a, b in zip(own.channels, best.channels):
         lines.append(f"| {a.channel} [{a.unit}] | {cells(a)} | {cells(b)} |")
-    lines.append(f"| perceived error (rms in thresholds, summed) | {own.perceived_error:.3f} | | | "
+    lines.append(f"| perceived error (rms past the threshold, in thresholds, summed) | {own.perceived_error:.3f} | | | "
                  f"{best.perceived_error:.3f} | | |")
     lines += ["", "| margin, co-simulated | scene's cueing | tuned |", "|---|---|---|"]
     lines += [f"| {k} | {own.margins[k]:.1%} | {best.margins[k]:.1%} |" for k in own.margins]

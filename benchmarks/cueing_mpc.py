@@ -7,7 +7,8 @@ Five cueings per drive: the classical washout at the scene's values, and as `cos
 for that drive (its default ranges, seed 1); the MPC with 3 s of foresight (reading the recorded
 drive ahead), and without (as a live drive comes), its prediction held or decaying (CUEINGS).
 
-Reported per drive and cueing: the summed perceived error (rms per channel in thresholds), the
+Reported per drive and cueing: the summed perceived error (rms per channel past its threshold, in
+thresholds), the
 time of each cue kind over all channels (spurious, sign error, missing), the stroke used (the
 legs' range over the stroke) and the closest a leg came to an end of it, the largest leg speed,
 the co-simulation's real-time factor; for the MPC, its solve time per step (p50 and p99: the

@@ -176,6 +176,7 @@ class ChannelQuality:
     missing_time: float
     missing_largest: float
     threshold: float
+    rms_felt_error: float = 0.0  # of that error less the threshold (an error below it is not felt: 0)
 
     @property
     def false_cue_time(self) -> float:
@@ -209,15 +210,18 @@ def quality(p: Perceived) -> list[ChannelQuality]:
         for kind, felt in (("spurious", platform), ("sign error", platform), ("missing", vehicle)):
             where = kinds[kind]
             figures += [float(where.sum() * dt), float(np.abs(felt[where]).max()) if where.any() else 0.0]
+        felt_error = np.maximum(np.abs(error) - THRESHOLDS[c], 0.0)  # the indifference threshold's dead zone
         out.append(ChannelQuality(channel, UNITS[c], float(np.sqrt(np.mean(error ** 2))),
-                                  float(np.sqrt(np.mean(vehicle ** 2))), correlation, *figures, float(THRESHOLDS[c])))
+                                  float(np.sqrt(np.mean(vehicle ** 2))), correlation, *figures, float(THRESHOLDS[c]),
+                                  float(np.sqrt(np.mean(felt_error ** 2)))))
     return out
 
 
 def perceived_error(channels: list[ChannelQuality]) -> float:
-    """One number for a cueing's quality: the channels' rms errors, each in thresholds of its own
-    channel, summed (what tuning minimises)."""
-    return float(sum(q.rms_error / q.threshold for q in channels))
+    """One number for a cueing's quality (what tuning minimises): per channel the rms of the
+    perceived error that passes the channel's indifference threshold (an error below it is not
+    felt and does not count; above, by as much as it passes it), in thresholds, summed."""
+    return float(sum(q.rms_felt_error / q.threshold for q in channels))
 
 
 def cue_figures(q: ChannelQuality) -> list[tuple[str, float, float]]:
@@ -235,5 +239,6 @@ def quality_lines(channels: list[ChannelQuality]) -> list[str]:
                          for kind, time, largest in cue_figures(q))
         lines.append(f"perceived {q.channel}: rms error {q.rms_error:.3g} {q.unit} (the vehicle's {q.rms_vehicle:.3g}), "
                      f"correlation {correlation}; cues beyond the threshold {q.threshold:.3g}: {cues}")
-    lines.append(f"perceived error (rms per channel in thresholds, summed): {perceived_error(channels):.3f}")
+    lines.append(f"perceived error (rms per channel of what passes its threshold, in thresholds, summed): "
+                 f"{perceived_error(channels):.3f}")
     return lines

@@ -147,7 +147,8 @@ def test_one_gravity_for_every_fmu(tmp_path):
 def test_model_predictive_cueing_feels_closer_within_the_stroke(drive_run):
     """examples/vehicle/car_drive_mpc.toml, the same drive through the MPC (issue 51's mark): the
     co-simulated platform feels at least 30 % closer to the car than the classical washout does
-    (the summed perceived error, rms per channel in thresholds), and its legs, as simulated, stay
+    (the summed perceived error, rms per channel past its threshold; the MPC reading the drive 3 s
+    ahead, as the scene says), and its legs, as simulated, stay
     within the stroke less the margin and its joints within their tilt."""
     from cosim.platform.perception import perceived_error, quality
     mpc = cosim.simulate(EXAMPLE.with_name("car_drive_mpc.toml"))

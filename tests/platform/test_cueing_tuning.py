@@ -37,7 +37,8 @@ def test_a_vehicle_run_reports_what_the_occupant_feels(tmp_path):
     assert (tmp_path / "car_drive_perception.png").stat().st_size > 10_000
     page = (tmp_path / "car_drive.html").read_text()
     assert "Motion cueing: what the occupant feels" in page
-    shown = re.search(r'data-name="perceived error \(rms per channel in thresholds, summed\)" data-value="([^"]+)"', page)
+    shown = re.search(r'data-name="perceived error \(rms per channel past its threshold, in thresholds, summed\)" '
+                      r'data-value="([^"]+)"', page)
     assert float(shown.group(1)) == pytest.approx(float(total.split(": ")[1]), abs=1e-3)
     for column in ("vehicle.specific_force.x", "vehicle.angular_rate.z", "twist.wz"):
         assert column in result.names

@@ -189,3 +189,21 @@ def test_the_vehicle_at_rest_feels_nothing():
     motion = vehicle_motion(np.tile([0.0, 0.0, 9.80665], (5, 1)), np.zeros((5, 3)), 9.80665)
     assert np.abs(motion).max() == 0.0
     assert isinstance(perceive(np.arange(5.0), motion, motion), Perceived)
+
+
+def test_an_error_below_the_indifference_threshold_is_not_felt():
+    """The perceived error counts what passes each channel's threshold: a perceived error of half a
+    threshold everywhere counts nothing; of twice a threshold in one channel, one threshold for as
+    long as it lasts (rms over the run: its root of the fraction of time)."""
+    from cosim.platform.perception import perceived_error, quality
+    t = np.arange(0, 10.0, 1e-2)
+    felt = np.zeros((len(t), 6))
+    felt[:, 0] = np.sin(t)
+
+    def measured(platform: np.ndarray) -> float:
+        return perceived_error(quality(Perceived(t, felt, felt, felt, platform)))
+
+    assert measured(felt + 0.5 * THRESHOLDS) == 0.0
+    doubled = felt.copy()
+    doubled[t >= 7.5, 2] += 2.0 * THRESHOLDS[2]  # the last quarter of the run
+    assert measured(doubled) == pytest.approx(math.sqrt(0.25), rel=1e-9)

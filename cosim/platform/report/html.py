@@ -191,7 +191,8 @@ def _perception(perceived) -> str:
              f"{q.spurious_time:.2f}, {q.sign_error_time:.2f}, {q.missing_time:.2f}",
              repr(q.rms_error)) for q in channels]
     total = perceived_error(channels)
-    rows.append(("perceived error (rms per channel in thresholds, summed)", f"{total:.3f}", repr(total)))
+    rows.append(("perceived error (rms per channel past its threshold, in thresholds, summed)", f"{total:.3f}",
+                 repr(total)))
     t, plots = perceived.times, []
     for c, (channel, unit) in enumerate(zip(CHANNELS, UNITS)):
         figure = go.Figure([_trace(t, perceived.vehicle[:, c], "vehicle", color="#999"),
