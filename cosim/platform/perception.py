@@ -21,6 +21,9 @@ are sorted as the cueing literature sorts them, per channel (e.g. Grant and Reid
 spurious cue where the platform is felt and the vehicle is not, a sign error where both are felt
 with opposite signs, a missing cue where the vehicle is felt and the platform is not.
 
+A second model judges the same motions (second_opinion: Reid and Nahon's organs, SECOND_ORGANS), so
+that a cueing is not judged only by the model it was tuned or planned with.
+
 The vehicle's motion comes as the cueing FMU took it (its `vehicle.*` outputs); the platform's is
 its simulated motion at the head point: from the pose and the twist (base frame) of the mechanics,
 f = R^T (a_head - g), a_head = a + alpha x r + w x (w x r), w_head = R^T w, with R = Rz Ry Rx
@@ -100,6 +103,17 @@ CANAL = Vestibular("semicircular canals (Telban and Cardullo 2005)", (0.0, 0.0, 
                    (-1.0 / TAU_A, -1.0 / TAU_1, -1.0 / TAU_2), TAU_L / TAU_2)
 ORGANS = (OTOLITH,) * 3 + (CANAL,) * 3
 
+# A second opinion, to judge a cueing by a model it was not tuned or planned with: the vestibular
+# models of Reid and Nahon's washout studies (1985), as the motion-cueing literature restates them
+# (e.g. Asadi et al. 2015): otoliths K (1 + tau_a s) / ((1 + tau_L s)(1 + tau_S s)) with K = 0.4,
+# tau_a = 10 s, tau_L = 5 s, tau_S = 0.016 s (after Fernandez and Goldberg's afferents: a faster
+# otolith than Young and Meiry's); canals tau_a tau_L s^2 / ((1 + tau_a s)(1 + tau_L s)) with
+# tau_a = 80 s, tau_L = 5.73 s (no short lag, no lead). The thresholds are the same.
+SECOND_OTOLITH = Vestibular("otoliths (Reid and Nahon 1985)", (-1.0 / 10.0,), (-1.0 / 5.0, -1.0 / 0.016),
+                            0.4 * 10.0 / (5.0 * 0.016))
+SECOND_CANAL = Vestibular("semicircular canals (Reid and Nahon 1985)", (0.0, 0.0), (-1.0 / 80.0, -1.0 / 5.73), 1.0)
+SECOND_ORGANS = (SECOND_OTOLITH,) * 3 + (SECOND_CANAL,) * 3
+
 
 def rotations(poses: np.ndarray) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll) of each pose (n x 6: x, y, z, roll, pitch, yaw): n x 3 x 3,
@@ -145,16 +159,22 @@ class Perceived:
     platform_perceived: np.ndarray  # n x 6
 
 
-def perceive(times: np.ndarray, vehicle: np.ndarray, platform: np.ndarray, step: float | None = None) -> Perceived:
+def perceive(times: np.ndarray, vehicle: np.ndarray, platform: np.ndarray, step: float | None = None,
+             organs: tuple[Vestibular, ...] = ORGANS) -> Perceived:
     """Both motions (n x 6 at `times`, uneven allowed) resampled every `step` seconds (linear;
     default: the times' most common spacing, so that a run's samples are taken as they are) and
-    through the vestibular models."""
+    through the vestibular models (`organs`, one per channel: the project's, or SECOND_ORGANS)."""
     step = step or float(np.median(np.diff(times)))
     grid = np.arange(times[0], times[-1] + 0.5 * step, step)
     grid = grid[grid <= times[-1]]
     at = [np.column_stack([np.interp(grid, times, m[:, c]) for c in range(6)]) for m in (vehicle, platform)]
-    felt = [np.column_stack([ORGANS[c].perceive(grid, m[:, c]) for c in range(6)]) for m in at]
+    felt = [np.column_stack([organs[c].perceive(grid, m[:, c]) for c in range(6)]) for m in at]
     return Perceived(grid, at[0], at[1], felt[0], felt[1])
+
+
+def second_opinion(p: Perceived) -> float:
+    """The perceived error of the same motions by the second model (SECOND_ORGANS)."""
+    return perceived_error(quality(perceive(p.times, p.vehicle, p.platform, organs=SECOND_ORGANS)))
 
 
 @dataclass(frozen=True)

@@ -207,3 +207,22 @@ def test_an_error_below_the_indifference_threshold_is_not_felt():
     doubled = felt.copy()
     doubled[t >= 7.5, 2] += 2.0 * THRESHOLDS[2]  # the last quarter of the run
     assert measured(doubled) == pytest.approx(math.sqrt(0.25), rel=1e-9)
+
+
+def test_the_second_model_is_the_published_one():
+    """The second opinion's organs (Reid and Nahon 1985, cosim.platform.perception.SECOND_ORGANS):
+    the otoliths' static gain 0.4 and their response 0.4 (1 + 10 s) / ((1 + 5 s)(1 + 0.016 s)) at
+    a few frequencies; the canals' 80 * 5.73 s^2 / ((1 + 80 s)(1 + 5.73 s)): no response to a
+    constant rate, unit gain between their corners; scipy's simulation of both equals theirs."""
+    from cosim.platform.perception import SECOND_CANAL, SECOND_OTOLITH
+    w = np.array([0.01, 0.3, 2.0, 30.0])
+    s = 1j * w
+    assert np.allclose(SECOND_OTOLITH.response(w), 0.4 * (1 + 10 * s) / ((1 + 5 * s) * (1 + 0.016 * s)), rtol=1e-12)
+    assert SECOND_OTOLITH.static_gain() == pytest.approx(0.4)
+    assert np.allclose(SECOND_CANAL.response(w), 80 * 5.73 * s ** 2 / ((1 + 80 * s) * (1 + 5.73 * s)), rtol=1e-12)
+    assert abs(SECOND_CANAL.response(np.array([3.0]))[0]) == pytest.approx(1.0, abs=0.01)
+    t = np.arange(0, 30.0, 1e-3)
+    u = np.sin(0.7 * t) + (t > 3.0)
+    for organ in (SECOND_OTOLITH, SECOND_CANAL):
+        _, expected, _ = lsim(ZerosPolesGain(organ.zeros, organ.poles, organ.gain), u - u[0], t)
+        assert np.abs(organ.perceive(t, u) - organ.static_gain() * u[0] - expected).max() < 1e-6

@@ -18,7 +18,8 @@ import numpy as np
 from ...engine.outcome import Outcome, Report
 from ...engine.run import Plan, run
 from ..core import gravity_of
-from ..perception import CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines, vehicle_motion
+from ..perception import (CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines,
+                          second_opinion, vehicle_motion)
 from ..ports import DRIVES, POSE, per_leg
 from ..report.limits import result_excursion_lines
 from ..report.plots import units
@@ -133,6 +134,8 @@ def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) 
             report.perceived = perceived_motion(scene, compiled.mechanics, result)
             report.channels = quality(report.perceived)
             report.remarks += quality_lines(report.channels)
+            report.remarks.append("perceived error by a second model (Reid and Nahon 1985's otoliths and canals, "
+                                  f"the same thresholds): {second_opinion(report.perceived):.3f}")
     return report
 
 
