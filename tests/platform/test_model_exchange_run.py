@@ -51,7 +51,7 @@ def test_a_vehicles_drive_runs_as_one_system_too():
     converged = scene.changed({"scene.step": scene.step / 16, "coupling.startup_step": scene.control.startup_step / 16})
     me, cs = cosim.simulate(scene, model_exchange=True), cosim.simulate(converged)
     times = me["time"]
-    assert np.ptp(me["pose.pitch"]) > 0.04  # the braking's tilt is under way
+    assert np.ptp(me["pose.pitch"]) > 0.03  # the braking's tilt is under way (2.1 deg at 2.5 deg/s)
     for dof in POSE:
         assert np.abs(me[f"pose.{dof}"] - np.interp(times, cs["time"], cs[f"pose.{dof}"])).max() < 1e-5, dof
     for leg in LEGS:
