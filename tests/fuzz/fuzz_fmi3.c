@@ -87,8 +87,11 @@ static void model_exchange_call(fmi3Instance c, double *time) {
         fmi3Float64 next = NAN;
         status = fmi3UpdateDiscreteStates(c, &update, &terminate, &nominals, &values, &defined, &next);
         judge("fmi3UpdateDiscreteStates", status, for_me(S_EVENT));
-        if (status == fmi3OK && defined && !isnan(*time) && !(next > *time))
-            violation("fmi3UpdateDiscreteStates", "the next time event is not after the time now");
+        if (status == fmi3OK && defined && !isnan(*time) && !(next > *time)) {
+            char what[160];
+            snprintf(what, sizeof what, "the next time event %.17g is not after the time now %.17g", next, *time);
+            violation("fmi3UpdateDiscreteStates", what);
+        }
         after(status, 0);
         break;
     }
@@ -158,7 +161,7 @@ static void run_sequence(int max_calls) {
             status = fmi3ExitInitializationMode(c);
             judge("fmi3ExitInitializationMode", status, S_INIT);
             after(status, model_exchange ? S_EVENT : S_STEP);
-            time = start;
+            if (status == fmi3OK) time = start; /* a refused call leaves the instance's time as it was */
             break;
         case 4: case 5: case 6: {
             if (model_exchange || pick(8) == 0) { /* Model Exchange's calls (on Co-Simulation: refused) */
