@@ -202,15 +202,16 @@ def export_ssp(scene: str | Path | Scene, path: str | Path, *, measure: bool = T
     return export_scene(loaded, ssp=Path(path), measure=measure).files[0]
 
 
-def export_fmu(scene: str | Path | Scene, path: str | Path, *, fmi: int = 2) -> Path:
+def export_fmu(scene: str | Path | Scene, path: str | Path, *, fmi: int = 2, model_exchange: bool = False) -> Path:
     """Writes a scene as ONE Co-Simulation FMU (FMI 2.0, or 3.0 with fmi=3; Linux and Windows
     binaries): its FMUs nested and coupled inside as `simulate` couples them, its values and files
     inside, so that any tool that imports an FMU runs the scene (`cosim export SCENE --fmu`; at a
     communication step that is a multiple of the scene's step its outputs are `simulate`'s bit for
-    bit). Returns the FMU's path."""
+    bit); with model_exchange=True as ONE Model Exchange FMU instead (`--fmu FILE --me`: the
+    connections carried inside its derivatives, for the importer's solver). Returns the FMU's path."""
     from .platform.run.portable import export_fmu as write
     loaded = scene if isinstance(scene, Scene) else load_scene(scene)
-    return write(loaded, Path(path), fmi=fmi).files[0]
+    return write(loaded, Path(path), fmi=fmi, model_exchange=model_exchange).files[0]
 
 
 def sweep(file: str | Path, *, workers: int | None = None, scheduler: str | None = None,
