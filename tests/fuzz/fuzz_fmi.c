@@ -105,6 +105,7 @@ static void run_sequence(int max_calls) {
     possible = S_INSTANTIATED;
     fmi2FMUstate states[3] = {NULL, NULL, NULL};
     double state_time[3] = {NAN, NAN, NAN}, bytes_time = NAN; /* the times they were taken at */
+    double state_start[3] = {NAN, NAN, NAN}, bytes_start = NAN; /* the start times they carry */
     fmi2Byte *bytes = NULL;
     size_t n_bytes = 0;
     double time = 0.0, start = 0.0; /* the instance's time (NAN: unknown to the oracle), its start */
@@ -206,7 +207,7 @@ static void run_sequence(int max_calls) {
             const int slot = pick(3);
             status = fmi2GetFMUstate(c, &states[slot]);
             judge("fmi2GetFMUstate", status, S_ANY);
-            if (status == fmi2OK) state_time[slot] = time;
+            if (status == fmi2OK) state_time[slot] = time, state_start[slot] = start;
             break;
         }
         case 16: {
@@ -214,7 +215,9 @@ static void run_sequence(int max_calls) {
             if (!states[slot]) break;
             status = fmi2SetFMUstate(c, states[slot]);
             judge("fmi2SetFMUstate", status, S_ANY);
-            if (status == fmi2OK) possible = S_ANY, time = state_time[slot]; /* its phase: unknown */
+            /* its phase: unknown; its time and the start time of its experiment (fmi2SetupExperiment's,
+               which a later fmi2ExitInitializationMode starts from) are the state's */
+            if (status == fmi2OK) possible = S_ANY, time = state_time[slot], start = state_start[slot];
             break;
         }
         case 17: {
@@ -236,19 +239,20 @@ static void run_sequence(int max_calls) {
             if (!bytes) break;
             status = fmi2SerializeFMUstate(c, states[slot], bytes, size);
             judge("fmi2SerializeFMUstate", status, S_ANY);
-            bytes_time = state_time[slot];
+            bytes_time = state_time[slot], bytes_start = state_start[slot];
             break;
         }
         case 19: {
             if (!bytes) break;
             if (pick(2)) { /* altered payload: its time, if taken, is unknown */
                 bytes[next_random() % n_bytes] ^= (fmi2Byte)(1 + pick(255));
-                bytes_time = NAN;
+                bytes_time = bytes_start = NAN;
             }
             const int slot = pick(3);
             status = fmi2DeSerializeFMUstate(c, bytes, pick(10) ? n_bytes : n_bytes - 1, &states[slot]);
             judge("fmi2DeSerializeFMUstate", status, S_ANY);
             state_time[slot] = status == fmi2OK ? bytes_time : NAN;
+            state_start[slot] = status == fmi2OK ? bytes_start : NAN;
             break;
         }
         case 20: {
