@@ -19,7 +19,10 @@
  * The prediction is linear in the decisions z: X_k = X_k^free + S_k z, with S_k (the response to
  * each decision alone) built once by the same step. The cost, each term weighted by its interval:
  *     sum_k h_k (|y_k|^2_Wy + |q_k|^2_Wq + |q'_k|^2_Wv + |a_k|^2_Wa),
- * a QP in z: H = sum S' W S (constant, factorised once), f from the free response. Constraints at
+ * a QP in z: H = sum S' W S (constant), f from the free response. Solved in u = R z (H = R' R, its
+ * Cholesky factor, once): the cost 1/2 |u|^2 + (R^-T f)' u, every constraint's row a S R^-1, whose
+ * S R^-1 is formed once, so that a solve forms the constraints as cheaply as in z and the solver
+ * has no product with R^-1 to form (the acceleration bounds become the rows of R^-1). Constraints at
  * every interval's end, linearised about the pose now (re-linearised every solve; the leg Jacobian
  * J = dL/dq by central differences of the mechanics' inverse kinematics, platform.c):
  *     legs within the stroke less the margin:  L(q_0) + J (q_k - q_0) in [L_min + m, L_max - m],
@@ -103,7 +106,9 @@ struct MpcData {
     double phi[N + 1][2][4 * 9];                  /* phi_0..3 per interval and organ */
     double weight_y[DOF], weight_q[DOF], weight_v[DOF], weight_a[DOF];
     double sq[N][DOF][Z], sv[N][DOF][Z], sy[N][DOF][Z]; /* the prediction's response to each decision */
-    double H[Z * Z], f[Z], A[M * Z], upper[Z + M], lower[Z + M];
+    double H[Z * Z], f[Z], A[(Z + M) * Z], upper[Z + M], lower[Z + M];
+    double rinv[Z * Z];                           /* R^-1 (upper triangular): z = R^-1 u */
+    double factor[Z * Z];                         /* R, while the QP changes to u */
     int sense[Z + M];
     DAQPProblem qp;
     DAQPSettings settings;
@@ -170,6 +175,53 @@ static void hessian(MpcData *m) {
                                        wv * m->sv[k][d][i] * m->sv[k][d][j];
         }
     for (int j = 0; j < Z; j++) m->H[j * Z + j] += m->h[j / DOF] * m->weight_a[j % DOF];
+}
+
+/* H = R' R (R upper triangular, Cholesky; a tiny multiple of the identity added where the weights
+ * leave H only semi-definite), R^-1 into rinv; then each response S becomes S R^-1, the acceleration
+ * bounds' rows R^-1's and H the identity: the QP in u = R z. */
+static void change_to_unit_hessian(MpcData *m) {
+    double *R = m->factor, largest = 0.0;
+    for (int j = 0; j < Z; j++) largest = fmax(largest, m->H[j * Z + j]);
+    for (double shift = 0.0;; shift = shift == 0.0 ? 1e-12 * largest : 10.0 * shift) {
+        int positive = 1;
+        memset(R, 0, sizeof m->factor);
+        for (int j = 0; j < Z && positive; j++) {
+            double pivot = m->H[j * Z + j] + shift;
+            for (int k = 0; k < j; k++) pivot -= R[k * Z + j] * R[k * Z + j];
+            if (!(pivot > 1e-14 * largest)) { positive = 0; break; }
+            R[j * Z + j] = sqrt(pivot);
+            for (int i = j + 1; i < Z; i++) {
+                double sum = m->H[j * Z + i];
+                for (int k = 0; k < j; k++) sum -= R[k * Z + j] * R[k * Z + i];
+                R[j * Z + i] = sum / R[j * Z + j];
+            }
+        }
+        if (positive) break;
+    }
+    memset(m->rinv, 0, sizeof m->rinv);
+    for (int c = 0; c < Z; c++) { /* R X = e_c by back substitution */
+        m->rinv[c * Z + c] = 1.0 / R[c * Z + c];
+        for (int i = c - 1; i >= 0; i--) {
+            double sum = 0.0;
+            for (int k = i + 1; k <= c; k++) sum += R[i * Z + k] * m->rinv[k * Z + c];
+            m->rinv[i * Z + c] = -sum / R[i * Z + i];
+        }
+    }
+    double (*const responses[3])[DOF][Z] = {m->sq, m->sv, m->sy};
+    for (int s = 0; s < 3; s++)
+        for (int k = 0; k < N; k++)
+            for (int d = 0; d < DOF; d++) {
+                double *row = responses[s][k][d], out[Z];
+                for (int j = 0; j < Z; j++) {
+                    out[j] = 0.0;
+                    for (int i = 0; i <= j; i++) out[j] += row[i] * m->rinv[i * Z + j];
+                }
+                memcpy(row, out, sizeof out);
+            }
+    memcpy(m->A, m->rinv, sizeof m->rinv);
+    memset(m->H, 0, sizeof m->H);
+    for (int j = 0; j < Z; j++) m->H[j * Z + j] = 1.0;
 }
 
 static double gravity_of(const FmuInstance *fmu) { return fmu->s.v.gravity; }
@@ -250,12 +302,13 @@ MpcData *mpc_create(FmuInstance *fmu) {
     }
     responses(m, gravity_of(fmu));
     hessian(m);
+    change_to_unit_hessian(m);
     for (int j = 0; j < Z; j++) {
         const double limit = j % DOF >= 3 ? v->mpc_angular_acceleration_limit : v->mpc_acceleration_limit;
         m->upper[j] = limit, m->lower[j] = -limit, m->sense[j] = 0;
     }
     for (int r = Z; r < Z + M; r++) m->sense[r] = DAQP_SOFT;
-    m->qp.n = Z, m->qp.m = Z + M, m->qp.ms = Z;
+    m->qp.n = Z, m->qp.m = Z + M, m->qp.ms = 0; /* the acceleration bounds: rows of R^-1, hard */
     m->qp.H = m->H, m->qp.f = m->f, m->qp.A = m->A, m->qp.bupper = m->upper, m->qp.blower = m->lower;
     m->qp.sense = m->sense;
     daqp_default_settings(&m->settings);
@@ -326,7 +379,7 @@ static void envelope_linearised(const MpcData *m, const double q[DOF], double va
  * [low, high] less row . free. */
 static void constrain(MpcData *m, int r, const double row[DOF], double (*s)[Z], const double *free_part,
                       double low, double high) {
-    double *a = m->A + (size_t)r * Z, shift = 0.0;
+    double *a = m->A + (size_t)(Z + r) * Z, shift = 0.0;
     for (int j = 0; j < Z; j++) {
         a[j] = 0.0;
         for (int d = 0; d < DOF; d++) a[j] += row[d] * s[d][j];
@@ -386,7 +439,7 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
         }
     }
     DAQPResult result;
-    double solution[Z], multipliers[Z + M];
+    double solution[Z], multipliers[Z + M]; /* u */
     result.x = solution, result.lam = multipliers;
     int status;
     if (!m->ready) {
@@ -412,7 +465,10 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
         state->iterations = 0;
         return;
     }
-    memcpy(state->a, solution, sizeof state->a);
+    for (int d = 0; d < DOF; d++) { /* z = R^-1 u: the first interval's */
+        state->a[d] = 0.0;
+        for (int j = d; j < Z; j++) state->a[d] += m->rinv[d * Z + j] * solution[j];
+    }
     state->iterations = result.iter;
     if (result.soft_slack > 1e-3) state->softened++;
 }
