@@ -388,14 +388,12 @@ static void constrain(MpcData *m, int r, const double row[DOF], double (*s)[Z], 
     m->upper[Z + r] = high - shift, m->lower[Z + r] = low - shift;
 }
 
-/* The QP at time t for the motion now (state mpc), solved: the first interval's accelerations. */
-static void solve(FmuInstance *fmu, MpcData *m, double t) {
+/* The QP's linear term and constraints at time t for the motion now (in u: the responses are S R^-1). */
+static void form_qp(FmuInstance *fmu, MpcData *m, double t, const Motion *at) {
     const ModelVariables *v = &fmu->s.v;
-    MpcState *state = &fmu->s.internal.mpc;
     const double g = gravity_of(fmu), zero[DOF] = {0};
-    Motion now, x;
-    memcpy(&now, fmu->s.x, sizeof now);
-    x = now;
+    const Motion now = *at;
+    Motion x = now;
     double envelope[ENVELOPE_VALUES], J[ENVELOPE_VALUES * DOF];
     envelope_linearised(m, now.q, envelope, J);
     const double *length = envelope;
@@ -438,6 +436,15 @@ static void solve(FmuInstance *fmu, MpcData *m, double t) {
             constrain(m, k * ROWS + 12 + j, row, m->sv[k], x.v, -radius, radius);
         }
     }
+}
+
+/* The QP at time t for the motion now (state mpc), solved: the first interval's accelerations. */
+static void solve(FmuInstance *fmu, MpcData *m, double t) {
+    const ModelVariables *v = &fmu->s.v;
+    MpcState *state = &fmu->s.internal.mpc;
+    Motion now;
+    memcpy(&now, fmu->s.x, sizeof now);
+    form_qp(fmu, m, t, &now);
     DAQPResult result;
     double solution[Z], multipliers[Z + M]; /* u */
     result.x = solution, result.lam = multipliers;

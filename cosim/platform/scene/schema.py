@@ -127,7 +127,7 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("ranges", Free("cueing FMU parameter = [low, high]"), "the parameters searched and their ranges (default: "
             "for the classical washout the gain and frequency of the x and y translation, the tilt and the yaw rotation; "
             "for the MPC its weights of the perceived specific force and angular rate, the position, the angle and the "
-            "acceleration)"),
+            "acceleration, and its prediction's decay)"),
         Key("iterations", Number("", 1, whole=True), "generations of the search", 15),
         Key("population", Number("", 1, whole=True), "points per parameter in a generation", 6),
         Key("seed", Number("", 0, whole=True), "the search's seed: the same seed, the same answer", 1))),
