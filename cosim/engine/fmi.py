@@ -76,6 +76,15 @@ def loaded(fmu_path: str | Path) -> tuple[object, Path]:
     return _LOADED[key]
 
 
+def forget(fmu_path: str | Path) -> None:
+    """The extractions `loaded` made of the FMU at fmu_path (every version of it) removed, and
+    forgotten: for an FMU written for one run and gone after it (`cosim run --me`), so that a
+    process running many such keeps none of them."""
+    path = str(Path(fmu_path).resolve())
+    for key in [key for key in _LOADED if key[0] == path]:
+        shutil.rmtree(_LOADED.pop(key)[1], ignore_errors=True)
+
+
 def _runs(member: str) -> bool:
     """Whether an archive member is one an instance can use here: everything but the sources, the
     documentation and other platforms' binaries (a third of an FMU's extraction time, whose binaries

@@ -322,7 +322,7 @@ def integrate_plan(plan, progress: Sequence = ()) -> Outcome:
     from dataclasses import replace
     from .structure import Component
     from .system_fmu import write_system_fmu
-    from .fmi import loaded
+    from .fmi import forget, loaded
     progress = list(progress)
     if all(loaded(c.fmu)[0].coSimulation is None for c in plan.structure.components):  # Model Exchange FMUs as
         return integrate(plan.structure, plan.stop_time, plan.record, plan.names,  # they are (a lone one's run)
@@ -332,8 +332,11 @@ def integrate_plan(plan, progress: Sequence = ()) -> Outcome:
         fmu = write_system_fmu(replace(plan, model_exchange=False), Path(folder) / "system.fmu",
                                model_exchange=True)
         one = replace(plan.structure, components=[Component(SYSTEM, fmu)], connections=[])
-        outcome = integrate(one, plan.stop_time, [(SYSTEM, n) for n in names], names, plan.output_interval,
-                            progress=progress)
+        try:
+            outcome = integrate(one, plan.stop_time, [(SYSTEM, n) for n in names], names, plan.output_interval,
+                                progress=progress)
+        finally:
+            forget(fmu)  # written for this run: its extraction goes with it
     components = {c.name for c in plan.structure.components}
     messages = []
     for _, message in outcome.messages:  # "mechanics: t = ... leg 4 ..." is mechanics' own

@@ -219,6 +219,21 @@ def test_cosim_run_integrates_it_as_it_runs_the_scene_as_model_exchange(exported
         assert np.array_equal(lone[name].to_numpy(), whole[name].to_numpy()), name
 
 
+def test_a_process_running_many_model_exchange_runs_keeps_none_of_their_fmus():
+    """Each `simulate(..., model_exchange=True)` writes the scene's one ME FMU for the run and
+    extracts it: after the run neither the FMU nor its extraction is left, nor remembered, so that a
+    sweep of such runs in one process accumulates nothing (two runs, the same results)."""
+    import cosim
+    from cosim.engine import fmi
+    scene = load_scene(SCENE).changed({"scene.duration": 0.05})
+    before = dict(fmi._LOADED)
+    runs = [cosim.simulate(scene, model_exchange=True) for _ in range(2)]
+    assert np.array_equal(runs[0]["pose.z"], runs[1]["pose.z"]) and len(runs[0]["pose.z"]) > 10
+    added = {key: folder for key, folder in fmi._LOADED.items() if key not in before}
+    assert not [key for key in added if "cosim-me-" in key[0]], added
+    assert all(folder.is_dir() for _, folder in fmi._LOADED.values())
+
+
 def test_the_model_exchange_export_refuses_what_it_cannot_write_in_one_line(tmp_path):
     done = export(tmp_path / "x.fmu", 1.0, "--ssp", str(tmp_path / "x.ssp"))
     assert done.returncode == 2 and "the one Model Exchange FMU alone" in done.stderr, done.stderr
