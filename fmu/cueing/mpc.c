@@ -177,13 +177,16 @@ static void hessian(MpcData *m) {
     for (int j = 0; j < Z; j++) m->H[j * Z + j] += m->h[j / DOF] * m->weight_a[j % DOF];
 }
 
-/* H = R' R (R upper triangular, Cholesky; a tiny multiple of the identity added where the weights
+/* H = R' R (R upper triangular, Cholesky; a small multiple of the identity added where the weights
  * leave H only semi-definite), R^-1 into rinv; then each response S becomes S R^-1, the acceleration
- * bounds' rows R^-1's and H the identity: the QP in u = R z. */
-static void change_to_unit_hessian(MpcData *m) {
+ * bounds' rows R^-1's and H the identity: the QP in u = R z. 0, or -1 if H has no such factor (a
+ * weight so large that H is not finite, or all of them 0). */
+static int change_to_unit_hessian(MpcData *m) {
     double *R = m->factor, largest = 0.0;
-    for (int j = 0; j < Z; j++) largest = fmax(largest, m->H[j * Z + j]);
+    for (int j = 0; j < Z * Z; j++) largest = fmax(largest, fabs(m->H[j]));
+    if (!(largest > 0.0) || !isfinite(largest)) return -1;
     for (double shift = 0.0;; shift = shift == 0.0 ? 1e-12 * largest : 10.0 * shift) {
+        if (shift > 1e-3 * largest) return -1; /* no factor with a shift that leaves the cost as weighted */
         int positive = 1;
         memset(R, 0, sizeof m->factor);
         for (int j = 0; j < Z && positive; j++) {
@@ -222,6 +225,7 @@ static void change_to_unit_hessian(MpcData *m) {
     memcpy(m->A, m->rinv, sizeof m->rinv);
     memset(m->H, 0, sizeof m->H);
     for (int j = 0; j < Z; j++) m->H[j * Z + j] = 1.0;
+    return 0;
 }
 
 static double gravity_of(const FmuInstance *fmu) { return fmu->s.v.gravity; }
@@ -302,7 +306,12 @@ MpcData *mpc_create(FmuInstance *fmu) {
     }
     responses(m, gravity_of(fmu));
     hessian(m);
-    change_to_unit_hessian(m);
+    if (change_to_unit_hessian(m) != 0) {
+        fmu_log(fmu, fmi2Error, "logStatusError", "mpc.weight.*: the MPC's cost has no positive definite Hessian "
+                "(a weight so large that it is not finite, or every weight 0)");
+        fmu_free(fmu, m);
+        return NULL;
+    }
     for (int j = 0; j < Z; j++) {
         const double limit = j % DOF >= 3 ? v->mpc_angular_acceleration_limit : v->mpc_acceleration_limit;
         m->upper[j] = limit, m->lower[j] = -limit, m->sense[j] = 0;

@@ -145,6 +145,12 @@ def test_its_derivatives_are_its_own():
     ({"limit.leg_length_max": 1.8}, "the neutral pose puts leg 1 at"),
     ({"geometry.base_joint[1].x": 0.4834652370381326, "geometry.base_joint[1].y": -0.637386354243376,
       "geometry.base_joint[1].z": 1.689527733348906}, "a leg has no length at the neutral pose"),
+    # a weight within its range but so large that the cost's Hessian is not finite (found by the
+    # system FMU's fuzzer: the factorisation searched for a shift for ever)
+    ({"mpc.weight.specific_force": 1.7976931348623157e308}, "the MPC's cost has no positive definite Hessian"),
+    ({f"mpc.weight.{w}": 0.0 for w in ("specific_force", "angular_rate", "position", "angle", "velocity",
+                                        "angular_velocity", "acceleration", "angular_acceleration")},
+     "the MPC's cost has no positive definite Hessian"),
 ])
 def test_settings_it_cannot_run_are_refused(values, says):
     instance = FmuInstance(fmu_path("cueing"), "refused")
