@@ -59,6 +59,9 @@ class Outer:
 
 
 PLATFORMS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}  # each version's folders
+# what an importer may set, by the outer variable's causality (system.txt): s settable (an input, a
+# parameter: its nested instance says when), n never (an output, a local: the system computes it)
+_SETTABLE = {"input": "s", "parameter": "s", "output": "n", "local": "n"}
 
 
 def system_binaries(fmi: int = 2) -> dict[str, Path]:
@@ -246,7 +249,7 @@ def _describe(plan: Plan, control: FixedStep, execution: Execution, folders: dic
     lines.append(f"feed_indices {len(kernel.feed_indices)} " + " ".join(str(int(v)) for v in kernel.feed_indices))
     variables = _outer_variables(plan, execution, kernel.index, states)  # by the kernel's own instance indices
     lines.append(f"variables {len(variables)}")
-    lines += [f"{v.instance} {v.kind} {v.vr}" for v in variables]
+    lines += [f"{v.instance} {v.kind} {v.vr} {_SETTABLE[v.causality]}" for v in variables]
     lines.append("end")
     return "\n".join(lines) + "\n", variables
 

@@ -179,6 +179,39 @@ def test_calls_at_the_wrong_time_are_refused_with_the_reason(exported):
         with pytest.raises(FmuError, match="no variable of this type has value reference"):
             instance._call("fmi2GetReal", instance.fmu.getReal, [len(instance.variables) + 5])
         assert instance.get("pose.z") > 1.5
+        # an output is the system's, even where the nested variable is an input (a drive's speed,
+        # which the mechanics feeds): the importer cannot set it (found by tests/fuzz/fuzz_system.c)
+        speed = instance.variables["speed[1]"]
+        assert speed.causality == "output"
+        with pytest.raises(FmuError, match=f"value reference {speed.valueReference} is an output of this FMU"):
+            instance._call("fmi2SetReal", instance.fmu.setReal, [speed.valueReference], [1.0])
+        # a step that would take more of the system's steps than the models' layer takes in one is
+        # refused before it starts, not run for as long as it would take
+        instance.time = 1e-3
+        with pytest.raises(FmuError, match="would take more than 200000 of the system's steps"):
+            instance.do_step(1e6)
+        instance.do_step(1e-3)  # and the instance runs on from where it was
+        assert instance.time == pytest.approx(2e-3)
+    finally:
+        instance.free()
+
+
+def test_values_are_read_from_initialization_on_and_set_until_it_ends(exported):
+    """FMI 2.0's state machine: no value is read before initialization (not even none of them);
+    after a failed initialization only reading, a reset or freeing it are allowed."""
+    from cosim.engine.fmi import FmuError, FmuInstance
+    _, fmu, _ = exported
+    instance = FmuInstance(fmu, "platform")
+    try:
+        with pytest.raises(FmuError, match="fmi2GetReal is not allowed now: the FMU is instantiated"):
+            instance._call("fmi2GetReal", instance.fmu.getReal, [])
+        instance._call("fmi2SetupExperiment", instance.fmu.setupExperiment, None, 0.0, None)
+        instance._call("fmi2EnterInitializationMode", instance.fmu.enterInitializationMode)
+        instance._call("fmi2ExitInitializationMode", instance.fmu.exitInitializationMode)
+        instance._call("fmi2Terminate", instance.fmu.terminate)
+        assert instance.get("pose.z") > 1.5  # a terminated FMU's values are read
+        with pytest.raises(FmuError, match="fmi2SetReal is not allowed now: the FMU is terminated"):
+            instance._call("fmi2SetReal", instance.fmu.setReal, [], [])
     finally:
         instance.free()
 

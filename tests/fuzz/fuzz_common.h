@@ -25,8 +25,10 @@
  * about 8 s for the mechanics under the sanitizers on this machine's cores. A per-sequence budget
  * (200 calls of bounded work) could not tell that from a hang; a per-call one with room does. */
 #define HANG_SECONDS 30
+#ifndef FUZZ_SYSTEM /* a model's harness: its variable table (fuzz_system.c reads a system FMU's description) */
 #include "fmu_common.h"
 #include "model_guid.h"
+#endif
 
 #include <float.h>
 #include <math.h>
@@ -56,6 +58,7 @@ static double hostile_real(void) {
     }
 }
 
+#ifndef FUZZ_SYSTEM
 /* a value for variable vr: mostly within its bounds (to get deep into the model), sometimes hostile */
 static double value_for(int vr) {
     const FmuVariable *var = &fmu_variables[vr];
@@ -67,6 +70,7 @@ static double value_for(int vr) {
 static unsigned random_vr(void) {
     return pick(10) == 0 ? (unsigned)(pick(3) == 0 ? 0 : VR_COUNT + pick(100)) : (unsigned)(1 + pick(VR_COUNT - 1));
 }
+#endif
 
 /* ---- the oracle: FMI 2.0 Co-Simulation and Model Exchange states (a set: after an error the
  * instance may be anywhere); after initialization Co-Simulation is in Step Complete (or Failed),
@@ -104,6 +108,7 @@ static void after(int status, int success_state) {
     else possible |= S_ERROR;
 }
 
+#ifndef FUZZ_SYSTEM
 /* Where setting these references may succeed: Model Exchange's Continuous-Time Mode takes
  * continuous inputs only (its other variables in Event Mode). */
 static int settable_states(const unsigned *vrs, size_t nvr) {
@@ -113,6 +118,15 @@ static int settable_states(const unsigned *vrs, size_t nvr) {
             return S_SET & ~S_CONTINUOUS;
     return S_SET;
 }
+
+/* a model's harness takes no options of its own; its name is its model's */
+static int fuzz_option(const char *flag, const char *value) { (void)flag, (void)value; return 0; }
+static const char *fuzz_name(void) { return MODEL_IDENTIFIER_STRING; }
+#else
+/* the system's harness: --fmu-dir DIR (1: taken, 0: not an option or DIR unusable); its FMU's name */
+static int fuzz_option(const char *flag, const char *value);
+static const char *fuzz_name(void);
+#endif
 
 static void on_alarm(int signum) {
     (void)signum;
@@ -135,6 +149,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(argv[i], "--calls") && i + 1 < argc) max_calls = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--replay") && i + 1 < argc) replay = strtol(argv[++i], NULL, 10);
         else if (!strcmp(argv[i], "--verbose")) verbose = 1;
+        else if (i + 1 < argc && fuzz_option(argv[i], argv[i + 1])) i++;
         else { fprintf(stderr, "usage: %s [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose]\n", argv[0]); return 2; }
     }
     signal(SIGALRM, on_alarm);
@@ -147,7 +162,7 @@ int main(int argc, char **argv) {
         run_sequence(max_calls);
         alarm(0);
     }
-    printf("%s: seed %llu, %ld sequences, %ld calls, %ld violations\n", MODEL_IDENTIFIER_STRING, first_seed,
+    printf("%s: seed %llu, %ld sequences, %ld calls, %ld violations\n", fuzz_name(), first_seed,
            replay >= 0 ? 1 : sequences, calls, violations);
     return violations ? 1 : 0;
 }

@@ -8,7 +8,9 @@
 #include "fmi2FunctionTypes.h"
 #include "kernel.h"
 
-enum { PHASE_INSTANTIATED, PHASE_INITIALIZATION, PHASE_STEPPING, PHASE_TERMINATED, PHASE_FAILED };
+/* FAILED: a call failed while it ran (it may still terminate); ERROR: one failed before it ran (FMI's
+ * error state: its values may be read, then it is reset or freed) */
+enum { PHASE_INSTANTIATED, PHASE_INITIALIZATION, PHASE_STEPPING, PHASE_TERMINATED, PHASE_FAILED, PHASE_ERROR };
 
 typedef struct { /* a nested FMU's binary and its functions */
     void *library;
@@ -67,6 +69,7 @@ typedef struct { /* a variable of the outer FMU: one of an instance's */
     int instance;
     char kind;
     unsigned vr;
+    int settable; /* an input or a parameter (its instance says when); not an output or a local */
 } Variable;
 
 struct System {
@@ -141,6 +144,12 @@ int system_allowed(System *s, const char *call, int ok);
  * system_allowed's refusal. */
 int system_interface_is(System *s, int model_exchange);
 int system_mode_is(System *s, int continuous_time);
+/* 1 if values may be got (setting 0: from initialization on, a failed or terminated instance too)
+ * or set (setting 1: instantiated, initializing or running) in the instance's phase, as FMI's
+ * state machines have it (the nested instance then says which variable when). */
+int system_values_allowed(const System *s, int setting);
+/* A nested call failed: the system FAILED if it was running, else in ERROR. */
+void system_failed(System *s);
 int system_setup(System *s, int tolerance_defined, double tolerance, double start, int stop_defined, double stop);
 int system_enter(System *s);
 int system_exit(System *s);

@@ -2,6 +2,7 @@
  * checked against the FMU's phase and passed to the system's life cycle (system_fmu.c, system_me.c). */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "fmi2Functions.h"
 #include "system.h"
@@ -87,7 +88,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 
 /* Each value passed on to the instance whose it is; the worst status, stopping at an error. */
 #define PASS_ON(call, kind, how, type)                                                             \
-    SYSTEM(c, call, s->phase != PHASE_TERMINATED && (nvr == 0 || (vr && value)));                   \
+    SYSTEM(c, call, system_values_allowed(s, strncmp(call, "fmi2Set", 7) == 0) && (nvr == 0 || (vr && value))); \
     fmi2Status worst = fmi2OK;                                                                     \
     for (size_t i = 0; i < nvr; i++) {                                                             \
         const fmi2Status status = (fmi2Status)how(s, call, kind, vr[i], (type)&value[i]);         \

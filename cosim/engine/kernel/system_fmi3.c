@@ -8,6 +8,7 @@
  * the export made it so. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "fmi3Functions.h"
 #include "system.h"
@@ -127,7 +128,7 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 /* Scalars: one value per reference, each passed on to the instance whose it is (the worst status,
  * stopping at an error); a Boolean through FMI 2.0's int. */
 #define VALUES(call, ok)                                                                           \
-    SYSTEM(instance, call, (ok) && s->phase != PHASE_TERMINATED &&                                  \
+    SYSTEM(instance, call, (ok) && system_values_allowed(s, strncmp(call, "fmi3Set", 7) == 0) &&     \
            (nValueReferences == 0 || (valueReferences && values)));                                \
     if (nValues != nValueReferences) {                                                             \
         say(s, fmi2Error, "logStatusError", "%s: %zu values for %zu references (scalars only)", call, nValues, \

@@ -192,7 +192,7 @@ System *system_new(const char *api, const char *instance, const char *token, con
 
 int system_allowed(System *s, const char *call, int ok) {
     static const char *phases[] = {"instantiated, not initialized", "in initialization mode", "stepping",
-                                   "terminated", "failed"};
+                                   "terminated", "failed", "in error (a call failed before it ran: reset or free it)"};
     if (!s) return 0;
     if (!ok && s->refusal)
         say(s, fmi2Error, "logStatusError", "%s is not allowed: %s", call, s->refusal);
@@ -209,11 +209,16 @@ int system_allowed(System *s, const char *call, int ok) {
             Inner *inner_ = &(s)->inners[k_];                                                      \
             if ((s)->fmus[inner_->fmu].call(inner_->component) > fmi2Warning) {                    \
                 say(s, fmi2Error, "logStatusError", "%s: %s failed", inner_->name, #call);         \
-                (s)->phase = PHASE_FAILED;                                                         \
+                system_failed(s);                                                                  \
                 return ERROR;                                                                      \
             }                                                                                      \
         }                                                                                          \
     } while (0)
+
+int system_values_allowed(const System *s, int setting) {
+    return setting ? s->phase == PHASE_INSTANTIATED || s->phase == PHASE_INITIALIZATION || s->phase == PHASE_STEPPING
+                   : s->phase != PHASE_INSTANTIATED;
+}
 
 int system_interface_is(System *s, int model_exchange) {
     if (s->model_exchange != model_exchange)
@@ -262,8 +267,12 @@ static int kernel_failed(System *s) {
     const int k = s->kernel.failed_instance;
     say(s, fmi2Error, "logStatusError", "%s: %s failed at t = %.9g s", k >= 0 ? s->inners[k].name : "?",
         call_name(s->kernel.failed_call), k >= 0 ? s->kernel.instance_time[k] : NAN);
-    s->phase = PHASE_FAILED;
+    system_failed(s);
     return ERROR;
+}
+
+void system_failed(System *s) {
+    s->phase = s->phase == PHASE_STEPPING || s->phase == PHASE_FAILED ? PHASE_FAILED : PHASE_ERROR;
 }
 
 int system_exit(System *s) {
@@ -298,6 +307,20 @@ static double plan_step(System *s) {
     return s->regular_step;
 }
 
+/* At most this many of the system's steps in one communication step, as the models bound theirs
+ * (ODE_MAX_STEPS, fmu/common/ode.h): a step asking for more is refused before it starts, not left
+ * to run for as long as it would take. */
+enum { MAX_STEPS_PER_COMMUNICATION_STEP = 200000 };
+
+/* How many of the system's steps a communication step of h takes at most: every step left in the
+ * plan's runs, and the regular step's over all of h (and the two partial steps at its ends). */
+static double steps_at_most(const System *s, double h) {
+    double steps = 2.0 + ceil(h / s->regular_step);
+    if (s->run < s->n_runs) steps += s->run_left;
+    for (int run = s->run + 1; run < s->n_runs; run++) steps += s->run_count[run];
+    return steps;
+}
+
 int system_do_step(System *s, double t, double h_communication) {
     const double t_end = t + h_communication;
     double now = system_time(s);
@@ -306,6 +329,12 @@ int system_do_step(System *s, double t, double h_communication) {
         say(s, fmi2Error, "logStatusError",
             "%sDoStep: a step of %.9g s from t = %.9g s, where the system is at t = %.9g s (steps go forward from "
             "where the last one ended)", s->api, h_communication, t, now);
+        return ERROR;
+    }
+    if (steps_at_most(s, h_communication) > MAX_STEPS_PER_COMMUNICATION_STEP) {
+        say(s, fmi2Error, "logStatusError",
+            "%sDoStep: a step of %.9g s would take more than %d of the system's steps (%.9g s each): give it in "
+            "shorter communication steps", s->api, h_communication, MAX_STEPS_PER_COMMUNICATION_STEP, s->regular_step);
         return ERROR;
     }
     double residual, bond_energy[2 * 64];
@@ -346,7 +375,7 @@ int system_reset(System *s) {
     EVERY_INNER(s, reset);
     for (int k = 0; k < s->n_instances; k++)
         if (!set_values(s, &s->inners[k])) {
-            s->phase = PHASE_FAILED;
+            system_failed(s);
             return ERROR;
         }
     s->phase = PHASE_INSTANTIATED;
@@ -381,6 +410,11 @@ int system_get(System *s, const char *call, char kind, unsigned vr, void *value)
 int system_set(System *s, const char *call, char kind, unsigned vr, const void *value) {
     const Variable *v = variable(s, vr, kind, call);
     if (!v) return ERROR;
+    if (!v->settable) { /* the nested variable may be an input (a connection's target): the system's, not the importer's */
+        say(s, fmi2Error, "logStatusError", "%s: value reference %u is an output of this FMU (see its "
+            "modelDescription.xml): it cannot be set", call, vr);
+        return ERROR;
+    }
     s->stale = 1;
     const Inner *inner = &s->inners[v->instance];
     const Nested *n = &s->fmus[inner->fmu];

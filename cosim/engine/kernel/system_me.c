@@ -25,7 +25,7 @@ enum { OK = 0, ERROR = 3, SWEEPS = 10 };
 
 static int refused(System *s, const Inner *inner, const char *call) {
     say(s, fmi2Error, "logStatusError", "%s: %s failed at t = %.9g s", inner->name, call, s->me_time);
-    s->phase = PHASE_FAILED;
+    system_failed(s);
     return ERROR;
 }
 
@@ -133,7 +133,7 @@ int system_me_new_discrete_states(System *s, int *terminate, int *states_changed
             if (round == 100) {
                 say(s, fmi2Error, "logStatusError", "%s: still new discrete states after %d rounds of "
                     "fmi2NewDiscreteStates at t = %.9g s", inner->name, round, s->me_time);
-                s->phase = PHASE_FAILED;
+                system_failed(s);
                 return ERROR;
             }
             if (NESTED(s, inner)->new_discrete_states(inner->component, &info) > fmi2Warning)
