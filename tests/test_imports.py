@@ -1,6 +1,6 @@
 """A command loads what it needs and no more: `cosim --help` and a run without plots never import
 the plotting, parallel or optimisation libraries (matplotlib, plotly, Dask and its scheduler
-tornado, pymoo, pyarrow, pandas), which cost a run without them most of its start-up, nor a run
+tornado, pymoo, pyarrow, pandas, clarabel), which cost a run without them most of its start-up, nor a run
 that streams and listens to nothing the networking (socket); `cosim --help` not even the engine's
 numerics and FMI (numpy, scipy, fmpy, lxml: the package's names load on first use)."""
 
@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-HEAVY = ("matplotlib", "plotly", "dask", "distributed", "tornado", "pymoo", "pyarrow", "pandas")
+HEAVY = ("matplotlib", "plotly", "dask", "distributed", "tornado", "pymoo", "pyarrow", "pandas", "clarabel")
 LOADED = """
 import json, sys
 from cosim.cli import main

@@ -83,13 +83,23 @@ class Vestibular:
         h = float(times[1] - times[0]) if len(times) > 1 else 1.0
         u0 = float(signal[0])
         deviation = np.asarray(signal, dtype=float) - u0  # from the settled state, zero before the start
-        residues, direct = self.modes()
+        recursions, direct = self.recursions(h)
         out = np.full(len(deviation), self.static_gain() * u0) + direct * deviation
+        for decay, previous, now, residue in recursions:
+            out += residue * lfilter([now, previous], [1.0, -decay], deviation)
+        return out
+
+    def recursions(self, h: float) -> tuple[list[tuple[float, float, float, float]], float]:
+        """Its modes over a step h with the input linear between samples (perceive's recursions):
+        per mode (e^{ph}, i0 - i1, i1, its residue) in x+ = e^{ph} x + (i0 - i1) u + i1 u+, the
+        output sum residue x + direct u; and the direct term."""
+        residues, direct = self.modes()
+        out = []
         for r, p in zip(residues, self.poles):
             i0 = np.expm1(p * h) / p
             i1 = (np.expm1(p * h) - p * h) / (p * p * h)
-            out += r * lfilter([i1, i0 - i1], [1.0, -np.exp(p * h)], deviation)
-        return out
+            out.append((float(np.exp(p * h)), float(i0 - i1), float(i1), float(r)))
+        return out, float(direct)
 
 
 # the otoliths (Young and Meiry 1968, as Telban and Cardullo 2005 give them): gain, lead, long and short lags

@@ -66,6 +66,8 @@ def test_tuning_beats_the_scenes_cueing_within_every_limit_and_is_the_same_on_da
     assert here.better  # co-simulated: less perceived error, every margin >= 0
     assert here.confirmed["tuned"].perceived_error < 0.97 * here.confirmed["scene"].perceived_error
     assert all(low <= here.best[k] <= high for k, (low, high) in ranges.items())
+    # the floor under every cueing of the drive (cueing_bound) lies under both, screened and co-simulated
+    assert here.floor.perceived_error < min(j.perceived_error for j in [*here.screened.values(), *here.confirmed.values()])
     on_dask = tune(braking, ranges, workers=2, seed=3, iterations=3, population=4)
     assert on_dask.best == here.best and on_dask.evaluations == here.evaluations
 
@@ -84,6 +86,8 @@ def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     summary = (tmp_path / "out" / "short_tuning.txt").read_text()
     gain = float(re.search(r"tilt.gain = ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["tilt.gain"] == pytest.approx(gain, rel=1e-3)
+    floor = re.search(r"the floor: .* tilting no faster than 2.5 deg/s, feels closer than ([0-9.]+)", summary)
+    assert 0 <= float(floor.group(1)) < float(re.search(r"co-simulated: perceived error ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["translation.x.gain"] == 0.5  # the scene's own values kept
     assert "# 2.5 deg/s: a margin" in (tmp_path / "out" / "short_tuned.toml").read_text()  # and its comments
     assert np.isfinite(cosim.simulate(tuned)["pose.x"]).all()

@@ -30,6 +30,7 @@ from ..run.runner import run_scene
 from ..scene import Scene
 from ..run.alone import play_cueing
 from .search.optimise import evolve
+from .cueing_bound import CueingBound, scene_bound
 
 # searched where the scene's [cueing.tune] names no ranges, per [cueing] algorithm: for the classical
 # washout the horizontal channels and the tilt, the ones a ground vehicle's motion exercises most;
@@ -194,6 +195,7 @@ class Tuning:
     seconds: float
     screened: dict[str, Judged] = field(default_factory=dict)   # "scene", "tuned"
     confirmed: dict[str, Judged] = field(default_factory=dict)  # "scene", "tuned"
+    floor: CueingBound | None = None  # the least error any cueing could reach on the drive (cueing_bound)
 
     @property
     def better(self) -> bool:
@@ -208,6 +210,13 @@ class Tuning:
             out.append(f"the {'scene' if name == 'scene' else 'tuned'}'s cueing:")
             out += [f"  {judged.line()}" for judged in (self.screened[name], self.confirmed[name])]
         out.append("tuned parameters: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.best.items()))
+        if self.floor is not None:
+            tuned = self.confirmed["tuned"].perceived_error
+            out.append(f"the floor: no cueing within the platform's stroke and joints, tilting no faster than "
+                       f"{math.degrees(self.floor.tilt_rate_limit):.3g} deg/s, feels closer than "
+                       f"{self.floor.perceived_error:.3f}, even knowing the whole drive (the tuned cueing is "
+                       f"{tuned - self.floor.perceived_error:.3f} above it: at most {1.0 - self.floor.perceived_error / tuned:.0%} "
+                       "of its error is left to gain; cosim.platform.design.cueing_bound)")
         out.append("verdict: the tuned cueing " + ("feels closer to the vehicle than the scene's, within every limit, "
                                                     "confirmed by co-simulation" if self.better else
                                                     "is not confirmed better within every limit by co-simulation"))
@@ -238,6 +247,11 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
     for name, parameters in (("scene", {}), ("tuned", best)):
         tuning.screened[name] = own if name == "scene" else screen(scene, parameters)
         tuning.confirmed[name] = confirm(scene, parameters)
+    rate_limit = ranges.get("tilt.rate_limit", (None, None))[1]  # searched: the fastest it may take
+    try:
+        tuning.floor = scene_bound(scene, rate_limit)
+    except RuntimeError:  # the solver did not converge: the report goes without its floor
+        tuning.floor = None
     return tuning
 
 
