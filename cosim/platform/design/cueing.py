@@ -207,7 +207,7 @@ class Tuning:
         out = [f"tuned {len(self.ranges)} cueing parameters by differential evolution: {self.evaluations} screenings "
                f"in {self.seconds:.0f} s"]
         for name in ("scene", "tuned"):
-            out.append(f"the {'scene' if name == 'scene' else 'tuned'}'s cueing:")
+            out.append("the scene's cueing:" if name == "scene" else "the tuned cueing:")
             out += [f"  {judged.line()}" for judged in (self.screened[name], self.confirmed[name])]
         out.append("tuned parameters: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.best.items()))
         if self.floor is not None:
