@@ -93,6 +93,18 @@ def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     assert np.isfinite(cosim.simulate(tuned)["pose.x"]).all()
 
 
+def test_a_drive_the_cueing_renders_exactly_is_on_the_floor(tmp_path, capsys):
+    """A drive's first second, cruising (nothing felt): the tuned cueing's error and the floor are both
+    0, and the summary says nothing is left to gain (not a division by zero)."""
+    scene = tmp_path / "cruise.toml"
+    scene.write_text(EXAMPLE.read_text().replace("duration = 20.0", "duration = 1.0").replace(
+        'vehicle = "drive.csv"', f'vehicle = "{EXAMPLE.parent / "drive.csv"}"')
+        + '\n[cueing.tune]\nranges = {"tilt.gain" = [0.2, 0.8]}\niterations = 1\npopulation = 2\n')
+    assert main(["tune", str(scene), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
+    summary = (tmp_path / "out" / "cruise_tuning.txt").read_text()
+    assert "feels closer than 0.000" in summary and "nothing is left to gain" in summary
+
+
 def test_tuning_a_scene_without_a_vehicle_is_one_line(capsys):
     assert main(["tune", str(ROOT / "scenes" / "meng_eq35.toml"), "--workers", "0"]) == 2
     err = capsys.readouterr().err

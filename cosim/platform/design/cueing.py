@@ -212,11 +212,13 @@ class Tuning:
         out.append("tuned parameters: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.best.items()))
         if self.floor is not None:
             tuned = self.confirmed["tuned"].perceived_error
+            left = max(0.0, tuned - self.floor.perceived_error)
             out.append(f"the floor: no cueing within the platform's stroke and joints, tilting no faster than "
                        f"{math.degrees(self.floor.tilt_rate_limit):.3g} deg/s, feels closer than "
-                       f"{self.floor.perceived_error:.3f}, even knowing the whole drive (the tuned cueing is "
-                       f"{tuned - self.floor.perceived_error:.3f} above it: at most {1.0 - self.floor.perceived_error / tuned:.0%} "
-                       "of its error is left to gain; cosim.platform.design.cueing_bound)")
+                       f"{self.floor.perceived_error:.3f}, even knowing the whole drive ("
+                       + (f"the tuned cueing is {left:.3f} above it: at most {left / tuned:.0%} of its error is left to gain"
+                          if left > 0.0 else "the tuned cueing is on it: nothing is left to gain")
+                       + "; cosim.platform.design.cueing_bound)")
         out.append("verdict: the tuned cueing " + ("feels closer to the vehicle than the scene's, within every limit, "
                                                     "confirmed by co-simulation" if self.better else
                                                     "is not confirmed better within every limit by co-simulation"))
