@@ -16,9 +16,10 @@
 # design writes to it (a tmpfs: root), a sweep cache with planted files or the wrong owner or mode;
 # any traceback, hang, exit other than 0/1/2, multi-line error, unpacked copy left behind,
 # half-written file or planted file run fails it.
-# The whole system as one FMU is fuzzed too (tests/fuzz/fuzz_system.c: its FMI 2.0 layer under the
-# sanitizers, the nested FMUs as the export ships them): Meng's scene and the MPC car drive, each
-# exported as Co-Simulation and as Model Exchange.
+# The whole system as one FMU is fuzzed too (tests/fuzz/fuzz_system.c: its FMI 2.0 layer, fuzz_fmi3.c
+# built as fuzz3_system: its FMI 3.0 layer, under the sanitizers, the nested FMUs as the export ships
+# them): Meng's scene and the MPC car drive, each exported as Co-Simulation and as Model Exchange, in
+# FMI 2.0 and in FMI 3.0.
 # Each run also checks for leaks (LeakSanitizer: every sequence instantiates and frees an instance)
 # and steps six instances on six threads against a sequential run (ThreadSanitizer reports races).
 # Exits non-zero on any violation, sanitizer report or difference.
@@ -29,20 +30,26 @@ CMAKE=.venv/bin/cmake
 [ -x "$CMAKE" ] || CMAKE=cmake
 "$CMAKE" -S . -B build-fuzz -DCOSIM_FUZZ=ON -DCOSIM_SANITIZE=ON -DPython3_EXECUTABLE="$PWD/.venv/bin/python" \
   > build-fuzz.log 2>&1 || { cat build-fuzz.log; exit 1; }
-targets="fuzz_system"
+targets="fuzz_system fuzz3_system"
 for m in $MODELS; do targets="$targets fuzz_$m fuzz3_$m threads_$m"; done
 # shellcheck disable=SC2086
 "$CMAKE" --build build-fuzz -j 2 --target $targets >> build-fuzz.log 2>&1 || { cat build-fuzz.log; exit 1; }
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export TSAN_OPTIONS=halt_on_error=1
 mode=${1:-ci}
-SYSTEM_FMUS="meng_cs meng_me car_cs car_me"
-export_systems() {  # the system FMUs fuzz_system runs on, exported as a user does and unpacked
-  local folder=build-fuzz/system_fmus scene
+# the system FMUs: SCENE_INTERFACE[3] (3: FMI 3.0, fuzzed by fuzz3_system; else FMI 2.0, fuzz_system)
+SYSTEM_FMUS="meng_cs meng_me car_cs car_me meng_cs3 meng_me3 car_cs3 car_me3"
+harness() { case "$1" in *3) echo build-fuzz/fuzz3_system ;; *) echo build-fuzz/fuzz_system ;; esac; }
+export_systems() {  # the system FMUs the harnesses run on, exported as a user does and unpacked
+  local folder=build-fuzz/system_fmus scene options
   rm -rf "$folder" && mkdir -p "$folder"
   for name in $SYSTEM_FMUS; do
     case "$name" in meng_*) scene=scenes/meng_eq35.toml ;; *) scene=examples/vehicle/car_drive_mpc.toml ;; esac
-    .venv/bin/python -m cosim export "$scene" --fmu "$folder/$name.fmu" --duration 2 $([ "${name#*_}" = me ] && echo --me) \
+    options=""
+    case "$name" in *_me*) options="--me" ;; esac
+    case "$name" in *3) options="$options --fmi 3" ;; esac
+    # shellcheck disable=SC2086
+    .venv/bin/python -m cosim export "$scene" --fmu "$folder/$name.fmu" --duration 2 $options \
       > "$folder/$name.log" 2>&1 || { cat "$folder/$name.log"; exit 1; }
     .venv/bin/python -c "import sys, zipfile; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" \
       "$folder/$name.fmu" "$folder/$name"
@@ -57,7 +64,7 @@ case "$mode" in
   replay3)
     exec "build-fuzz/fuzz3_$2" --seed "$3" --replay "$4" --verbose ;;
   replay-system)
-    exec build-fuzz/fuzz_system --fmu-dir "$PWD/build-fuzz/system_fmus/$2" --seed "$3" --replay "$4" --verbose ;;
+    exec "$(harness "$2")" --fmu-dir "$PWD/build-fuzz/system_fmus/$2" --seed "$3" --replay "$4" --verbose ;;
   long)
     for m in $MODELS; do
       "build-fuzz/fuzz_$m" --seed 1 --sequences 100000
@@ -65,7 +72,7 @@ case "$mode" in
     done
     export_systems
     for name in $SYSTEM_FMUS; do
-      build-fuzz/fuzz_system --fmu-dir "$PWD/build-fuzz/system_fmus/$name" --seed 1 --sequences 10000
+      "$(harness "$name")" --fmu-dir "$PWD/build-fuzz/system_fmus/$name" --seed 1 --sequences 10000
     done ;;
   ci)
     new_seed=$(( $(date +%s) % 1000000007 ))
@@ -80,7 +87,7 @@ case "$mode" in
     export_systems
     for name in $SYSTEM_FMUS; do
       for seed in 1 "$new_seed"; do
-        build-fuzz/fuzz_system --fmu-dir "$PWD/build-fuzz/system_fmus/$name" --seed "$seed" --sequences 1000
+        "$(harness "$name")" --fmu-dir "$PWD/build-fuzz/system_fmus/$name" --seed "$seed" --sequences 1000
       done
     done
     .venv/bin/python tests/fuzz/fuzz_inputs.py --mutants 40 ;;

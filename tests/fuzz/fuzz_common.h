@@ -109,9 +109,11 @@ static void after(int status, int success_state) {
 }
 
 #ifndef FUZZ_SYSTEM
-/* Where setting these references may succeed: Model Exchange's Continuous-Time Mode takes
- * continuous inputs only (its other variables in Event Mode). */
-static int settable_states(const unsigned *vrs, size_t nvr) {
+/* Where setting these references (as `type`: 'r', 'i', 'b', 's'; a model's harness does not judge it)
+ * may succeed: Model Exchange's Continuous-Time Mode takes continuous inputs only (its other
+ * variables in Event Mode). */
+static int settable_states(const unsigned *vrs, size_t nvr, int type) {
+    (void)type;
     for (size_t i = 0; vrs && i < nvr; i++)
         if (vrs[i] >= 1 && vrs[i] < VR_COUNT &&
             !(fmu_variables[vrs[i]].causality == FMU_INPUT && fmu_variables[vrs[i]].variability == FMU_CONTINUOUS))

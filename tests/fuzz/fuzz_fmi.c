@@ -150,7 +150,7 @@ static void run_sequence(int max_calls) {
         case 7: case 8: {
             for (size_t i = 0; i < nvr; i++) reals[i] = (vrs[i] >= 1 && vrs[i] < VR_COUNT) ? value_for((int)vrs[i]) : hostile_real();
             status = fmi2SetReal(c, pick(20) ? vrs : NULL, nvr, pick(20) ? reals : NULL);
-            judge("fmi2SetReal", status, settable_states(vrs, nvr));
+            judge("fmi2SetReal", status, settable_states(vrs, nvr, 'r'));
             after(status, 0);
             break;
         }

@@ -8,10 +8,34 @@
  * model with Model Exchange (MODEL_MODEL_EXCHANGE) is instantiated as that in half the sequences,
  * which then make Model Exchange's calls (times, states of every size, Event and Continuous-Time
  * Mode, discrete-state updates) in place of steps, by FMI 3.0's Model Exchange state machine; each
- * interface's own calls on the other's instance are never allowed. */
+ * interface's own calls on the other's instance are never allowed.
+ *
+ * Built with FUZZ_SYSTEM (fuzz3_system), the same sequences run against a whole system as ONE FMI
+ * 3.0 FMU (`cosim export SCENE --fmu FILE --fmi 3`, with --me its Model Exchange): its layer
+ * (cosim/engine/kernel/system_fmi3.c over system_fmu.c) linked in, the nested FMUs loaded from its
+ * resources/, what it offers read from its modelDescription.xml (fuzz_system.h):
+ *
+ *   fuzz3_system --fmu-dir DIR [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose] */
 #include "fuzz_common.h"
 
 #include "fmi3Functions.h"
+
+#ifdef FUZZ_SYSTEM /* fuzz3_system: a system FMU's FMI 3.0 layer; what it offers read from its description */
+#include "fuzz_system.h"
+#define MODEL_GUID guid
+#define MODEL_N_STATES n_states
+#define STATES_CAPACITY (MAX_STATES + 2)
+#define MODEL_MODEL_EXCHANGE offers_model_exchange
+#define OFFERS_CO_SIMULATION (!offers_model_exchange) /* exported as one interface or the other */
+#define FMU_STATE_CALLS (has_fmu_state ? S_ANY : 0)
+#define VR_COUNT ((unsigned)n_variables)
+#define RESOURCES resources
+#else
+#define STATES_CAPACITY (MODEL_N_STATES > 0 ? MODEL_N_STATES : 1)
+#define OFFERS_CO_SIMULATION 1
+#define FMU_STATE_CALLS S_ANY
+#define RESOURCES ""
+#endif
 
 static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
     (void)env, (void)status, (void)category;
@@ -27,7 +51,7 @@ static int for_me(int states) { return model_exchange ? states : 0; }
 /* One of Model Exchange's calls (on a Co-Simulation instance: each is refused), by FMI 3.0's Model
  * Exchange state machine; *time: the instance's time as the calls so far set it (NAN: unknown). */
 static void model_exchange_call(fmi3Instance c, double *time) {
-    enum { N = MODEL_N_STATES > 0 ? MODEL_N_STATES : 1 };
+    enum { N = STATES_CAPACITY };
     double x[N], dx[N];
     const size_t n = pick(10) ? (size_t)MODEL_N_STATES : (size_t)pick(N + 2); /* the wrong size now and then */
     const size_t fits = n <= (size_t)N ? n : (size_t)N;
@@ -72,8 +96,10 @@ static void model_exchange_call(fmi3Instance c, double *time) {
         const int states = pick(2);
         status = states ? fmi3GetNumberOfContinuousStates(c, pick(20) ? &count : NULL)
                         : fmi3GetNumberOfEventIndicators(c, pick(20) ? &count : NULL);
-        judge("fmi3GetNumberOfContinuousStates/EventIndicators", status, for_me(S_ANY));
-        if (status == fmi3OK && count != (states ? (size_t)MODEL_N_STATES : 0))
+        /* in any state (the Reference FMUs' mask), of either interface: a Co-Simulation instance may
+         * answer (none) or refuse */
+        judge("fmi3GetNumberOfContinuousStates/EventIndicators", status, S_ANY);
+        if (status == fmi3OK && count != (states && model_exchange ? (size_t)MODEL_N_STATES : 0))
             violation("fmi3GetNumberOfContinuousStates/EventIndicators", "a count that is not the model's");
         break;
     }
@@ -110,21 +136,21 @@ static void model_exchange_call(fmi3Instance c, double *time) {
 }
 
 static void run_sequence(int max_calls) {
-    model_exchange = MODEL_MODEL_EXCHANGE && pick(2);
+    model_exchange = MODEL_MODEL_EXCHANGE && (!OFFERS_CO_SIMULATION || pick(2));
     fmi3Instance c = model_exchange
-        ? fmi3InstantiateModelExchange("fuzz", MODEL_GUID, "", fmi3False, pick(2) != 0, NULL, log_message)
-        : fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, "", fmi3False, pick(2) != 0, fmi3False, pick(2) != 0, NULL,
+        ? fmi3InstantiateModelExchange("fuzz", MODEL_GUID, RESOURCES, fmi3False, pick(2) != 0, NULL, log_message)
+        : fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, RESOURCES, fmi3False, pick(2) != 0, fmi3False, pick(2) != 0, NULL,
                                       0, NULL, log_message, NULL);
     if (!c) { violation("fmi3Instantiate", "returned NULL for a valid token"); return; }
     if (pick(10) == 0) { /* what a Co-Simulation FMU without event mode must refuse */
         calls++;
-        if (fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, "", fmi3False, fmi3False, fmi3True, fmi3False, NULL, 0,
+        if (fmi3InstantiateCoSimulation("fuzz", MODEL_GUID, RESOURCES, fmi3False, fmi3False, fmi3True, fmi3False, NULL, 0,
                                         NULL, log_message, NULL))
             violation("fmi3InstantiateCoSimulation", "accepted eventModeUsed without event mode");
-        if (fmi3InstantiateCoSimulation("fuzz", "{not the token}", "", fmi3False, fmi3False, fmi3False, fmi3False,
+        if (fmi3InstantiateCoSimulation("fuzz", "{not the token}", RESOURCES, fmi3False, fmi3False, fmi3False, fmi3False,
                                         NULL, 0, NULL, log_message, NULL))
             violation("fmi3InstantiateCoSimulation", "accepted a wrong instantiation token");
-        fmi3Instance me = fmi3InstantiateModelExchange("fuzz", MODEL_GUID, "", fmi3False, fmi3False, NULL, log_message);
+        fmi3Instance me = fmi3InstantiateModelExchange("fuzz", MODEL_GUID, RESOURCES, fmi3False, fmi3False, NULL, log_message);
         if (me && !MODEL_MODEL_EXCHANGE)
             violation("fmi3InstantiateModelExchange", "a Co-Simulation FMU gave a Model Exchange instance");
         if (!me && MODEL_MODEL_EXCHANGE)
@@ -187,7 +213,7 @@ static void run_sequence(int max_calls) {
         case 7: case 8:
             for (size_t i = 0; i < nvr; i++) reals[i] = (vrs[i] >= 1 && vrs[i] < VR_COUNT) ? value_for((int)vrs[i]) : hostile_real();
             status = fmi3SetFloat64(c, pick(20) ? vrs : NULL, nvr, pick(20) ? reals : NULL, nvalues);
-            judge("fmi3SetFloat64", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
+            judge("fmi3SetFloat64", status, nvalues == nvr ? settable_states(vrs, nvr, 'r') : 0);
             after(status, 0);
             break;
         case 9: {
@@ -200,15 +226,17 @@ static void run_sequence(int max_calls) {
             after(status, 0);
             break;
         }
-        case 10:
+        case 10: {
             for (size_t i = 0; i < nvr; i++) {
                 ints[i] = pick(3) ? pick(4) : (fmi3Int32)(next_random() & 0x7fffffff) - 0x3fffffff;
                 booleans[i] = pick(2) != 0;
             }
-            status = pick(2) ? fmi3SetInt32(c, vrs, nvr, ints, nvalues) : fmi3SetBoolean(c, vrs, nvr, booleans, nvalues);
-            judge("fmi3SetInt32/Boolean", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
+            const int boolean = pick(2);
+            status = boolean ? fmi3SetBoolean(c, vrs, nvr, booleans, nvalues) : fmi3SetInt32(c, vrs, nvr, ints, nvalues);
+            judge("fmi3SetInt32/Boolean", status, nvalues == nvr ? settable_states(vrs, nvr, boolean ? 'b' : 'i') : 0);
             after(status, 0);
             break;
+        }
         case 11:
             status = pick(2) ? fmi3GetInt32(c, vrs, nvr, ints, nvalues) : fmi3GetBoolean(c, vrs, nvr, booleans, nvalues);
             judge("fmi3GetInt32/Boolean", status, nvalues == nvr ? S_GET : 0);
@@ -219,7 +247,7 @@ static void run_sequence(int max_calls) {
             fmi3String out[5];
             if (pick(2)) {
                 status = fmi3SetString(c, vrs, nvr, text, nvalues);
-                judge("fmi3SetString", status, nvalues == nvr ? settable_states(vrs, nvr) : 0);
+                judge("fmi3SetString", status, nvalues == nvr ? settable_states(vrs, nvr, 's') : 0);
             } else {
                 status = fmi3GetString(c, vrs, nvr, out, nvalues);
                 judge("fmi3GetString", status, nvalues == nvr ? S_GET : 0);
@@ -247,11 +275,11 @@ static void run_sequence(int max_calls) {
         case 15: {
             const int slot = pick(3);
             switch (pick(3)) {
-            case 0: status = fmi3GetFMUState(c, &states[slot]); judge("fmi3GetFMUState", status, S_ANY); break;
+            case 0: status = fmi3GetFMUState(c, &states[slot]); judge("fmi3GetFMUState", status, FMU_STATE_CALLS); break;
             case 1:
                 if (!states[slot]) break;
                 status = fmi3SetFMUState(c, states[slot]);
-                judge("fmi3SetFMUState", status, S_ANY);
+                judge("fmi3SetFMUState", status, FMU_STATE_CALLS);
                 if (status == fmi3OK) possible = S_ANY, time = NAN; /* the state's own phase and time: unknown */
                 break;
             default: status = fmi3FreeFMUState(c, &states[slot]); judge("fmi3FreeFMUState", status, S_ANY);

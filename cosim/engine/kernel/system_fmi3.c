@@ -27,6 +27,11 @@ static void log_fmi3(void *environment, const char *instance, int status, const 
 
 #define SYSTEM(c, call, ok) System *s = (c) ? ((Instance *)(c))->system : NULL; \
     if (!system_allowed(s, call, s && (ok))) return fmi3Error
+/* 1 if every pointer the call needs was given; else 0, the refusal's reason kept for SYSTEM. */
+static int given(fmi3Instance c, int all_given) {
+    if (c && !all_given) ((Instance *)c)->system->refusal = "a pointer it needs is NULL";
+    return all_given;
+}
 #define UNSUPPORTED(c, call) (fmi3Status)system_unsupported((c) ? ((Instance *)(c))->system : NULL, call)
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
@@ -106,12 +111,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean noSetFMUStatePriorToCurrentPoint, fmi3Boolean *eventHandlingNeeded,
                       fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    SYSTEM(instance, "fmi3DoStep", s->phase == PHASE_STEPPING && system_interface_is(s, 0));
+    SYSTEM(instance, "fmi3DoStep", given(instance, eventHandlingNeeded && terminateSimulation && earlyReturn &&
+                                               lastSuccessfulTime) && s->phase == PHASE_STEPPING && system_interface_is(s, 0));
     const int status = system_do_step(s, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation) *terminateSimulation = fmi3False;
-    if (earlyReturn) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime) *lastSuccessfulTime = system_time(s);
+    *eventHandlingNeeded = *terminateSimulation = *earlyReturn = fmi3False;
+    *lastSuccessfulTime = system_time(s);
     return (fmi3Status)status;
 }
 
@@ -283,13 +287,13 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
-    SYSTEM(instance, "fmi3GetNumberOfEventIndicators", nEventIndicators != NULL);
+    SYSTEM(instance, "fmi3GetNumberOfEventIndicators", given(instance, nEventIndicators != NULL));
     *nEventIndicators = 0;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
-    SYSTEM(instance, "fmi3GetNumberOfContinuousStates", nContinuousStates != NULL);
+    SYSTEM(instance, "fmi3GetNumberOfContinuousStates", given(instance, nContinuousStates != NULL));
     *nContinuousStates = (size_t)(s->model_exchange ? s->n_states : 0);
     return fmi3OK;
 }
