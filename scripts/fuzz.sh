@@ -16,9 +16,9 @@
 # design writes to it (a tmpfs: root), a sweep cache with planted files or the wrong owner or mode;
 # any traceback, hang, exit other than 0/1/2, multi-line error, unpacked copy left behind,
 # half-written file or planted file run fails it.
-# The whole system as one FMU is fuzzed too (tests/fuzz/fuzz_system.c: its FMI 2.0 layer, fuzz_fmi3.c
-# built as fuzz3_system: its FMI 3.0 layer, under the sanitizers, the nested FMUs as the export ships
-# them): Meng's scene and the MPC car drive, each exported as Co-Simulation and as Model Exchange, in
+# The whole system as one FMU is fuzzed too (the same harnesses built for a system FMU: fuzz_system
+# its FMI 2.0 layer, fuzz3_system its FMI 3.0 layer, under the sanitizers, the nested FMUs as the
+# export ships them): Meng's scene and the MPC car drive, each exported as Co-Simulation and as Model Exchange, in
 # FMI 2.0 and in FMI 3.0.
 # Each run also checks for leaks (LeakSanitizer: every sequence instantiates and frees an instance)
 # and steps six instances on six threads against a sequential run (ThreadSanitizer reports races).

@@ -180,7 +180,7 @@ def test_calls_at_the_wrong_time_are_refused_with_the_reason(exported):
             instance._call("fmi2GetReal", instance.fmu.getReal, [len(instance.variables) + 5])
         assert instance.get("pose.z") > 1.5
         # an output is the system's, even where the nested variable is an input (a drive's speed,
-        # which the mechanics feeds): the importer cannot set it (found by tests/fuzz/fuzz_system.c)
+        # which the mechanics feeds): the importer cannot set it (found by the system FMU's fuzzer, scripts/fuzz.sh)
         speed = instance.variables["speed[1]"]
         assert speed.causality == "output"
         with pytest.raises(FmuError, match=f"value reference {speed.valueReference} is an output of this FMU"):

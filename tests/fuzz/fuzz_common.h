@@ -25,7 +25,7 @@
  * about 8 s for the mechanics under the sanitizers on this machine's cores. A per-sequence budget
  * (200 calls of bounded work) could not tell that from a hang; a per-call one with room does. */
 #define HANG_SECONDS 30
-#ifndef FUZZ_SYSTEM /* a model's harness: its variable table (fuzz_system.c reads a system FMU's description) */
+#ifndef FUZZ_SYSTEM /* a model's harness: its variable table (a system's reads its FMU's description) */
 #include "fmu_common.h"
 #include "model_guid.h"
 #endif
@@ -124,10 +124,23 @@ static int settable_states(const unsigned *vrs, size_t nvr, int type) {
 /* a model's harness takes no options of its own; its name is its model's */
 static int fuzz_option(const char *flag, const char *value) { (void)flag, (void)value; return 0; }
 static const char *fuzz_name(void) { return MODEL_IDENTIFIER_STRING; }
+#define STATES_CAPACITY (MODEL_N_STATES > 0 ? MODEL_N_STATES : 1) /* a state array's length */
+#define OFFERS_CO_SIMULATION 1
+#define FMU_STATE_CALLS S_ANY /* where its FMU state calls may succeed */
+#define RESOURCES ""
 #else
-/* the system's harness: --fmu-dir DIR (1: taken, 0: not an option or DIR unusable); its FMU's name */
-static int fuzz_option(const char *flag, const char *value);
-static const char *fuzz_name(void);
+/* A system FMU's harness (fuzz_fmi.c and fuzz_fmi3.c built with FUZZ_SYSTEM: fuzz_system and
+ * fuzz3_system): what a model's harness has from its variable table, read from the FMU's
+ * description (fuzz_system.h, --fmu-dir DIR). */
+#include "fuzz_system.h"
+#define MODEL_GUID guid
+#define MODEL_N_STATES n_states
+#define STATES_CAPACITY (MAX_STATES + 2)
+#define MODEL_MODEL_EXCHANGE offers_model_exchange
+#define OFFERS_CO_SIMULATION (!offers_model_exchange) /* exported as one interface or the other */
+#define FMU_STATE_CALLS (has_fmu_state ? S_ANY : 0)
+#define VR_COUNT ((unsigned)n_variables)
+#define RESOURCES resources
 #endif
 
 static void on_alarm(int signum) {

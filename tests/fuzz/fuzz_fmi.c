@@ -4,8 +4,23 @@
  * and size, FMU states of its own, altered serialized bytes. A model with Model Exchange
  * (MODEL_MODEL_EXCHANGE) is instantiated as that in half the sequences, which then make Model
  * Exchange's calls (times, states of every size, event and continuous-time modes) in place of
- * steps; each interface's own calls on the other's instance are never allowed. */
+ * steps; each interface's own calls on the other's instance are never allowed.
+ *
+ * Built with FUZZ_SYSTEM (fuzz_system), the same sequences run against a whole system as ONE FMI 2.0
+ * FMU (`cosim export SCENE --fmu FILE`, with --me its Model Exchange): its layer
+ * (cosim/engine/kernel/system_fmi2.c over system_fmu.c, system_me.c, system_read.c, kernel.c)
+ * linked in, the nested FMUs loaded from its resources/ as any importer's instance loads them,
+ * what it offers read from its modelDescription.xml (fuzz_common.h, fuzz_system.h): its value
+ * references, causality, variability, interface, states, whether it can get and set its state.
+ *
+ *   fuzz_system --fmu-dir DIR [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose]
+ *
+ * DIR: the exported FMU unpacked (scripts/fuzz.sh exports and unpacks the ones CI fuzzes). */
 #include "fuzz_common.h"
+
+#ifdef FUZZ_SYSTEM
+#include "fmi2Functions.h"
+#endif
 
 static int model_exchange; /* this sequence's instance is Model Exchange */
 
@@ -18,10 +33,10 @@ static int for_me(int states) { return model_exchange ? states : 0; }
  * Model Exchange state machine; x: states to set, altered at random. *time: the instance's time as
  * the calls so far set it, NAN where the oracle cannot know it (a state set back, a reset). */
 static void model_exchange_call(fmi2Component c, double *time) {
-#if !MODEL_MODEL_EXCHANGE /* a Co-Simulation-only model's binary has none of them */
+#if !defined(FUZZ_SYSTEM) && !MODEL_MODEL_EXCHANGE /* a Co-Simulation-only model's binary has none of them */
     (void)c, (void)time;
 #else
-    enum { N = MODEL_N_STATES > 0 ? MODEL_N_STATES : 1 };
+    enum { N = STATES_CAPACITY };
     double x[N], dx[N];
     const size_t n = pick(10) ? (size_t)MODEL_N_STATES : (size_t)pick(N + 2); /* the wrong size now and then */
     fmi2Status status;
@@ -98,9 +113,20 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 /* ---- one sequence ---- */
 static void run_sequence(int max_calls) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-    model_exchange = MODEL_MODEL_EXCHANGE && pick(2);
-    fmi2Component c = fmi2Instantiate("fuzz", model_exchange ? fmi2ModelExchange : fmi2CoSimulation, MODEL_GUID, "",
-                                      &callbacks, fmi2False, pick(2) ? fmi2True : fmi2False);
+    model_exchange = MODEL_MODEL_EXCHANGE && (!OFFERS_CO_SIMULATION || pick(2));
+    if (pick(20) == 0) { /* an interface it does not offer, or another GUID: no instance */
+        const int other = !model_exchange ? MODEL_MODEL_EXCHANGE == 0 : !OFFERS_CO_SIMULATION;
+        fmi2Component wrong = other && pick(2)
+            ? fmi2Instantiate("fuzz", model_exchange ? fmi2CoSimulation : fmi2ModelExchange, MODEL_GUID, RESOURCES,
+                              &callbacks, fmi2False, fmi2False)
+            : fmi2Instantiate("fuzz", model_exchange ? fmi2ModelExchange : fmi2CoSimulation, "{not its guid}",
+                              RESOURCES, &callbacks, fmi2False, fmi2False);
+        calls++;
+        if (wrong) violation("fmi2Instantiate", "an instance of an interface it does not offer, or of another GUID");
+        fmi2FreeInstance(wrong);
+    }
+    fmi2Component c = fmi2Instantiate("fuzz", model_exchange ? fmi2ModelExchange : fmi2CoSimulation, MODEL_GUID,
+                                      RESOURCES, &callbacks, fmi2False, pick(2) ? fmi2True : fmi2False);
     if (!c) { violation("fmi2Instantiate", "returned NULL for a valid GUID"); return; }
     possible = S_INSTANTIATED;
     fmi2FMUstate states[3] = {NULL, NULL, NULL};
@@ -166,8 +192,9 @@ static void run_sequence(int max_calls) {
         }
         case 10: {
             for (size_t i = 0; i < nvr; i++) ints[i] = pick(3) ? pick(4) : (int)(next_random() & 0x7fffffff) - 0x3fffffff;
-            status = pick(2) ? fmi2SetInteger(c, vrs, nvr, ints) : fmi2SetBoolean(c, vrs, nvr, ints);
-            judge("fmi2SetInteger/Boolean", status, S_SET);
+            const int boolean = pick(2);
+            status = boolean ? fmi2SetBoolean(c, vrs, nvr, ints) : fmi2SetInteger(c, vrs, nvr, ints);
+            judge("fmi2SetInteger/Boolean", status, settable_states(vrs, nvr, boolean ? 'b' : 'i'));
             after(status, 0);
             break;
         }
@@ -181,7 +208,7 @@ static void run_sequence(int max_calls) {
         case 12: {
             fmi2String text[4] = {"", "/dev/zero", "no such file", NULL};
             fmi2String out[4];
-            if (pick(2)) { status = fmi2SetString(c, vrs, nvr, text); judge("fmi2SetString", status, S_SET); }
+            if (pick(2)) { status = fmi2SetString(c, vrs, nvr, text); judge("fmi2SetString", status, settable_states(vrs, nvr, 's')); }
             else { status = fmi2GetString(c, vrs, nvr, out); judge("fmi2GetString", status, S_GET); }
             after(status, 0);
             break;
@@ -190,7 +217,7 @@ static void run_sequence(int max_calls) {
             fmi2Integer order[4];
             for (size_t i = 0; i < nvr; i++) { order[i] = 1 + pick(3) - (pick(10) == 0); reals[i] = hostile_real(); }
             status = fmi2SetRealInputDerivatives(c, pick(20) ? vrs : NULL, nvr, pick(20) ? order : NULL, reals);
-            judge("fmi2SetRealInputDerivatives", status, for_cs(S_SET));
+            judge("fmi2SetRealInputDerivatives", status, for_cs(settable_states(vrs, nvr, 'r')));
             after(status, 0);
             break;
         }
@@ -206,7 +233,7 @@ static void run_sequence(int max_calls) {
         case 15: {
             const int slot = pick(3);
             status = fmi2GetFMUstate(c, &states[slot]);
-            judge("fmi2GetFMUstate", status, S_ANY);
+            judge("fmi2GetFMUstate", status, FMU_STATE_CALLS);
             if (status == fmi2OK) state_time[slot] = time, state_start[slot] = start;
             break;
         }
@@ -214,7 +241,7 @@ static void run_sequence(int max_calls) {
             const int slot = pick(3);
             if (!states[slot]) break;
             status = fmi2SetFMUstate(c, states[slot]);
-            judge("fmi2SetFMUstate", status, S_ANY);
+            judge("fmi2SetFMUstate", status, FMU_STATE_CALLS);
             /* its phase: unknown; its time and the start time of its experiment (fmi2SetupExperiment's,
                which a later fmi2ExitInitializationMode starts from) are the state's */
             if (status == fmi2OK) possible = S_ANY, time = state_time[slot], start = state_start[slot];

@@ -13,29 +13,12 @@
  * Built with FUZZ_SYSTEM (fuzz3_system), the same sequences run against a whole system as ONE FMI
  * 3.0 FMU (`cosim export SCENE --fmu FILE --fmi 3`, with --me its Model Exchange): its layer
  * (cosim/engine/kernel/system_fmi3.c over system_fmu.c) linked in, the nested FMUs loaded from its
- * resources/, what it offers read from its modelDescription.xml (fuzz_system.h):
+ * resources/, what it offers read from its modelDescription.xml (fuzz_common.h, fuzz_system.h):
  *
  *   fuzz3_system --fmu-dir DIR [--seed S] [--sequences N] [--calls M] [--replay K] [--verbose] */
 #include "fuzz_common.h"
 
 #include "fmi3Functions.h"
-
-#ifdef FUZZ_SYSTEM /* fuzz3_system: a system FMU's FMI 3.0 layer; what it offers read from its description */
-#include "fuzz_system.h"
-#define MODEL_GUID guid
-#define MODEL_N_STATES n_states
-#define STATES_CAPACITY (MAX_STATES + 2)
-#define MODEL_MODEL_EXCHANGE offers_model_exchange
-#define OFFERS_CO_SIMULATION (!offers_model_exchange) /* exported as one interface or the other */
-#define FMU_STATE_CALLS (has_fmu_state ? S_ANY : 0)
-#define VR_COUNT ((unsigned)n_variables)
-#define RESOURCES resources
-#else
-#define STATES_CAPACITY (MODEL_N_STATES > 0 ? MODEL_N_STATES : 1)
-#define OFFERS_CO_SIMULATION 1
-#define FMU_STATE_CALLS S_ANY
-#define RESOURCES ""
-#endif
 
 static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
     (void)env, (void)status, (void)category;

@@ -1,8 +1,8 @@
-/* What the system FMU's harnesses (fuzz_system.c: FMI 2.0; fuzz_fmi3.c built with FUZZ_SYSTEM:
- * FMI 3.0) know of the FMU under test, read from its modelDescription.xml where a model's harness
- * has its variable table: each variable's type, where setting it may succeed (by causality and
- * variability), its start; the number of continuous states; the interface it offers; its token and
- * resources. Included after fuzz_common.h. */
+/* What the system FMU's harnesses (fuzz_fmi.c: FMI 2.0, fuzz_fmi3.c: FMI 3.0, each built with
+ * FUZZ_SYSTEM) know of the FMU under test, read from its modelDescription.xml where a model's
+ * harness has its variable table: each variable's type, where setting it may succeed (by causality
+ * and variability), its start; the number of continuous states; the interface it offers; its token
+ * and resources. Included by fuzz_common.h, after the oracle's states. */
 #ifndef FUZZ_SYSTEM_H
 #define FUZZ_SYSTEM_H
 
