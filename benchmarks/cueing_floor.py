@@ -2,7 +2,8 @@
 the least perceived error any platform motion within Meng's stroke and joints could reach, knowing
 the whole drive, as the tilt rate limit is raised from the scenes' 2.5 deg/s (a faster tilt is felt
 by the canals: the measure counts it). By the project's perception model and the second one; the
-split of the floor by channel at the scenes' limit; the time each floor takes.
+split of the floor by channel at the scenes' limit; what the best motion counting every error
+(no dead zone, as the MPC's quadratic cost) is felt as; the time each floor takes.
 
     python benchmarks/cueing_floor.py            # prints the table
     python benchmarks/cueing_floor.py --write    # and writes it into docs/benchmarks.md
@@ -43,8 +44,8 @@ def outside(floor) -> float:
 def main() -> None:
     lines = ["| drive | model | " + " | ".join(f"floor, tilt at most {r:g} deg/s" for r in RATES)
              + " | at 2.5 deg/s by channel (sf x, y, z; rate x, y, z) | its motion outside the limits "
-             "[% of the drive] | seconds per floor |",
-             "|---|---|" + "---|" * len(RATES) + "---|---|---|"]
+             "[% of the drive] | optimised without the dead zone, by the measure (above the floor) | seconds per floor |",
+             "|---|---|" + "---|" * len(RATES) + "---|---|---|---|"]
     for name, path in DRIVES.items():
         scene = load_scene(path)
         for model, organs in (("project's", None), ("second (Reid and Nahon)", SECOND_ORGANS)):
@@ -54,8 +55,10 @@ def main() -> None:
                 floors.append(scene_bound(scene, math.radians(rate), **({"organs": organs} if organs else {})))
                 seconds.append(time.perf_counter() - start)
             split = ", ".join(f"{v:.2f}" for v in floors[0].channels.values())
+            counted = scene_bound(scene, math.radians(RATES[0]), dead_zone=False, **({"organs": organs} if organs else {}))
             lines.append(f"| {name} | {model} | " + " | ".join(f"{f.perceived_error:.3f}" for f in floors)
-                         + f" | {split} | {outside(floors[0]):.0%} | {min(seconds):.1f} |")
+                         + f" | {split} | {outside(floors[0]):.0%} | {counted.reached:.3f} "
+                         f"({counted.reached / floors[0].perceived_error - 1:+.1%}) | {min(seconds):.1f} |")
         print(*lines[-2:], sep="\n", flush=True)
     lines += ["", "The floor: the least perceived error (per channel the rms of the felt error, in thresholds, "
               "summed) of any platform motion whose DOFs stay within the largest excursion a pose within Meng's "
@@ -64,7 +67,10 @@ def main() -> None:
               "knowing the whole drive; the MPC's linearised model (cosim.platform.design.cueing_bound, Clarabel, on "
               "the drive's 10 ms samples). No cueing within those limits, live or with foresight, feels closer. Its "
               "motion, all DOFs at once, leaves the stroke or the joints' angle for the share of the drive given: "
-              "there the floor is lower than any platform could feel. The "
+              "there the floor is lower than any platform could feel. Optimised without the dead zone: the "
+              "best motion when every error counts, below the indifference thresholds too (as in the MPC's "
+              "quadratic cost), felt by the measure (which forgives them) at 2.5 deg/s: what a cost without the "
+              "dead zone gives up, knowing the whole drive. The "
               "time is the best of the five limits' (the workspace's extremes and the vehicle's motion included)."]
     publish("cueing_floor", "python benchmarks/cueing_floor.py", lines)
 

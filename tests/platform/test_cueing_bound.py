@@ -95,6 +95,14 @@ def test_a_motion_the_platform_can_make_is_felt_exactly(ranges):
     assert exact.perceived_error < 1e-6 and exact.reached < 1e-6
 
 
+def test_a_motion_optimised_without_the_dead_zone_is_felt_above_the_floor(emergency_stop, floor):
+    """Counting every error, below the thresholds too (the MPC's quadratic cost does), the best motion
+    is one the measure finds above the floor (the floor is least), and below what that program
+    counted (the measure forgives the errors within the thresholds)."""
+    counted = scene_bound(emergency_stop, dead_zone=False)
+    assert floor.perceived_error < counted.reached < counted.perceived_error
+
+
 def test_the_floor_falls_as_the_tilt_may_turn_faster(emergency_stop, floor):
     faster = [scene_bound(emergency_stop, math.radians(rate)).perceived_error for rate in (5.0, 10.0)]
     assert floor.perceived_error > faster[0] > faster[1]

@@ -186,10 +186,12 @@ def _channel_terms(translation: int | None, tilt: int | None, weight: float | No
     return [(f"acc{translation}", eye)] + ([(f"pos{tilt}", weight * gravity * eye)] if tilt is not None else [])
 
 
-def _felt_rows(prog: _Program, channel: int, terms: list, organ: Vestibular, felt_vehicle: np.ndarray) -> None:
+def _felt_rows(prog: _Program, channel: int, terms: list, organ: Vestibular, felt_vehicle: np.ndarray,
+               dead_zone: bool = True) -> None:
     """A channel's perception (the organ's modes, x_k = e x_{k-1} + (i0 - i1) u_{k-1} + i1 u_k from 0),
-    its felt error w = perceived platform - perceived vehicle - d with the dead zone |d| <= threshold,
-    and its rms in thresholds as a cone t >= |w| / (threshold sqrt(n)), t in the cost."""
+    its felt error w = perceived platform - perceived vehicle - d with the dead zone |d| <= threshold
+    (without it d = 0: every error counts, as in the MPC's quadratic cost), and its rms in thresholds
+    as a cone t >= |w| / (threshold sqrt(n)), t in the cost."""
     n = prog.n
     eye, shift = sp.identity(n, format="csr"), sp.eye(n, k=-1, format="csr")
     modes, direct = organ.recursions(prog.step)  # the measure's own discretisation
@@ -203,8 +205,9 @@ def _felt_rows(prog: _Program, channel: int, terms: list, organ: Vestibular, fel
     prog.equal.append((prog.rows([(f"felt{channel}", eye), (f"dead{channel}", eye)] + [(name, -c) for name, c in perceived]),
                        -felt_vehicle))
     threshold = float(THRESHOLDS[channel])
-    prog.less.append((prog.rows([(f"dead{channel}", eye)]), np.full(n, threshold)))
-    prog.less.append((prog.rows([(f"dead{channel}", -eye)]), np.full(n, threshold)))
+    zone = threshold if dead_zone else 0.0
+    prog.less.append((prog.rows([(f"dead{channel}", eye)]), np.full(n, zone)))
+    prog.less.append((prog.rows([(f"dead{channel}", -eye)]), np.full(n, zone)))
     cone = prog.variable(f"norm{channel}", 1)
     prog.cost[cone.start] = 1.0
     scale = 1.0 / (threshold * np.sqrt(n))
@@ -214,14 +217,17 @@ def _felt_rows(prog: _Program, channel: int, terms: list, organ: Vestibular, fel
 
 def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.ndarray, tilt_rate_limit: float,
                           gravity: float = 9.81, step: float = 0.01,
-                          organs: tuple[Vestibular, ...] = ORGANS) -> CueingBound:
+                          organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True) -> CueingBound:
     """The least perceived error (cosim.platform.perception's measure, by `organs`) of any platform
     motion for the vehicle's motion (n x 6 at `times`, the six channels as vehicle_motion gives
     them), knowing all of it, in the relaxed model above: each DOF within its `ranges` (6 x 2, from
     neutral), roll and pitch each turning no faster than `tilt_rate_limit` [rad/s] beyond the
     vehicle's own rate about that axis, from rest at neutral, accelerations and rates constant
     between samples `step` apart. The floor is the program's dual bound; the motion found is
-    measured by the project's measure (`reached`: the same number to the solver's tolerance)."""
+    measured by the project's measure (`reached`: the same number to the solver's tolerance).
+    dead_zone False: the program counts every error, below the thresholds too (as the MPC's quadratic
+    cost does); its optimum is then no floor (`perceived_error`: that objective), but `reached`, its
+    motion by the measure, shows what ignoring the dead zone costs."""
     grid = np.arange(times[0], times[-1] + 0.5 * step, step)
     grid = grid[grid <= times[-1] + 1e-12]
     n = len(grid)
@@ -235,7 +241,7 @@ def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.nda
         _motion_rows(prog, problem, step, ranges, rate_bound)
         for channel, translation, tilt, weight in problem:
             _felt_rows(prog, channel, _channel_terms(translation, tilt, weight, gravity, eye), organs[channel],
-                       felt_vehicle[:, channel])
+                       felt_vehicle[:, channel], dead_zone)
         x, least = prog.solve()
         floor += least
         for channel, translation, tilt, weight in problem:
@@ -250,12 +256,13 @@ def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.nda
 
 
 def scene_bound(scene, tilt_rate_limit: float | None = None, step: float = 0.01,
-                organs: tuple[Vestibular, ...] = ORGANS) -> CueingBound:
+                organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True) -> CueingBound:
     """The floor under every cueing of a scene's vehicle motion (least_perceived_error): its
     platform's excursions within its mechanics' stroke and joint angle (the margins not taken off;
     widened by WIDEN),
     its tilt rate limit (the scene's `tilt.rate_limit`, or the cueing FMU's default; or as given),
-    the vehicle's motion as the cueing FMU reads it from the scene's file."""
+    the vehicle's motion as the cueing FMU reads it from the scene's file (dead_zone: as
+    least_perceived_error's)."""
     from ..core import gravity_of
     from ..run.alone import play_cueing
     from ..run.compile import CUEING_ALGORITHMS, scene_cueing, scene_values
@@ -271,4 +278,4 @@ def scene_bound(scene, tilt_rate_limit: float | None = None, step: float = 0.01,
     limits = scene_limits(scene)
     ranges = WIDEN * excursion_ranges(_core(scene), limits.leg_length, limits.joint_angle)
     return least_perceived_error(times, vehicle_motion(taken[:, :3], taken[:, 3:], gravity), ranges,
-                                 float(tilt_rate_limit), gravity, step, organs)
+                                 float(tilt_rate_limit), gravity, step, organs, dead_zone)
