@@ -108,7 +108,6 @@ struct MpcData {
     double sq[N][DOF][Z], sv[N][DOF][Z], sy[N][DOF][Z]; /* the prediction's response to each decision */
     double H[Z * Z], f[Z], A[(Z + M) * Z], upper[Z + M], lower[Z + M];
     double rinv[Z * Z];                           /* R^-1 (upper triangular): z = R^-1 u */
-    double factor[Z * Z];                         /* R, while the QP changes to u */
     int sense[Z + M];
     DAQPProblem qp;
     DAQPSettings settings;
@@ -180,15 +179,16 @@ static void hessian(MpcData *m) {
 /* H = R' R (R upper triangular, Cholesky; a small multiple of the identity added where the weights
  * leave H only semi-definite), R^-1 into rinv; then each response S becomes S R^-1, the acceleration
  * bounds' rows R^-1's and H the identity: the QP in u = R z. 0, or -1 if H has no such factor (a
- * weight so large that H is not finite, or all of them 0). */
+ * weight so large that H is not finite, or all of them 0). R is formed in those rows of A, which
+ * become R^-1's once it is no longer needed. */
 static int change_to_unit_hessian(MpcData *m) {
-    double *R = m->factor, largest = 0.0;
+    double *R = m->A, largest = 0.0;
     for (int j = 0; j < Z * Z; j++) largest = fmax(largest, fabs(m->H[j]));
     if (!(largest > 0.0) || !isfinite(largest)) return -1;
     for (double shift = 0.0;; shift = shift == 0.0 ? 1e-12 * largest : 10.0 * shift) {
         if (shift > 1e-3 * largest) return -1; /* no factor with a shift that leaves the cost as weighted */
         int positive = 1;
-        memset(R, 0, sizeof m->factor);
+        memset(R, 0, Z * Z * sizeof *R);
         for (int j = 0; j < Z && positive; j++) {
             double pivot = m->H[j * Z + j] + shift;
             for (int k = 0; k < j; k++) pivot -= R[k * Z + j] * R[k * Z + j];
