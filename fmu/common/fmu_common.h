@@ -103,6 +103,11 @@ int model_derivatives(FmuInstance *fmu, double *dxdt);
 /* After an integrator's step is accepted: the checks a Co-Simulation step makes at its end
  * (warnings logged; fmi2Error stops the run). */
 fmi2Status model_completed_integrator_step(FmuInstance *fmu);
+#if MODEL_STATE_NOMINALS
+/* Each continuous state's nominal value (MODEL_N_STATES of them: 1 where the model knows none), for
+ * the importer's solver: its absolute tolerance is the relative one times the nominal. */
+void model_state_nominals(const FmuInstance *fmu, double *nominals);
+#endif
 #if MODEL_TIME_EVENTS
 /* The next time after fmu->s.time at which the model changes discontinuously (INFINITY: none). */
 double model_next_time_event(FmuInstance *fmu);

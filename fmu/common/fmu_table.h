@@ -92,6 +92,9 @@ typedef struct { char text[FMU_TEXT_MAX]; } FmuText; /* a String variable's valu
 #ifndef MODEL_TIME_EVENTS
 #define MODEL_TIME_EVENTS 0
 #endif
+#ifndef MODEL_STATE_NOMINALS /* 1: the model gives its states' nominal values (model_state_nominals), else all 1 */
+#define MODEL_STATE_NOMINALS 0
+#endif
 /* A model with continuous states integrates them in Co-Simulation by the shared solvers (ode.h,
  * FMU_SOLVER_VARIABLES in its table) unless it sets MODEL_SHARED_SOLVER 0 (it steps them itself:
  * the cueing's filters, discretised exactly). */

@@ -484,6 +484,11 @@ int model_derivatives(FmuInstance *fmu, double *dxdt) {
     return 0;
 }
 
+void model_state_nominals(const FmuInstance *fmu, double *nominals) {
+    for (int k = 0; k < MODEL_N_STATES; k++) nominals[k] = 1.0; /* the washout's filters and tilt */
+    if (mpc_of(fmu)) mpc_state_nominals(mpc_of(fmu), nominals);
+}
+
 fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
     (void)fmu;
     return fmi2OK;

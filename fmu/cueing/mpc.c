@@ -48,6 +48,7 @@
 #include "utils.h" /* daqp_update_ldp */
 
 #include <math.h>
+#include <stddef.h> /* offsetof */
 #include <string.h>
 
 enum {
@@ -566,6 +567,17 @@ void mpc_derivatives(FmuInstance *fmu, const MpcData *m, double *dxdt) {
         }
     }
     memcpy(dxdt, &rate, sizeof rate);
+}
+
+void mpc_state_nominals(const MpcData *m, double *nominals) {
+    const double perceived_scale = 0.1; /* [m/s^2], [rad/s] */
+    const size_t first = offsetof(Motion, xi) / sizeof(double);
+    for (size_t k = 0; k < first; k++) nominals[k] = 1.0;
+    for (int c = 0; c < DOF; c++) { /* y = C xi + D e: the canals' C reaches 2e3 (their 5 ms mode) */
+        const Organ *o = &m->organ[c < 3 ? 0 : 1];
+        for (int i = 0; i < o->n; i++)
+            nominals[first + XI_FIRST[c] + i] = o->c[i] != 0.0 ? perceived_scale / fabs(o->c[i]) : 1.0;
+    }
 }
 
 void mpc_time_event(FmuInstance *fmu, MpcData *m) {

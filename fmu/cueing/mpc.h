@@ -29,6 +29,11 @@ void mpc_perceived_error(FmuInstance *fmu, const MpcData *data, double y[6]);
 /* Model Exchange: the state's derivatives under the accelerations held since the last solve; at an
  * event, a solve where one is due; the time the next is. */
 void mpc_derivatives(FmuInstance *fmu, const MpcData *data, double *dxdt);
+/* The nominal value of each state (MODEL_N_STATES): 1 for the platform's motion; for each organ's
+ * state the size that moves the perceived error by 0.1 (m/s^2, rad/s), below the indifference
+ * thresholds, so that an importer's solver (absolute tolerance: the relative one times the nominal)
+ * holds the perceived errors, not only the motion, to its tolerance. */
+void mpc_state_nominals(const MpcData *data, double *nominals);
 void mpc_time_event(FmuInstance *fmu, MpcData *data);
 double mpc_next_solve(const FmuInstance *fmu);
 /* The pose reference (value and first three derivatives per DOF, from neutral) into pose. */

@@ -30,6 +30,7 @@
 /* Model Exchange too (fmi2_me.c), the MPC's solves its time events. */
 #define MODEL_MODEL_EXCHANGE 1
 #define MODEL_TIME_EVENTS 1
+#define MODEL_STATE_NOMINALS 1 /* the MPC's perception states are far from 1 (model_state_nominals) */
 
 /* Meng 2010's neutral height (../shared/params/meng2010.toml), the default neutral.z. */
 #define CUEING_NEUTRAL_HEIGHT 1.689527733348906
