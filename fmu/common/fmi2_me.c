@@ -96,9 +96,7 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
         return fmi2Error;
     if (!array_fits(fmu, "fmi2GetNominalsOfContinuousStates", x_nominal, nx, MODEL_N_STATES)) return fmi2Error;
 #if MODEL_STATE_NOMINALS
-    double nominals[MODEL_N_STATES];
-    model_state_nominals(fmu, nominals);
-    for (size_t k = 0; k < nx; k++) x_nominal[k] = nominals[k];
+    model_state_nominals(fmu, x_nominal); /* nx is MODEL_N_STATES (array_fits) */
 #else
     for (size_t k = 0; k < nx; k++) x_nominal[k] = 1.0;
 #endif
