@@ -409,20 +409,29 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
                              maxNumSteps=100000)
         rows.append([t, *system.outputs(record)])
         grid = 1
-        while t < stop_time - 1e-12 * max(1.0, abs(stop_time)):
+
+        def reached(at: float) -> bool:  # a time within rounding of now (a grid point and a table's row
+            return at - t <= 1e-12 * max(1.0, abs(t))  # a few ulps apart): CVODE cannot step there
+
+        while not reached(stop_time):
             target = min(structure.experiment.start + grid * interval, stop_time)
             goal = min(target, next_event)
-            try:
-                _, _, t = solver.step(t, goal)
-            except RuntimeError as error:
-                raise Stopped(f"the solver failed at t = {system.time:.9g} s: {error}") from None
-            system.set_time(t)  # the solver's states at t are set (CVodeSolver.step)
-            system.propagate()
-            system.completed_step()
-            if t >= next_event - 1e-12 * max(1.0, abs(t)):
+            if not reached(goal):
+                try:
+                    _, _, t = solver.step(t, goal)
+                except RuntimeError as error:
+                    raise Stopped(f"the solver failed at t = {system.time:.9g} s: {error}") from None
+                system.set_time(t)  # the solver's states at t are set (CVodeSolver.step)
+                system.propagate()
+                system.completed_step()
+            elif goal > t:  # taken as now: time moves on to it, the states stay
+                t = goal
+                system.set_time(t)
+                system.propagate()
+            if reached(next_event):
                 next_event = system.event()
                 solver.reset(t)
-            if t >= target - 1e-12 * max(1.0, abs(t)):
+            if reached(target):
                 rows.append([t, *system.outputs(record)])
                 grid += 1
                 if grid % 100 == 0:
