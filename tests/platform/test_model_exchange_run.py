@@ -52,6 +52,8 @@ def test_a_vehicles_drive_runs_as_one_system_too():
     me, cs = cosim.simulate(scene, model_exchange=True), cosim.simulate(converged)
     times = me["time"]
     assert np.ptp(me["pose.pitch"]) > 0.03  # the braking's tilt is under way (2.1 deg at 2.5 deg/s)
+    assert any("the cueing's reference unguarded" in remark for remark in me.report.remarks)  # it says so
+    assert not any("unguarded" in remark for remark in cs.report.remarks)
     for dof in POSE:
         assert np.abs(me[f"pose.{dof}"] - np.interp(times, cs["time"], cs[f"pose.{dof}"])).max() < 1e-5, dof
     for leg in LEGS:

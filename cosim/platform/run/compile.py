@@ -253,6 +253,9 @@ def model_exchange_plan(compiled: CompiledScene) -> tuple[Plan, str]:
     Model Exchange FMU (a user's drive) is one line (UsageError)."""
     from ...engine.monolithic import RELATIVE_TOLERANCE, model_exchange_structure
     model_exchange_structure(compiled.plan.structure)  # every component has a Model Exchange FMU, or one line
-    return (replace(compiled.plan, model_exchange=True),
-            "run as one Model Exchange FMU of the scene's FMUs (the connections carried inside its derivatives) "
-            f"under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): no coupling, no macro step")
+    remark = ("run as one Model Exchange FMU of the scene's FMUs (the connections carried inside its derivatives) "
+              f"under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): no coupling, no macro step")
+    if compiled.scene.vehicle is not None:  # the guard is the step kernel's (guard.py): no kernel step here
+        remark += ("; the cueing's reference unguarded (the envelope's guard holds it in a co-simulation's steps, "
+                   "not here): any excursion past the platform's limits below is the cueing's own")
+    return replace(compiled.plan, model_exchange=True), remark
