@@ -44,7 +44,7 @@ _libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
 _libc.free.argtypes = [ctypes.c_void_p]
 _STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
 _DOUBLES = ctypes.POINTER(ctypes.c_double)
-RELATIVE_TOLERANCE = 1e-8  # CVODE's, the absolute one per state as much of its size (at least 1)
+RELATIVE_TOLERANCE = 1e-8  # CVODE's, the absolute one per state as much of the FMU's nominal of it
 
 
 class Stopped(RuntimeError):
@@ -246,6 +246,11 @@ class MonolithicSystem:
     def derivatives_into(self, pointer) -> None:
         self._each_part("fmi2GetDerivatives", "getDerivatives", pointer)
 
+    def nominals_into(self, pointer) -> None:
+        """Each FMU's nominals of its states (a solver's absolute tolerance is its relative one
+        times them, as fmpy and fmusim set it)."""
+        self._each_part("fmi2GetNominalsOfContinuousStates", "getNominalsOfContinuousStates", pointer)
+
     def event(self, enter: bool = True) -> float:
         """Every FMU through Event Mode (entered unless it is there: after initialization); the
         next time event of any (inf: none)."""
@@ -385,8 +390,6 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
     try:
         t = structure.experiment.start
         next_event = system.first_event
-        x = system.states()
-        holder = np.ascontiguousarray(x) if system.size else np.zeros(1)
 
         def get_x(pointer, n):
             system.states_into(pointer)
@@ -398,7 +401,7 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
             system.derivatives_into(pointer)
 
         def nominals(pointer, n):
-            np.ctypeslib.as_array(pointer, (n,))[:] = np.maximum(np.abs(holder), 1.0)
+            system.nominals_into(pointer)
 
         class _NoInput:
             def apply(self, t):
