@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "struct_layout.h"
+#include "motion_guard.h"
 
 typedef int (*SetRealFn)(void *, const unsigned *, size_t, const double *);
 typedef int (*GetRealFn)(void *, const unsigned *, size_t, double *);
@@ -124,16 +125,10 @@ typedef struct {
 enum { LIVE_ACCEPTED, LIVE_OUTSIDE, LIVE_LATE, LIVE_FUTURE, LIVE_REPEATED, LIVE_OUT_OF_ORDER, LIVE_MALFORMED,
        LIVE_OLD_VERSION, LIVE_NON_FINITE, LIVE_BEYOND_LIMITS, LIVE_FOREIGN, LIVE_UNAUTHENTICATED, LIVE_WATCHDOG,
        LIVE_COUNTS };
-enum { GUARD_KINDS = 8, LIVE_KEY_MAX = 256, LIVE_MAC = 32 };
+enum { LIVE_KEY_MAX = 256, LIVE_MAC = 32 };
 
 typedef int (*AdmissibleFn)(void *context, const double *values); /* 1: the values are within the envelope */
-/* May replace the acceleration (per channel, constant over the next h) that the reference at
- * value with rate is about to take; returns the bits (< 1 << GUARD_KINDS) of the limits it held
- * back, 0 if it took it as asked. */
-typedef int (*GuardFn)(void *context, double h, const double *value, const double *rate, double *acceleration);
-/* 0 if the values are within the envelope; otherwise the bits (< 1 << GUARD_KINDS) counted for a
- * step spent going back, and in `goal` the values the reference goes back to (inside). */
-typedef int (*RecoverFn)(void *context, const double *value, double *goal);
+/* GuardFn, RecoverFn, GUARD_KINDS: motion_guard.h (the reference's stepping within the envelope) */
 
 typedef struct {
     /* pacing (factor <= 0: as fast as it goes) */

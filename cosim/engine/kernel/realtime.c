@@ -192,84 +192,39 @@ static void take_packet(Kernel *s, RealTime *r, ssize_t size, const void *from, 
     }
 }
 
-/* The acceleration, constant over the next h, that takes a value moving at `rate` towards a goal
- * moving at goal_rate with goal_acceleration, as fast as the limits allow, and lands on it: the
- * rate it asks for at the step's end is the largest from which braking at a_max stops on the goal
- * (the braking curve of whole steps: the step's own travel counted, so braking starts in time and
- * never overshoots), near the goal a quarter of the error a step (the error then decays by real
- * factors 0.70 and 0.18 a step: no ringing). */
-static double towards(double value, double rate, double goal, double goal_rate, double goal_acceleration,
-                      double v_max, double a_max, double h) {
-    const double error = goal - value, distance = fabs(error), direction = error < 0.0 ? -1.0 : 1.0;
-    const double closing = direction * (rate - goal_rate);      /* [/s] towards the goal, relative to it */
-    /* w, the closing rate at the step's end: (closing + w) h / 2 + w^2 / (2 a_max) = distance */
-    const double room = 0.25 * h * h + 2.0 * (distance - 0.5 * closing * h) / a_max;
-    const double braking = room >= 0.0 ? a_max * (sqrt(room) - 0.5 * h) : -INFINITY;
-    double wanted = goal_rate + goal_acceleration * h + direction * fmin(braking, 0.25 * distance / h);
-    wanted = fmax(-v_max, fmin(v_max, wanted));
-    return fmax(-a_max, fmin(a_max, (wanted - rate) / h));
+/* The guard's view of the reference (motion_guard.h): its channels' limits and the envelope. */
+static MotionGuard guard_of(const RealTime *r) {
+    const MotionGuard g = {r->n_live, r->rate_max, r->acceleration_max, r->guard, r->recover, r->guard_context};
+    return g;
 }
 
 /* The reference carried over the step just taken with the motion handed on for it, chosen or
  * passed on (not on the step it starts: it starts where the replaced outputs are). */
 static void carry_reference(RealTime *r, double h) {
-    const int n = r->n_live;
-    if (r->live_active < 2) return;
-    for (int i = 0; i < n; i++) {
-        double *value = &r->live[VALUE * n + i], *rate = &r->live[RATE * n + i];
-        const double acceleration = r->live[ACCELERATION * n + i];
-        *value += *rate * h + 0.5 * acceleration * h * h;
-        *rate += acceleration * h;
-    }
+    if (r->live_active >= 2) motion_guard_carry(r->n_live, r->live, h);
 }
 
 /* The reference's motion over the next step: its acceleration chosen towards the target
- * (extrapolated by its rate and acceleration from the time it was given for; where the reference
- * is outside the envelope, towards the way back in that `recover` gives), then held within the
- * envelope by the guard. Constant over a step, that acceleration makes the value, rate and
- * acceleration handed to the inputs the reference's exact motion over the step. */
+ * (extrapolated by its rate and acceleration from the time it was given for, never further than
+ * the watchdog's silence), held within the envelope (motion_guard_advance). Constant over a step,
+ * that acceleration makes the value, rate and acceleration handed to the inputs the reference's
+ * exact motion over the step. */
 static void advance_reference(RealTime *r, double t_new, double h) {
     const int n = r->n_live;
-    double since = t_new - r->target_time, back[64];
+    double since = t_new - r->target_time, goal[3 * 64];
     if (fabs(since) > r->watchdog) since = copysign(r->watchdog, since); /* never extrapolated further */
-    const int returning = r->recover ? r->recover(r->guard_context, &r->live[VALUE * n], back) : 0;
     for (int i = 0; i < n; i++) {
         const double target = r->live[TARGET * n + i], target_rate = r->live[TARGET_RATE * n + i],
                      target_acceleration = r->live[TARGET_ACCELERATION * n + i];
-        const double goal = returning ? back[i] : target + target_rate * since + 0.5 * target_acceleration * since * since;
-        const double goal_rate = returning ? 0.0 : target_rate + target_acceleration * since;
-        r->live[ACCELERATION * n + i] = towards(r->live[VALUE * n + i], r->live[RATE * n + i], goal, goal_rate,
-                                                returning ? 0.0 : target_acceleration, r->rate_max[i],
-                                                r->acceleration_max[i], h);
+        goal[i] = target + target_rate * since + 0.5 * target_acceleration * since * since;
+        goal[n + i] = target_rate + target_acceleration * since;
+        goal[2 * n + i] = target_acceleration;
     }
-    /* the application's envelope: it may hold the motion back, towards braking (not on the way back in) */
-    const int held = returning ? returning
-                     : r->guard ? r->guard(r->guard_context, h, &r->live[VALUE * n], &r->live[RATE * n],
-                                           &r->live[ACCELERATION * n])
-                                : 0;
+    const MotionGuard g = guard_of(r);
+    const int held = motion_guard_advance(&g, r->live, goal, h); /* rows VALUE, RATE, ACCELERATION */
     for (int k = 0; k < GUARD_KINDS; k++)
         if (held & (1 << k)) r->guard_counts[k]++;
     r->live_active = 2;
-}
-
-/* 1 if the replaced outputs' own motion ([3][n]) may be taken as it is: inside the envelope, and the
- * guard would take its acceleration. */
-static int own_motion_safe(RealTime *r, double h, const double *own) {
-    const int n = r->n_live;
-    double scratch[64];
-    if (r->recover && r->recover(r->guard_context, own, scratch)) return 0;
-    for (int i = 0; i < n; i++) scratch[i] = own[2 * n + i];
-    return !r->guard || !r->guard(r->guard_context, h, own, own + n, scratch);
-}
-
-/* 1 if the reference has caught up with the replaced outputs' own motion: the same values within
- * 0.1 um (urad) and rates within 10 um/s, so that handing them back moves nothing a drive feels. */
-static int caught_up(const RealTime *r, const double *own) {
-    const int n = r->n_live;
-    for (int i = 0; i < n; i++)
-        if (!(fabs(r->live[VALUE * n + i] - own[i]) <= 1e-7 && fabs(r->live[RATE * n + i] - own[n + i]) <= 1e-5))
-            return 0;
-    return 1;
 }
 
 /* The datagrams waiting, each classified. */
@@ -309,7 +264,8 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         /* passed on as it is while the guard would take it (once a guarded reference has caught up
          * with it), kept as the reference's motion: what the inputs were handed over the step, from
          * which a reference the guard must hold starts, with no jump */
-        if ((r->live_active != 2 || caught_up(r, own)) && own_motion_safe(r, h, own)) {
+        const MotionGuard g = guard_of(r);
+        if ((r->live_active != 2 || motion_guard_caught_up(n, r->live, own)) && motion_guard_takes(&g, h, own)) {
             memcpy(r->live, own, 3 * (size_t)n * sizeof(double));
             r->live_active = 3;
             return;
