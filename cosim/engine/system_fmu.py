@@ -109,13 +109,14 @@ def _check(plan: Plan, model_exchange: bool) -> FixedStep:
 
 
 def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fmi: int = 2,
-                     model_exchange: bool = False) -> Path:
+                     model_exchange: bool = False, remark: str = "") -> Path:
     """`plan`'s system as one Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0 over the same
     nested FMI 2.0 FMUs; Linux and, where built, Windows binaries. Its default experiment is the
     plan's (start, stop time, regular step). model_exchange: a Model Exchange FMU instead, the
     nested FMUs' continuous states its own and the connections carried inside its derivatives
     (cosim/engine/kernel/system_me.c); every FMU of the system must offer Model Exchange (ours do,
-    through their twins in build/fmus_me/)."""
+    through their twins in build/fmus_me/). `remark`: what its description adds (what a tool's user
+    should know of it, shown where the tool shows an FMU's description)."""
     control = _check(plan, model_exchange)
     structure = plan.structure
     target = Path(target)
@@ -143,7 +144,7 @@ def write_system_fmu(plan: Plan, target: Path, model_name: str | None = None, fm
             shutil.copyfile(binary, folder / f"{identifier}{binary.suffix}")
         describe = _model_description if fmi == 2 else _model_description3
         (stage / "modelDescription.xml").write_bytes(
-            describe(model_name or structure.name, identifier, guid, plan, variables, model_exchange))
+            describe(model_name or structure.name, identifier, guid, plan, variables, model_exchange, remark))
         target.parent.mkdir(parents=True, exist_ok=True)
         partial = target.with_name(target.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -294,12 +295,16 @@ def _outer_variables(plan: Plan, execution: Execution, index: dict[str, int],
     return variables
 
 
-def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer],
-                       model_exchange: bool = False) -> bytes:
+def _description(model_name: str, model_exchange: bool, remark: str) -> str:
     how = ("as one ODE, the connections carried inside its derivatives" if model_exchange
            else "coupled inside by the cosim engine")
+    return f"{model_name}: the whole system as one FMU, {how}" + (f"; {remark}" if remark else "")
+
+
+def _model_description(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer],
+                       model_exchange: bool = False, remark: str = "") -> bytes:
     root = etree.Element("fmiModelDescription", fmiVersion="2.0", modelName=model_name, guid=guid,
-                         description=f"{model_name}: the whole system as one FMU, {how}",
+                         description=_description(model_name, model_exchange, remark),
                          generationTool="cosim (stewart platform co-simulation)",
                          variableNamingConvention="flat", numberOfEventIndicators="0")
     if model_exchange:
@@ -361,11 +366,11 @@ def _output_step(plan: Plan, model_exchange: bool) -> float:
 
 
 def _model_description3(model_name: str, identifier: str, guid: str, plan: Plan, variables: Sequence[Outer],
-                        model_exchange: bool = False) -> bytes:
+                        model_exchange: bool = False, remark: str = "") -> bytes:
     """FMI 3.0's description of the same variables (the same value references), and the independent
     variable `time` after them."""
     root = etree.Element("fmiModelDescription", fmiVersion="3.0", modelName=model_name, instantiationToken=guid,
-                         description=f"{model_name}: the whole system as one FMU, coupled inside by the cosim engine",
+                         description=_description(model_name, model_exchange, remark),
                          generationTool="cosim (stewart platform co-simulation)", variableNamingConvention="flat")
     if model_exchange:
         etree.SubElement(root, "ModelExchange", modelIdentifier=identifier, canGetAndSetFMUState="false",

@@ -288,6 +288,25 @@ def test_the_classical_washout_is_guarded_on_an_emergency_stop(tmp_path):
     assert np.maximum(tilt["lower_angle"], tilt["upper_angle"]).max() > math.radians(25.0)
 
 
+def test_the_one_fmu_export_says_its_cueing_runs_unguarded_as_it_does(tmp_path, capsys):
+    """The guard is the co-simulation step kernel's, not inside the one-FMU export: the export says so
+    in a line and in the FMU's description (what a tool shows of an FMU it imports), and in fmpy the
+    exported emergency stop's reference takes the joints past 25 deg, as the unguarded run's does."""
+    from fmpy import read_model_description, simulate_fmu
+    from cosim.cli import main
+    model, fmu = emergency_stop(tmp_path), tmp_path / "stop.fmu"
+    assert main(["export", model, "--fmu", str(fmu)]) == 0
+    said = capsys.readouterr().out
+    assert "the guard that holds it within the platform's envelope in `cosim run` is not inside it" in said
+    assert "bit for bit wherever `cosim run`'s guard leaves the cueing's reference as it comes" in said
+    assert "is not inside it" in read_model_description(str(fmu)).description
+    envelope, core = limits_of(model)
+    result = simulate_fmu(str(fmu), stop_time=10.0, output_interval=1e-2,
+                          output=[f"pose_ref.{a}" for a in POSE])
+    tilt = core.pose_kinematics(np.column_stack([result[f"pose_ref.{a}"] for a in POSE]))
+    assert np.maximum(tilt["lower_angle"], tilt["upper_angle"]).max() > math.radians(25.0)
+
+
 def test_a_paper_scene_keeps_its_trajectory_and_reports_each_excursion():
     """Meng's Eq 35 leaves Table 4's stroke as the paper's does: not guarded in a plain run, and
     the report gives each excursion with its longest (shortest) leg and how long it lasted."""

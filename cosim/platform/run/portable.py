@@ -213,6 +213,11 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
+# what the one-FMU export of a motion-cueing scene says of itself, and its description too
+UNGUARDED = ("the FMU runs the cueing's reference as it comes: the guard that holds it within the platform's "
+             "envelope in `cosim run` is not inside it")
+
+
 def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = False) -> Exported:
     """The scene as ONE Co-Simulation FMU at `target`, FMI 2.0 or (fmi=3) FMI 3.0
     (cosim.engine.system_fmu): its FMUs nested (our FMI 2.0 ones, the models of the FMI 3.0 ones bit
@@ -228,7 +233,8 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
     from .errors import SceneError
     try:
         compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
-        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange)
+        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange,
+                                remark=UNGUARDED if scene.vehicle is not None else "")
     except ParameterError as error:
         raise scene_error(scene, error) from None
     except SettingsError as error:  # what the one FMU cannot carry (a step control that chooses its steps)
@@ -243,13 +249,14 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
              f"{len(plan.structure.components)} FMUs, coupled inside as `cosim run` couples them ({plan.algorithm.kind}, "
              f"extrapolation order {plan.algorithm.order}, steps of {', '.join(f'{h:g}' for h in steps)} s with its finer "
              f"start and edges); at a communication step that is a multiple of {plan.control.step:g} s its outputs are "
-             "`cosim run`'s bit for bit, a shorter one steps finer inside",
+             "`cosim run`'s bit for bit" + (" wherever `cosim run`'s guard leaves the cueing's reference as it comes "
+                                            "(below)" if scene.vehicle is not None else "") +
+             ", a shorter one steps finer inside",
              f"note: its variables: the {len(plan.record)} recorded outputs as the results name them, the inputs no "
              "connection feeds and every parameter as 'component.variable', the scene's values as their starts "
              "(the drives' design and the tables inside)"]
     if scene.vehicle is not None:
-        lines.append("note: the FMU runs the cueing's reference as it comes: the guard that holds it within the "
-                     "platform's envelope in `cosim run` is not inside it")
+        lines.append(f"note: {UNGUARDED} (its description says so too)")
     return Exported([path], lines)
 
 
@@ -266,8 +273,7 @@ def model_exchange_lines(scene: Scene, plan, fmi: int) -> list[str]:
              "unconnected inputs and parameters (as the Co-Simulation FMU's), and each component's states and their "
              "derivatives as 'component.ode.x[k]'"]
     if scene.vehicle is not None:
-        lines.append("note: the FMU runs the cueing's reference as it comes: the guard that holds it within the "
-                     "platform's envelope in `cosim run` is not inside it")
+        lines.append(f"note: {UNGUARDED} (its description says so too)")
     return lines
 
 
