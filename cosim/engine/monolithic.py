@@ -369,6 +369,22 @@ def model_exchange_structure(structure: SystemStructure) -> SystemStructure:
     return replace(structure, components=components)
 
 
+def _solver(system: MonolithicSystem, t: float, relative_tolerance: float):
+    """fmpy's CVODE (BDF) on the system's states from t, its absolute tolerance per state the
+    relative one times the FMU's nominal of it."""
+    from fmpy.sundials import CVodeSolver
+
+    class _NoInput:
+        def apply(self, t):
+            pass
+
+    return CVodeSolver(system.size, 0, lambda pointer, n: system.states_into(pointer),
+                       lambda pointer, n: system.set_states_at(pointer),
+                       lambda pointer, n: system.derivatives_into(pointer), lambda pointer, n: None,
+                       lambda pointer, n: system.nominals_into(pointer), system.set_time, _NoInput(), t,
+                       relativeTolerance=relative_tolerance, maxNumSteps=100000)
+
+
 def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tuple[str, str]],
               names: Sequence[str] | None = None, output_interval: float | None = None,
               relative_tolerance: float = RELATIVE_TOLERANCE, progress: Sequence = ()) -> Outcome:
@@ -377,7 +393,6 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
     failure ends the results where they got (Outcome.failure). `progress`: observers that show how
     far it got (cosim.engine.observers.Progress, the co-simulation's bar), told every 100 rows."""
     from types import SimpleNamespace
-    from fmpy.sundials import CVodeSolver
     from .execution import RunFailed
     names = list(names) if names is not None else [f"{c}.{v}" for c, v in record]
     interval = output_interval or structure.experiment.step
@@ -391,25 +406,7 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
         t = structure.experiment.start
         next_event = system.first_event
 
-        def get_x(pointer, n):
-            system.states_into(pointer)
-
-        def set_x(pointer, n):
-            system.set_states_at(pointer)
-
-        def get_dx(pointer, n):
-            system.derivatives_into(pointer)
-
-        def nominals(pointer, n):
-            system.nominals_into(pointer)
-
-        class _NoInput:
-            def apply(self, t):
-                pass
-
-        solver = CVodeSolver(system.size, 0, get_x, set_x, get_dx, lambda pointer, n: None, nominals,
-                             system.set_time, _NoInput(), t, relativeTolerance=relative_tolerance,
-                             maxNumSteps=100000)
+        solver = _solver(system, t, relative_tolerance)
         rows.append([t, *system.outputs(record)])
         grid = 1
 
