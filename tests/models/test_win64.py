@@ -163,6 +163,56 @@ def unprivileged(folder: Path) -> list[str]:
     return prefix
 
 
+REMOTING_PORT = 8080  # fmpy 0.3.32's client and server meet at rpclib's default port, whatever runs
+
+
+def port_taken(port: int = REMOTING_PORT) -> bool:
+    import socket
+    with socket.socket() as probe:
+        return probe.connect_ex(("127.0.0.1", port)) == 0
+
+
+@pytest.fixture(scope="module")
+def remote_wine():
+    """The unprivileged user's Wine, made once: a home and a Wine prefix it owns, its first start
+    (which builds the prefix) done before any run. fmpy's client gives its server 20 tries half a
+    second apart (remoting/client_tcp.cpp), which a prefix built in the run can outlast on a loaded
+    machine; the server it started then comes up late and keeps the port from every later run."""
+    import tempfile
+    if WINE is None:
+        pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
+    home = Path(tempfile.mkdtemp(prefix="cosim-wine-"))
+    home.chmod(0o755)
+    prefix = unprivileged(home)
+    env = {**os.environ, "HOME": str(home), "WINEPREFIX": str(home / "wine"), "WINEDEBUG": "-all",
+           "PATH": f"{Path(WINE).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    subprocess.run([*prefix, WINE, "wineboot", "--init"], env=env, cwd=home, timeout=600,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wineserver = [*prefix, shutil.which("wineserver", path=env["PATH"]) or "wineserver"]
+    subprocess.run([*wineserver, "-w"], env=env, timeout=600)  # wait for the first start to finish
+    yield {"prefix": prefix, "env": env, "wineserver": wineserver}
+    subprocess.run([*wineserver, "-k"], env=env, timeout=60)
+    shutil.rmtree(home, ignore_errors=True)
+
+
+def run_remotely(wine: dict, folder: Path, arguments: list[str], timeout: float) -> tuple[int, str]:
+    """`python arguments...` as the unprivileged user in `folder` with its prepared Wine; its
+    return code and output. Every Wine process it leaves (a server that came up after its client
+    gave up) is ended after it, so that the port is free for the next run."""
+    assert not port_taken(), f"port {REMOTING_PORT}, where fmpy's remoting meets its server, is taken"
+    os.chown(folder, *(os.stat(wine["env"]["HOME"])[4:6]))
+    env = {**wine["env"], "TMPDIR": str(folder)}
+    log = folder / "run.log"
+    try:
+        with open(log, "w") as out:  # (a file, not a pipe: a Wine process left holding it cannot stall the test)
+            done = subprocess.run([*wine["prefix"], sys.executable, *arguments], stdout=out, stderr=subprocess.STDOUT,
+                                  env=env, cwd=folder, timeout=timeout)  # (fmpy returns to its start folder,
+        return done.returncode, log.read_text()[-4000:]                  # which must be the user's)
+    finally:
+        subprocess.run([*wine["wineserver"], "-k"], env=env, timeout=60)
+        subprocess.run([*wine["wineserver"], "-w"], env=env, timeout=60)
+
+
 @pytest.fixture
 def remote_folder():
     """A folder the unprivileged user can reach (pytest's own are the user's alone), removed after."""
@@ -174,21 +224,16 @@ def remote_folder():
 
 
 @pytest.mark.parametrize("name", MODELS)
-def test_fmpys_remoting_runs_the_windows_binary_as_its_linux_twin(name, remote_folder):
+def test_fmpys_remoting_runs_the_windows_binary_as_its_linux_twin(name, remote_folder, remote_wine):
     import json
     folder = remote_folder
     fmu = folder / f"{name}.fmu"
     shutil.copy(fmu_path(name), fmu)
     fmu.chmod(0o644)
     (folder / "run.py").write_text(REMOTE_RUN)
-    env = {**os.environ, "HOME": str(folder), "TMPDIR": str(folder), "WINEDEBUG": "-all",
-           "PATH": f"{Path(WINE).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
-    prefix = unprivileged(folder)
-    done = subprocess.run([*prefix, sys.executable, str(folder / "run.py"), str(fmu), json.dumps(EXPERIMENTS[name]),
-                           repr(STEP_OF.get(name, STEP)), str(folder), str(REMOTE_STEPS.get(name, 300))],
-                          capture_output=True, text=True, env=env, cwd=folder,  # (fmpy returns to its start
-                          timeout=600)                                          # folder, which must be the user's)
-    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    status, output = run_remotely(remote_wine, folder, [str(folder / "run.py"), str(fmu), json.dumps(EXPERIMENTS[name]),
+                                  repr(STEP_OF.get(name, STEP)), str(folder), str(REMOTE_STEPS.get(name, 300))], 600)
+    assert status == 0, output
     runs = np.load(folder / "runs.npz")
     linux, windows = runs["linux"], runs["windows"]
     assert len(linux) == len(windows) == REMOTE_STEPS.get(name, 300) + 1

@@ -32,8 +32,8 @@ from cosim.engine.artifacts import ROOT
 from cosim.platform.run.accuracy import judge, probe_duration
 from cosim.platform.run.portable import converged, export_fmu
 from cosim.platform.run.runner import run_scene
-from models.test_win64 import WINE, harness, unprivileged, wine_env  # noqa: F401 (fixtures: the harness built for
-#                                                                      both systems, a Wine prefix)
+from models.test_win64 import WINE, harness, remote_wine, run_remotely, wine_env  # noqa: F401 (fixtures: the
+#                                             harness built for both systems, Wine prefixes: the tests', the user's)
 
 pytestmark = pytest.mark.tools
 
@@ -164,11 +164,9 @@ np.savez(folder + "/runs.npz", linux=simulate_fmu(linux_dir, **run),
 """
 
 
-def test_under_wine_the_windows_binary_gives_the_linux_outputs(tmp_path_factory):
+def test_under_wine_the_windows_binary_gives_the_linux_outputs(remote_wine):
     """The Meng scene's FMU over its first 0.3 s at 1 ms: the system FMU's DLL nesting the models'
     DLLs, driven by fmpy's remoting under Wine, as its Linux binary."""
-    if WINE is None:
-        pytest.skip("needs Wine (scripts/setup.sh installs wine64)")
     import tempfile
     folder = Path(tempfile.mkdtemp(prefix="cosim-remoting-"))
     try:
@@ -177,11 +175,9 @@ def test_under_wine_the_windows_binary_gives_the_linux_outputs(tmp_path_factory)
         fmu = export_fmu(scene, folder / "meng.fmu").files[0]
         fmu.chmod(0o644)
         (folder / "run.py").write_text(REMOTE_RUN)
-        env = {**os.environ, "HOME": str(folder), "TMPDIR": str(folder), "WINEDEBUG": "-all",
-               "PATH": f"{Path(WINE).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
-        done = subprocess.run([*unprivileged(folder), sys.executable, str(folder / "run.py"), str(fmu), str(folder),
-                               "0.3", "0.001"], capture_output=True, text=True, env=env, cwd=folder, timeout=900)
-        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+        status, output = run_remotely(remote_wine, folder, [str(folder / "run.py"), str(fmu), str(folder), "0.3",
+                                                            "0.001"], 900)
+        assert status == 0, output
         runs = np.load(folder / "runs.npz")
         linux, windows = runs["linux"], runs["windows"]
         assert len(linux) == len(windows) == 301
