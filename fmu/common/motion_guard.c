@@ -2,6 +2,7 @@
 #include "motion_guard.h"
 
 #include <math.h>
+#include <string.h>
 
 /* The acceleration, constant over the next h, that takes a value moving at `rate` towards a goal
  * moving at goal_rate with goal_acceleration, as fast as the limits allow, and lands on it: the
@@ -55,4 +56,16 @@ int motion_guard_caught_up(int n, const double *motion, const double *own) {
     for (int i = 0; i < n; i++)
         if (!(fabs(motion[i] - own[i]) <= 1e-7 && fabs(motion[n + i] - own[n + i]) <= 1e-5)) return 0;
     return 1;
+}
+
+int motion_guard_follow(const MotionGuard *g, double *motion, int *active, const double *own, double h) {
+    const int n = g->n;
+    if ((*active != 2 || motion_guard_caught_up(n, motion, own)) && motion_guard_takes(g, h, own)) {
+        memcpy(motion, own, 3 * (size_t)n * sizeof(double));
+        *active = 3;
+        return -1;
+    }
+    if (!*active) memcpy(motion, own, 3 * (size_t)n * sizeof(double)); /* it starts where the source is */
+    *active = 2;
+    return motion_guard_advance(g, motion, own, h); /* towards the source's motion now */
 }

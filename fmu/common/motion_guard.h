@@ -37,6 +37,15 @@ int motion_guard_advance(const MotionGuard *g, double *motion, const double *goa
  * would take its acceleration over the next h. */
 int motion_guard_takes(const MotionGuard *g, double h, const double *own);
 
+/* A source's own motion ([3][n] at the end of a step of h) guarded: passed on as it is while the
+ * guard would take it (once a reference the guard held has caught up with it); where it would not,
+ * a reference takes over from the motion last handed on (`motion`, [3][n], carried over the step by
+ * the caller) and follows the source's within the limits and the envelope. `active`: 0 before the
+ * first step, then 3 while the source's own is passed on, 2 while the reference is. Returns -1 when
+ * the source's own is passed on (copied into `motion`), else the bits of what held the reference
+ * back (motion_guard_advance). */
+int motion_guard_follow(const MotionGuard *g, double *motion, int *active, const double *own, double h);
+
 /* 1 if the motion has caught up with a source's own ([3][n]): the same values within 0.1 um (urad)
  * and rates within 10 um/s, so that handing the source's back moves nothing a drive feels. */
 int motion_guard_caught_up(int n, const double *motion, const double *own);

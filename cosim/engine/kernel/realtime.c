@@ -198,6 +198,12 @@ static MotionGuard guard_of(const RealTime *r) {
     return g;
 }
 
+/* A step on which the envelope held the reference back, counted by what held it (bits). */
+static void count_held(RealTime *r, int held) {
+    for (int k = 0; k < GUARD_KINDS; k++)
+        if (held & (1 << k)) r->guard_counts[k]++;
+}
+
 /* The reference carried over the step just taken with the motion handed on for it, chosen or
  * passed on (not on the step it starts: it starts where the replaced outputs are). */
 static void carry_reference(RealTime *r, double h) {
@@ -221,9 +227,7 @@ static void advance_reference(RealTime *r, double t_new, double h) {
         goal[2 * n + i] = target_acceleration;
     }
     const MotionGuard g = guard_of(r);
-    const int held = motion_guard_advance(&g, r->live, goal, h); /* rows VALUE, RATE, ACCELERATION */
-    for (int k = 0; k < GUARD_KINDS; k++)
-        if (held & (1 << k)) r->guard_counts[k]++;
+    count_held(r, motion_guard_advance(&g, r->live, goal, h)); /* rows VALUE, RATE, ACCELERATION */
     r->live_active = 2;
 }
 
@@ -259,21 +263,17 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
         double own[3 * 64];
         if (!r->guard_source) return;
         own_motion(s, r, own);
-        for (int i = 0; i < 3 * n; i++) r->live[TARGET * n + i] = own[i];
-        r->target_time = t_new;
-        /* passed on as it is while the guard would take it (once a guarded reference has caught up
-         * with it), kept as the reference's motion: what the inputs were handed over the step, from
-         * which a reference the guard must hold starts, with no jump */
+        /* passed on as it is while the guard would take it, kept as the reference's motion: what the
+         * inputs were handed over the step, from which a reference the guard must hold starts, with
+         * no jump (motion_guard_follow: the cueing FMU's own guard steps the same way) */
         const MotionGuard g = guard_of(r);
-        if ((r->live_active != 2 || motion_guard_caught_up(n, r->live, own)) && motion_guard_takes(&g, h, own)) {
-            memcpy(r->live, own, 3 * (size_t)n * sizeof(double));
-            r->live_active = 3;
-            return;
-        }
-        if (!r->live_active) start_reference(s, r);
+        const int held = motion_guard_follow(&g, r->live, &r->live_active, own, h);
+        if (held < 0) return;
+        count_held(r, held);
+    } else {
+        if (!r->live_active) return;
+        advance_reference(r, t_new, h);
     }
-    if (!r->live_active) return;
-    advance_reference(r, t_new, h);
     const KernelInstance *in = &s->instances[r->live_instance];
     double *latest = s->samples + (size_t)(s->n_samples - 1) * (size_t)s->n_sample_values;
     for (int i = 0; i < n; i++) { /* the history's newest sample, as if the instance had given it */
