@@ -33,6 +33,7 @@
  * continuously (tilt_rate), and the MPC's solves are time events.
  */
 #include "fmu_common.h"
+#include "guard.h"
 #include "mpc.h"
 #include "table.h"
 
@@ -96,13 +97,14 @@ static int motion_within_bounds(FmuInstance *fmu, const FmuTable *table) {
     return 1;
 }
 
-/* The model data: the phi-functions per step size (derived), the vehicle table (read once) and the
- * MPC's data (algorithm 2). */
+/* The model data: the phi-functions per step size (derived), the vehicle table (read once), the
+ * MPC's data (algorithm 2) and the guard's envelope (guard = true). */
 typedef struct PhiCache PhiCache;
 typedef struct {
     PhiCache *cache;
     FmuTable *vehicle;
     MpcData *mpc;
+    CueingGuard *guard;
 } ModelData;
 
 /* Motion k (0-2 specific force, 3-5 angular rate) at t, and its rate into *rate. */
@@ -135,6 +137,11 @@ double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t) {
 static MpcData *mpc_of(const FmuInstance *fmu) {
     const ModelData *data = (const ModelData *)fmu->model_data;
     return data && fmu->s.v.algorithm == 2 ? data->mpc : NULL;
+}
+
+static CueingGuard *guard_of(const FmuInstance *fmu) {
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    return data && fmu->s.v.guard ? data->guard : NULL;
 }
 
 static double clip(double value, double limit) { return value > limit ? limit : value < -limit ? -limit : value; }
@@ -212,6 +219,7 @@ static void free_data(FmuInstance *fmu, void *data) {
     fmu_free(fmu, d->cache);
     fmu_table_free(fmu, d->vehicle);
     mpc_free(fmu, d->mpc);
+    cueing_guard_free(fmu, d->guard);
     fmu_free(fmu, d);
 }
 
@@ -345,12 +353,16 @@ fmi2Status model_validate(FmuInstance *fmu) { /* the bounds, "> 0" among them, a
     mpc_free(fmu, data->mpc); /* the parameters may have changed */
     data->mpc = NULL;
     if (v->algorithm == 2 && !(data->mpc = mpc_create(fmu))) return fmi2Error;
-    return fmi2OK;
+    cueing_guard_free(fmu, data->guard);
+    data->guard = NULL;
+    if (v->guard && !(data->guard = cueing_guard_create(fmu))) return fmi2Error;
+    return cueing_guard_state_valid(fmu) ? fmi2OK : fmi2Error;
 }
 
 /* Each filter settled for the inputs at the start (a vehicle at rest, or in steady motion, starts
  * with its cue settled: no translational or rotational cue, the tilt on its target). */
 void model_initialize(FmuInstance *fmu) {
+    cueing_guard_initialize(fmu);
     if (mpc_of(fmu)) {
         mpc_initialize(fmu, mpc_of(fmu));
         return;
@@ -373,8 +385,8 @@ void model_initialize(FmuInstance *fmu) {
     tilt_follow(fmu, fmu->s.time, 0.0);
 }
 
-fmi2Status model_do_step(FmuInstance *fmu, double h) {
-    if (mpc_of(fmu)) return mpc_do_step(fmu, mpc_of(fmu), h);
+/* The washout's filters over a step of h, exactly, and the tilt after them. */
+static fmi2Status washout_step(FmuInstance *fmu, double h) {
     const double t = fmu->s.time;
     for (int c = 0; c < N_CHANNELS; c++) {
         const Filter f = filter(fmu, c);
@@ -396,6 +408,15 @@ fmi2Status model_do_step(FmuInstance *fmu, double h) {
     }
     tilt_follow(fmu, t + h, h);
     return fmi2OK;
+}
+
+fmi2Status model_do_step(FmuInstance *fmu, double h) {
+    const fmi2Status status = mpc_of(fmu) ? mpc_do_step(fmu, mpc_of(fmu), h) : washout_step(fmu, h);
+    if (status == fmi2OK) { /* the guard takes the motion at the step's end (model_compute_outputs) */
+        fmu->s.internal.guard.pending = 1;
+        fmu->s.internal.guard.step = h;
+    }
+    return status;
 }
 
 /* d/dt of the filter's state x' = A x + B u for an input moving at du (first-order hold: u'' = 0). */
@@ -444,6 +465,7 @@ void model_compute_outputs(FmuInstance *fmu) {
         *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
         *fmu_real(fmu, POSE_RATE[d]) = pose[d][1];
     }
+    cueing_guard_outputs(fmu, guard_of(fmu), (const double(*)[4])pose);
     for (int k = 0; k < 6; k++) *fmu_real(fmu, VEHICLE[k]) = motion(fmu, k, t, NULL);
     fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
     fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
@@ -453,8 +475,11 @@ void model_compute_outputs(FmuInstance *fmu) {
 
 double model_output_derivative(FmuInstance *fmu, int vr, int order) {
     for (int d = 0; d < 6; d++) {
-        if (POSE[d] == vr) return fmu->s.internal.pose[d][order];
-        if (POSE_RATE[d] == vr) return fmu->s.internal.pose[d][order + 1];
+        double guarded;
+        if (POSE[d] == vr)
+            return cueing_guard_derivative(fmu, d, 0, order, &guarded) ? guarded : fmu->s.internal.pose[d][order];
+        if (POSE_RATE[d] == vr)
+            return cueing_guard_derivative(fmu, d, 1, order, &guarded) ? guarded : fmu->s.internal.pose[d][order + 1];
     }
     if (vr == VR_tilt_roll) return fmu->s.internal.tilt[0][order];
     if (vr == VR_tilt_pitch) return fmu->s.internal.tilt[1][order];
@@ -464,8 +489,9 @@ double model_output_derivative(FmuInstance *fmu, int vr, int order) {
 /* ---- Model Exchange (fmi2_me.c): the filters' own equations; the MPC's solves time events ---- */
 
 const char *model_exchange_refusal(const FmuInstance *fmu) {
-    (void)fmu;
-    return NULL;
+    return fmu->s.v.guard ? "guard = true is refused: the guard holds the reference at the end of each communication "
+                            "step, a Co-Simulation's (import the Co-Simulation FMU, or set guard = false)"
+                          : NULL;
 }
 
 int model_derivatives(FmuInstance *fmu, double *dxdt) {

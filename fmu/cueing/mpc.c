@@ -253,6 +253,23 @@ static void lateral_directions(MpcData *m) {
     }
 }
 
+int cueing_platform(FmuInstance *fmu, Platform *platform) {
+    const ModelVariables *v = &fmu->s.v;
+    double upper[PLATFORM_LEGS][3], lower[PLATFORM_LEGS][3], neutral[6];
+    for (int i = 0; i < PLATFORM_LEGS; i++) /* the table's order per leg: base x, y, z, platform x, y, z */
+        for (int k = 0; k < 3; k++) {
+            lower[i][k] = *fmu_real(fmu, VR_geometry_base_joint_1_x + 6 * i + k);
+            upper[i][k] = *fmu_real(fmu, VR_geometry_base_joint_1_x + 6 * i + 3 + k);
+        }
+    neutral[0] = v->neutral_x, neutral[1] = v->neutral_y, neutral[2] = v->neutral_z;
+    neutral[3] = v->neutral_roll, neutral[4] = v->neutral_pitch, neutral[5] = v->neutral_yaw;
+    if (platform_layout_from_joints(platform, (const double(*)[3])upper, (const double(*)[3])lower, neutral) != 0) {
+        fmu_log(fmu, fmi2Error, "logStatusError", "geometry.*: a leg has no length at the neutral pose");
+        return 0;
+    }
+    return 1;
+}
+
 MpcData *mpc_create(FmuInstance *fmu) {
     const ModelVariables *v = &fmu->s.v;
     if (v->mpc_horizon < N * v->mpc_period) {
@@ -265,23 +282,14 @@ MpcData *mpc_create(FmuInstance *fmu) {
         fmu_log(fmu, fmi2Error, "logStatusError", "cueing: out of memory");
         return NULL;
     }
-    double upper[PLATFORM_LEGS][3], lower[PLATFORM_LEGS][3], neutral[6];
-    for (int i = 0; i < PLATFORM_LEGS; i++) /* the table's order per leg: base x, y, z, platform x, y, z */
-        for (int k = 0; k < 3; k++) {
-            lower[i][k] = *fmu_real(fmu, VR_geometry_base_joint_1_x + 6 * i + k);
-            upper[i][k] = *fmu_real(fmu, VR_geometry_base_joint_1_x + 6 * i + 3 + k);
-        }
-    neutral[0] = v->neutral_x, neutral[1] = v->neutral_y, neutral[2] = v->neutral_z;
-    neutral[3] = v->neutral_roll, neutral[4] = v->neutral_pitch, neutral[5] = v->neutral_yaw;
-    if (platform_layout_from_joints(&m->platform, (const double(*)[3])upper, (const double(*)[3])lower, neutral) != 0) {
-        fmu_log(fmu, fmi2Error, "logStatusError", "geometry.*: a leg has no length at the neutral pose");
+    if (!cueing_platform(fmu, &m->platform)) {
         fmu_free(fmu, m);
         return NULL;
     }
     m->platform.gravity[2] = -gravity_of(fmu);
     lateral_directions(m);
     double length[PLATFORM_LEGS];
-    platform_leg_lengths(&m->platform, neutral, length);
+    platform_leg_lengths(&m->platform, m->platform.neutral_pose, length);
     for (int i = 0; i < PLATFORM_LEGS; i++)
         if (length[i] < v->limit_leg_length_min + v->limit_stroke_margin ||
             length[i] > v->limit_leg_length_max - v->limit_stroke_margin) {

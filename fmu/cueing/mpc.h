@@ -4,6 +4,7 @@
 #define CUEING_MPC_H
 
 #include "fmu_common.h"
+#include "platform.h"
 
 /* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t, its rate into *rate (model.c). */
 double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
@@ -11,6 +12,10 @@ double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
  * the recorded motion (vehicle.file) up to mpc.preview ahead of now, the input now for a live drive;
  * beyond, the last of it held or (mpc.prediction_decay) returning to rest. */
 double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
+
+/* The platform of the joints geometry.* at the neutral pose neutral.* (the mechanics' layout, as
+ * the MPC's envelope and the guard's take it); 0 with a logged reason if a leg has no length. */
+int cueing_platform(FmuInstance *fmu, Platform *platform);
 
 typedef struct MpcData MpcData;
 

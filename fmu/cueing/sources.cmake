@@ -1,5 +1,7 @@
 # The cueing FMU's model-predictive cueing (mpc.c) builds in, besides fmu/cueing/:
 # - the platform's inverse kinematics, fmu/mechanics/platform.c (one implementation: the mechanics');
+# - the guard (guard.c): the platform's envelope, fmu/mechanics/envelope.c, and the guard's stepping,
+#   fmu/common/motion_guard.c (one implementation: the step kernel's);
 # - DAQP 0.11.0 (Arnstrom, Bemporad and Axehill 2022; MIT licence, shipped in sources/ as
 #   DAQP_LICENSE), the dual active-set QP solver: the C sources its PyPI sdist carries (csrc/),
 #   fetched once per build folder and checked by their hash. Its own warnings are not ours to fix:
@@ -16,6 +18,8 @@ if(CMAKE_C_COMPILER_ID MATCHES "GNU|Clang")
   set_source_files_properties(${daqp_sources} PROPERTIES COMPILE_OPTIONS "-w")
 endif()
 configure_file("${daqp_SOURCE_DIR}/LICENSE" "${generated_dir}/DAQP_LICENSE" COPYONLY)
-list(APPEND model_sources "${CMAKE_SOURCE_DIR}/fmu/mechanics/platform.c" ${daqp_sources})
-list(APPEND model_headers "${CMAKE_SOURCE_DIR}/fmu/mechanics/platform.h" ${daqp_headers} "${generated_dir}/DAQP_LICENSE")
+list(APPEND model_sources "${CMAKE_SOURCE_DIR}/fmu/mechanics/platform.c" "${CMAKE_SOURCE_DIR}/fmu/mechanics/envelope.c"
+     "${CMAKE_SOURCE_DIR}/fmu/common/motion_guard.c" ${daqp_sources})
+list(APPEND model_headers "${CMAKE_SOURCE_DIR}/fmu/mechanics/platform.h" "${CMAKE_SOURCE_DIR}/fmu/mechanics/envelope.h"
+     "${CMAKE_SOURCE_DIR}/fmu/common/motion_guard.h" ${daqp_headers} "${generated_dir}/DAQP_LICENSE")
 list(APPEND include_dirs "${CMAKE_SOURCE_DIR}/fmu/mechanics" "${daqp_SOURCE_DIR}/csrc/include")

@@ -43,10 +43,19 @@ typedef struct {
     int iterations, softened;
 } MpcState;
 
+/* The guard on the cueing's own output (guard = true, guard.c): the reference it hands on. */
+typedef struct {
+    double motion[3][6]; /* the pose reference's value, rate and acceleration (over the next step) */
+    int active;          /* 0: not started, 2: the guard's own motion handed on, 3: the cueing's passed on */
+    int pending;         /* a step has ended and the guard has not yet taken its motion */
+    double step;         /* [s] the step that ended */
+} GuardState;
+
 typedef struct {
     double tilt[2][4];   /* roll and pitch of the tilt coordination: angle and its first three derivatives */
     double pose[6][4];   /* the pose's value and first three derivatives at the communication point */
     MpcState mpc;
+    GuardState guard;
 } ModelInternal;
 
 /* One translational axis a (x, y, z) of the vehicle's specific force into platform position. */
@@ -144,6 +153,7 @@ X(Real, gravity, "gravity", parameter, fixed, "m/s2", 9.81, FMU_POSITIVE, FMU_IN
   "Gravity: taken off the vertical specific force, and what tilt turns into specific force; the platform's, one " \
   "for every FMU (the master sets it from the mechanics' environment.gravity_x/y/z; default as the mechanics')") \
 MPC_VARIABLES(X) \
+GUARD_VARIABLES(X) \
 FMU_LAYER_VARIABLES(X)
 /* clang-format on */
 
@@ -213,6 +223,33 @@ X(Real, limit_stroke_margin, "limit.stroke_margin", parameter, fixed, "m", 0.01,
 X(Real, limit_leg_velocity, "limit.leg_velocity", parameter, fixed, "m/s", 1.0, FMU_POSITIVE, FMU_INF, "A leg's largest extension rate (the mechanics')") \
 X(Real, limit_joint_angle, "limit.joint_angle", parameter, fixed, "rad", 0.3490658503988659, 0.0, 3.2, \
   "Largest tilt of a leg from its neutral direction at either joint (the mechanics')")
+/* clang-format on */
+
+#define GUARD_HELD(X, kind, what) \
+X(Real, guard_held_##kind, "guard.held." #kind, output, discrete, "1", 0.0, 0.0, FMU_INF, "guard: steps " what)
+
+/* clang-format off */
+#define GUARD_VARIABLES(X) \
+X(Boolean, guard, "guard", parameter, fixed, "", 0, 0, 1, \
+  "Hold the pose reference within the platform's envelope (Co-Simulation): every leg within limit.leg_length_min/max " \
+  "less limit.stroke_margin, every joint within limit.joint_angle, the legs' speeds and accelerations within " \
+  "limit.leg_velocity and limit.leg_acceleration, braking in time within guard.*_max; the motion passed on as it is " \
+  "while it keeps there (as cosim run's master guards it: on for a tool that runs this FMU without it)") \
+X(Real, guard_velocity_max, "guard.velocity_max", parameter, fixed, "m/s", 0.25, FMU_POSITIVE, FMU_INF, \
+  "guard: the reference's largest speed along x, y, z where the guard holds it (a scene's [live] velocity_max)") \
+X(Real, guard_angular_velocity_max, "guard.angular_velocity_max", parameter, fixed, "rad/s", 0.5, FMU_POSITIVE, FMU_INF, \
+  "guard: its largest roll, pitch and yaw rate there") \
+X(Real, guard_acceleration_max, "guard.acceleration_max", parameter, fixed, "m/s2", 2.0, FMU_POSITIVE, FMU_INF, \
+  "guard: its largest acceleration along x, y, z there (its braking)") \
+X(Real, guard_angular_acceleration_max, "guard.angular_acceleration_max", parameter, fixed, "rad/s2", 4.0, FMU_POSITIVE, \
+  FMU_INF, "guard: its largest angular acceleration there") \
+X(Real, limit_leg_acceleration, "limit.leg_acceleration", parameter, fixed, "m/s2", 10.0, 0.0, FMU_INF, \
+  "guard: a leg's largest acceleration (the mechanics')") \
+GUARD_HELD(X, stroke, "on which a leg's stroke held the reference back") \
+GUARD_HELD(X, joint, "on which a joint's tilt held it back") \
+GUARD_HELD(X, leg_velocity, "on which a leg's speed held it back") \
+GUARD_HELD(X, leg_acceleration, "on which a leg's acceleration held it back") \
+GUARD_HELD(X, return, "spent bringing it back into the envelope from outside")
 /* clang-format on */
 
 /* Direct feed-through: the vehicle's motion taken, from its input; the rotations' rates, whose

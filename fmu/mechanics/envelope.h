@@ -1,7 +1,8 @@
-/* The motion envelope a live reference is held in (the step kernel's guard, docs/guide/realtime.md):
- * every leg within its stroke less a margin that covers the drives' tracking error, every joint
- * within its largest tilt, every leg's speed and acceleration within their limits. Part of the
- * platform_core library (the master's), not of the FMU. */
+/* The motion envelope a live reference is held in (the step kernel's guard, docs/guide/realtime.md,
+ * and the cueing FMU's own, fmu/cueing/guard.c): every leg within its stroke less a margin that
+ * covers the drives' tracking error, every joint within its largest tilt, every leg's speed and
+ * acceleration within their limits. Part of the platform_core library (the master's) and of the
+ * cueing FMU, not of the mechanics FMU. */
 #ifndef PLATFORM_ENVELOPE_H
 #define PLATFORM_ENVELOPE_H
 

@@ -209,6 +209,61 @@ def test_wrong_parameters_are_refused_by_name(cueing, name, value):
     assert name in str(caught.value)
 
 
+def braking(t: np.ndarray) -> np.ndarray:
+    """A car braking at 8 m/s^2 from 0.5 s on (0.15 s onset), at its occupant's head."""
+    u = np.zeros((len(t), 6))
+    u[:, 0], u[:, 2] = -8.0 * np.clip((t - 0.5) / 0.15, 0.0, 1.0), G
+    return u
+
+
+def envelope_excess(rows: np.ndarray) -> tuple[float, float]:
+    """How far the pose references (n x 6) take Meng's platform (the cueing's default joints) past
+    the cueing's default envelope: the legs past the stroke 1.535-2.2 m less 10 mm [m], the joints
+    past 20 deg [rad] (0 or less: inside)."""
+    from cosim.platform.core import Core
+    kinematics = Core().pose_kinematics(rows)
+    legs, tilt = kinematics["length"], np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])
+    return max(1.545 - legs.min(), legs.max() - 2.19), tilt.max() - np.radians(20.0)
+
+
+HELD = [f"guard.held.{kind}" for kind in ("stroke", "joint", "leg_velocity", "leg_acceleration", "return")]
+
+
+def test_the_guard_holds_the_reference_in_the_envelope_with_its_exact_motion(cueing):
+    """A hard braking, strongly cued, takes Meng's platform past its joints' 20 deg unguarded; with
+    guard = true the reference stays within the stroke less its margin and the joints' limit at every
+    step (the steps held counted by what held them), and wherever the guard held it the reference
+    moves as its outputs' derivatives say: over the step, value + rate h + acceleration h^2 / 2 and
+    rate + acceleration h, to round-off (its acceleration constant over a step, as the guard chose)."""
+    strong = {"translation.x.gain": 1.0, "translation.x.limit": 10.0, "translation.x.frequency": 1.0,
+              "tilt.gain": 1.0, "tilt.rate_limit": 0.3}
+    h, n = 1e-3, 3000
+    _, _, free, _, _ = drive(cueing(strong), braking, h, n)
+    assert envelope_excess(free)[1] > np.radians(2.0)  # unguarded: well past the joints' limit
+    guarded = cueing({**strong, "guard": True})
+    t, _, rows, rates, accelerations = drive(guarded, braking, h, n, POSE + HELD)
+    stroke, joint = envelope_excess(rows[:, :6])
+    assert stroke <= 1e-12 and joint <= 1e-12
+    held = rows[:, 6:].sum(axis=1)
+    assert rows[-1, 6 + 1] > 100 and np.all(np.diff(held) >= 0)
+    took = np.flatnonzero(np.diff(held) > 0) + 1  # at t[k] the guard held the step on from there
+    took = took[took + 1 < len(t)]
+    assert len(took) > 100
+    for d in range(6):
+        span = np.ptp(rows[:, d]) + 1e-3
+        moved = rows[took, d] + rates[took, d] * h + 0.5 * accelerations[took, d] * h * h
+        assert np.abs(rows[took + 1, d] - moved).max() <= 1e-12 * max(1.0, np.abs(rows[:, d]).max()), POSE[d]
+        assert np.abs(rates[took + 1, d] - (rates[took, d] + accelerations[took, d] * h)).max() <= 1e-12 * span
+
+
+def test_the_guard_refuses_an_envelope_without_the_neutral_pose(cueing):
+    """A stroke that leaves the neutral pose outside gives the guard nowhere to hold the reference:
+    refused in one line at initialization."""
+    with pytest.raises(FmuError) as caught:
+        cueing({"guard": True, "limit.leg_length_max": 1.6})
+    assert "guard: the neutral pose is outside the envelope" in str(caught.value)
+
+
 DRIVE = ROOT / "examples" / "vehicle" / "drive.csv"
 
 

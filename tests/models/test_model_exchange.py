@@ -269,6 +269,21 @@ def test_the_switching_inverter_is_refused_with_its_reason(capsys):
     drive.freeInstance()
 
 
+def test_the_cueings_guard_is_refused_with_its_reason(capsys):
+    """The cueing's guard holds its reference at the end of each communication step: as Model
+    Exchange, which has none, guard = true is refused at initialization in one line."""
+    from fmpy.fmi1 import FMICallException
+    cueing, vrs = instantiated("cueing", True)
+    cueing.setupExperiment(startTime=0.0)
+    cueing.enterInitializationMode()
+    cueing.setBoolean([vrs["guard"]], [True])
+    with pytest.raises(FMICallException):
+        cueing.exitInitializationMode()
+    assert "as Model Exchange, guard = true is refused: the guard holds the reference at the end of each " \
+           "communication step" in capsys.readouterr().out
+    cueing.freeInstance()
+
+
 POSE_REF = [f"pose_ref.{dof}" for dof in ("x", "y", "z", "roll", "pitch", "yaw")]
 TILT_RATE = float(np.radians(3.0))  # the tilt's rate limit these tests state (the default has a margin below it)
 POSE_REF_RATE = [f"pose_ref_rate.{dof}" for dof in ("x", "y", "z", "roll", "pitch", "yaw")]
