@@ -42,6 +42,7 @@ from cosim.platform.perception import SECOND_ORGANS, perceived_error, quality, s
 from cosim.platform.ports import POSE  # noqa: E402
 from cosim.platform.realtime import Envelope  # noqa: E402
 from cosim.platform.run.compile import scene_cueing, scene_values  # noqa: E402
+from cosim.platform.run.envelope import GUARD_OUTPUTS  # noqa: E402
 from cosim.platform.scene import load_scene  # noqa: E402
 
 EXAMPLE = ROOT / "examples" / "vehicle" / "car_drive.toml"
@@ -125,7 +126,7 @@ def measure(scene, wall: float) -> dict:
     kinematics = core.pose_kinematics(pose)
     lengths = kinematics["length"]
     speeds = core.leg_velocities_many(pose, rate)
-    held = result.report.pacing.held if result.report.pacing else {}
+    held = {name: int(result[name][-1]) for name in GUARD_OUTPUTS}  # the cueing FMU's guard's counts
     steps = solve_times(scene)
     return {"error": perceived_error(channels), "second": second_opinion(result.report.perceived),
             "spurious": sum(q.spurious_time for q in channels), "sign": sum(q.sign_error_time for q in channels),

@@ -13,6 +13,7 @@ import os
 import socket
 import threading
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -25,7 +26,8 @@ from cosim.platform.core import Core
 from cosim.platform.ports import POSE
 from cosim.platform.realtime import Envelope, guarded_plan
 from cosim.platform.realtime.margins import directions, measure, probe_scene
-from cosim.platform.run.compile import scene_values
+from cosim.platform.run.compile import scene_values, unguarded_cueing
+from cosim.platform.run.envelope import GUARD_KINDS, GUARD_OUTPUTS
 from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 
@@ -274,37 +276,69 @@ def emergency_stop(folder) -> str:
 
 def test_the_classical_washout_is_guarded_on_an_emergency_stop(tmp_path):
     """Unguarded, the washout commands the upper joints far past 20 deg on an emergency stop; as a
-    cueing scene is run, the guard holds its output at the envelope and the platform's joints stay
-    within their limit (and its legs within the stroke) at every sample."""
+    cueing scene is run, the cueing FMU's guard holds its output at the envelope (the steps it held
+    counted in its outputs and said in the report) and the platform's joints stay within their
+    limit (and its legs within the stroke) at every sample."""
     model = emergency_stop(tmp_path)
     envelope, core = limits_of(model)
     run = cosim.simulate(model)
-    assert run.report.pacing.held["a joint's tilt"] > 0
-    assert "the envelope held the reference back at" in run.report.text()
+    held = int(run["guard.held.joint"][-1])
+    assert held > 0 and np.all(np.diff(run["guard.held.joint"]) >= 0)
+    assert f"the envelope held the reference back at {held} steps by a joint's tilt" in run.report.text()
     assert_reference_inside(columns(run, "pose_ref"), envelope, core)
     assert_platform_within_its_limits(run, envelope, core)
-    unguarded, _ = run_scene(load_scene(model), adapt=lambda compiled: (compiled.plan, None))
+    unguarded, _ = run_scene(load_scene(model), adapt=lambda compiled: (unguarded_cueing(compiled.plan), None))
     tilt = core.pose_kinematics(columns(unguarded, "pose_ref"))
     assert np.maximum(tilt["lower_angle"], tilt["upper_angle"]).max() > math.radians(25.0)
+    assert unguarded["guard.held.joint"][-1] == 0
 
 
-def test_the_one_fmu_export_says_its_cueing_runs_unguarded_as_it_does(tmp_path, capsys):
-    """The guard is the co-simulation step kernel's, not inside the one-FMU export: the export says so
-    in a line and in the FMU's description (what a tool shows of an FMU it imports), and in fmpy the
-    exported emergency stop's reference takes the joints past 25 deg, as the unguarded run's does."""
+def test_the_cueing_fmus_guard_is_the_masters_bit_for_bit(tmp_path):
+    """The cueing FMU's own guard (fmu/cueing/guard.c) and the step kernel's guard on a source
+    (realtime.c) are one stepping (motion_guard.c) on one envelope: the emergency stop held by the
+    kernel, with the cueing FMU's guard off, gives every recorded column bit for bit, and the kernel
+    counts the steps held as the FMU does."""
+    model = emergency_stop(tmp_path)
+
+    def kernel_guarded(compiled):
+        plan, _ = guarded_plan(compiled)
+        live = replace(plan.real_time.live, guarded=True)  # the kernel guards the cueing's output
+        return replace(unguarded_cueing(plan), real_time=replace(plan.real_time, live=live)), None
+    by_kernel, report = run_scene(load_scene(model), adapt=kernel_guarded)
+    by_fmu, _ = run_scene(load_scene(model))
+    assert by_kernel.dtype.names == by_fmu.dtype.names
+    for name in by_fmu.dtype.names:
+        if not name.startswith("guard.held."):
+            assert np.array_equal(by_kernel[name], by_fmu[name]), name
+    held = {kind: int(by_fmu[name][-1]) for kind, name in zip(GUARD_KINDS, GUARD_OUTPUTS)}
+    assert held["a joint's tilt"] > 1000 and held == report.pacing.held
+
+
+def test_the_one_fmu_export_holds_the_cueing_as_cosim_run_does(tmp_path, capsys):
+    """The cueing FMU's guard goes with it into the one-FMU Co-Simulation export: in fmpy the exported
+    emergency stop is `cosim run`'s bit for bit at the scene's step, the reference within the
+    envelope; the Model Exchange export, which has no steps to hold it at, says in a line and in
+    its description (what a tool shows of an FMU it imports) that it runs the reference unguarded."""
     from fmpy import read_model_description, simulate_fmu
     from cosim.cli import main
-    model, fmu = emergency_stop(tmp_path), tmp_path / "stop.fmu"
+    model, fmu, me = emergency_stop(tmp_path), tmp_path / "stop.fmu", tmp_path / "stop_me.fmu"
     assert main(["export", model, "--fmu", str(fmu)]) == 0
     said = capsys.readouterr().out
-    assert "the guard that holds it within the platform's envelope in `cosim run` is not inside it" in said
-    assert "bit for bit wherever `cosim run`'s guard leaves the cueing's reference as it comes" in said
-    assert "is not inside it" in read_model_description(str(fmu)).description
+    assert "held within the platform's envelope by the cueing FMU's own guard" in said and "not inside it" not in said
+    assert "not inside it" not in read_model_description(str(fmu)).description
     envelope, core = limits_of(model)
-    result = simulate_fmu(str(fmu), stop_time=10.0, output_interval=1e-2,
-                          output=[f"pose_ref.{a}" for a in POSE])
-    tilt = core.pose_kinematics(np.column_stack([result[f"pose_ref.{a}"] for a in POSE]))
-    assert np.maximum(tilt["lower_angle"], tilt["upper_angle"]).max() > math.radians(25.0)
+    run = cosim.simulate(model)
+    step = load_scene(model).step
+    names = [f"pose_ref.{a}" for a in POSE] + [f"pose.{a}" for a in POSE] + ["guard.held.joint"]
+    result = simulate_fmu(str(fmu), stop_time=10.0, step_size=step, output_interval=step, output=names)
+    at = np.searchsorted(run["time"], result["time"][1:] - 1e-9)
+    assert np.allclose(run["time"][at], result["time"][1:], rtol=0, atol=1e-9)
+    for name in names:
+        assert np.array_equal(result[name][1:], run[name][at]), name
+    assert_reference_inside(np.column_stack([result[f"pose_ref.{a}"] for a in POSE]), envelope, core)
+    assert main(["export", model, "--fmu", str(me), "--me"]) == 0
+    assert "is not inside it" in capsys.readouterr().out
+    assert "is not inside it" in read_model_description(str(me)).description
 
 
 def test_a_paper_scene_keeps_its_trajectory_and_reports_each_excursion():

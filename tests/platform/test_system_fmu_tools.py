@@ -31,6 +31,7 @@ import cosim
 from cosim.engine.artifacts import ROOT
 from cosim.platform.run.accuracy import judge, probe_duration
 from cosim.platform.run.portable import converged, export_fmu
+from cosim.platform.ports import POSE
 from cosim.platform.run.runner import run_scene
 from models.test_win64 import WINE, harness, remote_wine, run_remotely, wine_env  # noqa: F401 (fixtures: the
 #                                             harness built for both systems, Wine prefixes: the tests', the user's)
@@ -125,6 +126,41 @@ def test_omsimulator_runs_it_as_fmpy_does(exported, step, tmp_path):
     time = columns["time"]
     last = np.r_[np.diff(time) > 0, True]  # a point written twice (before and after its events): the later one
     same_to({n: v[last] for n, v in columns.items()}, exported.fmpy(step), exported.names, 1e-11)  # its 12 digits
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_fmusim_and_omsimulator_hold_the_exported_cueing_as_cosim_run_does(fmi, tmp_path):
+    """The classical washout's emergency stop, whose reference the cueing FMU's guard holds at the
+    joints' limit for thousands of steps, exported as one FMU: fmusim and OMSimulator run it at the
+    scene's step as `cosim run` runs it (to the digits each writes), the reference within the
+    envelope and the guard's count of the steps it held the same."""
+    from peers import fmusim, omsimulator
+    from test_guard import assert_reference_inside, emergency_stop, limits_of
+    model = emergency_stop(tmp_path)
+    scene = cosim.load(model)
+    ours = run_scene(scene)[0]
+    fmu = export_fmu(scene, tmp_path / "stop.fmu", fmi=fmi).files[0]
+    names = [*(f"pose_ref.{a}" for a in POSE), *(f"pose.{a}" for a in POSE), "guard.held.joint"]
+    grid = np.flatnonzero(np.isin(np.round(ours["time"], 9), np.round(np.arange(0.0, 10.0 + 1e-9, scene.step), 9)))
+    mine = ours[["time", *names]][grid]
+    out = tmp_path / "fmusim.csv"
+    done = subprocess.run([str(fmusim()), "--interface-type", "cs", "--stop-time", "10.0", "--output-interval",
+                           repr(scene.step), "--output-file", str(out), str(fmu)], capture_output=True, text=True,
+                          timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    same_to({n: table[n] for n in ("time", *names)}, mine, names, 1e-15)
+    done = subprocess.run([str(omsimulator()), "--mode=cs", "--stopTime=10.0", f"--stepSize={scene.step!r}",
+                           "--resultFile=out.csv", str(fmu)], capture_output=True, text=True, cwd=tmp_path, timeout=900)
+    assert done.returncode == 0 and "error:" not in done.stdout + done.stderr, (done.stdout + done.stderr)[-3000:]
+    header = [name.strip().strip('"') for name in (tmp_path / "out.csv").open().readline().split(",")]
+    data = np.loadtxt(tmp_path / "out.csv", delimiter=",", skiprows=1, ndmin=2,
+                      usecols=[header.index(name) for name in ("time", *names)])
+    last = np.r_[np.diff(data[:, 0]) > 0, True]
+    same_to({n: data[last, k] for k, n in enumerate(("time", *names))}, mine, names, 1e-11)
+    envelope, core = limits_of(model)
+    assert_reference_inside(np.column_stack([table[f"pose_ref.{a}"] for a in POSE]), envelope, core)
+    assert table["guard.held.joint"][-1] == ours["guard.held.joint"][-1] > 1000
 
 
 @each(FMI2)

@@ -185,7 +185,7 @@ class Pacing:
                 (f"; the watchdog engaged {self.live['watchdog']} times, last at t = {self.watchdog_time:.3f} s "
                  "(no input: back to neutral)" if self.live.get("watchdog") else ""))
         held = {k: v for k, v in self.held.items() if v}
-        if held:
+        if held:  # (cosim.platform.run.envelope.held_line says a cueing FMU's guard's in these words)
             out.append("the envelope held the reference back at " + ", ".join(f"{v} steps by {k}" for k, v in held.items()))
         return out
 

@@ -54,7 +54,7 @@ def real_time_plan(compiled: CompiledScene, factor: float | None = 1.0, stream: 
                 if f"leg[{i}].{output}" not in names:
                     record.append(("mechanics", f"leg[{i}].{output}"))
                     names.append(f"leg[{i}].{output}")
-    guarded = guarded or factor is not None or bool(listen) or scene.vehicle is not None
+    guarded = guarded or factor is not None or bool(listen)  # (a cueing's output: its FMU's own guard holds it)
     remark = check_scene_reference(scene, mechanics_values) if factor is not None or listen else None
     options = RealTime(factor, stream, stream_names(scene, names) if stream else None, listen,
                        reference_guard(scene, mechanics_values, key) if guarded else None)

@@ -207,7 +207,7 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
     structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=legs,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
                                    interface_jacobian=scene.interface_jacobian, drive_fmus=fmus,
-                                   cueing_values=scene_cueing(scene, mechanics_values), fmi=scene.fmi)
+                                   cueing_values=guarded_cueing(scene_cueing(scene, mechanics_values)), fmi=scene.fmi)
     structure.settings = {**to_strings(algorithm, scene.control), **output_settings(*record, scene.output_interval)}
     return structure
 
@@ -216,7 +216,9 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
 CUEING_ALGORITHMS = {"classical": 1, "mpc": 2}
 # the mechanics' limits the cueing FMU takes by the same names (the MPC's envelope: the guard's, the
 # joints' tilt less limit.joint_margin)
-CUEING_LIMITS = ("leg_length_min", "leg_length_max", "stroke_margin", "leg_velocity", "joint_angle")
+CUEING_LIMITS = ("leg_length_min", "leg_length_max", "stroke_margin", "leg_velocity", "joint_angle", "leg_acceleration")
+# the cueing FMU's guard limits by the scene's [live] keys (the reference's braking where it is held)
+CUEING_GUARD_LIMITS = ("velocity_max", "angular_velocity_max", "acceleration_max", "angular_acceleration_max")
 
 
 def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
@@ -234,9 +236,25 @@ def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
               for leg in LEGS for k, axis in enumerate("xyz")}
     limits = {f"limit.{name}": float(mechanics_value(mechanics_values, f"limit.{name}")) for name in CUEING_LIMITS}
     limits["limit.joint_angle"] -= float(mechanics_value(mechanics_values, "limit.joint_margin"))  # the guard's
+    limits.update({f"guard.{key}": float(scene.document.value("live", key)) for key in CUEING_GUARD_LIMITS})
     return {"vehicle.file": scene.vehicle, "algorithm": CUEING_ALGORITHMS[scene.cueing_algorithm], **neutral,
             "gravity": float(np.linalg.norm(gravity_of(mechanics_values))), **joints, **limits,
             "mpc.preview": scene.cueing_preview, **scene.cueing_parameters}
+
+
+def guarded_cueing(values: dict | None) -> dict | None:
+    """The cueing FMU's values with its guard on (fmu/cueing/guard.c): its pose reference held within
+    the platform's envelope (the limits and joints scene_cueing gives it) at the end of each step,
+    in `cosim run` and in every tool its system goes to. Every motion-cueing scene runs so."""
+    return None if values is None else {**values, "guard": True}
+
+
+def unguarded_cueing(plan: Plan) -> Plan:
+    """The plan with its cueing FMU's guard off: Model Exchange, which has no steps to hold the
+    reference at (the cueing FMU refuses its guard there)."""
+    components = [replace(c, parameters={**c.parameters, "guard": False}) if c.name == "cueing" else c
+                  for c in plan.structure.components]
+    return replace(plan, structure=replace(plan.structure, components=components))
 
 
 def scene_algorithm(scene: Scene) -> Algorithm:
@@ -255,7 +273,7 @@ def model_exchange_plan(compiled: CompiledScene) -> tuple[Plan, str]:
     model_exchange_structure(compiled.plan.structure)  # every component has a Model Exchange FMU, or one line
     remark = ("run as one Model Exchange FMU of the scene's FMUs (the connections carried inside its derivatives) "
               f"under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): no coupling, no macro step")
-    if compiled.scene.vehicle is not None:  # the guard is the step kernel's (guard.py): no kernel step here
+    if compiled.scene.vehicle is not None:  # the cueing FMU's guard acts at a co-simulation's steps: none here
         remark += ("; the cueing's reference unguarded (the envelope's guard holds it in a co-simulation's steps, "
                    "not here): any excursion past the platform's limits below is the cueing's own")
-    return replace(compiled.plan, model_exchange=True), remark
+    return replace(unguarded_cueing(compiled.plan), model_exchange=True), remark

@@ -18,9 +18,19 @@ import numpy as np
 from ...engine.errors import UsageError
 from ..core import Core, PlatformEnvelope, mechanics_value
 
-# what the guard's bits (ENVELOPE_STROKE, _JOINT, _LEG_VELOCITY, _LEG_ACCELERATION) are called in the report
+# what the guard's bits (ENVELOPE_STROKE, _JOINT, _LEG_VELOCITY, _LEG_ACCELERATION, _RETURN) are called in
+# the report, and the cueing FMU's outputs that count them (guard.held.<kind>: fmu/cueing/guard.c)
 GUARD_KINDS = ("the stroke", "a joint's tilt", "a leg's speed", "a leg's acceleration",
                "its way back in from outside")
+GUARD_OUTPUTS = tuple(f"guard.held.{kind}" for kind in ("stroke", "joint", "leg_velocity", "leg_acceleration", "return"))
+
+
+def held_line(held: dict[str, int]) -> str | None:
+    """The report's line of the steps on which the envelope held the reference back, by what held
+    it (None where nothing did)."""
+    held = {k: v for k, v in held.items() if v}
+    return ("the envelope held the reference back at " + ", ".join(f"{v} steps by {k}" for k, v in held.items())
+            if held else None)
 
 
 @dataclass(frozen=True)

@@ -213,9 +213,10 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
-# what the one-FMU export of a motion-cueing scene says of itself, and its description too
+# what the one-FMU Model Exchange export of a motion-cueing scene says of itself, and its description too
+# (the cueing FMU's guard acts at the end of a co-simulation step: the Co-Simulation export holds it)
 UNGUARDED = ("the FMU runs the cueing's reference as it comes: the guard that holds it within the platform's "
-             "envelope in `cosim run` is not inside it")
+             "envelope at each step of `cosim run` and of the Co-Simulation export is not inside it")
 
 
 def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = False) -> Exported:
@@ -228,19 +229,19 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
     from ...engine import ParameterError
     from ...engine.settings import SettingsError
     from ...engine.system_fmu import system_binaries, write_system_fmu
-    from .compile import compile_scene
+    from .compile import compile_scene, unguarded_cueing
     from .errors import scene_error
     from .errors import SceneError
     try:
         compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
-        path = write_system_fmu(compiled.plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange,
-                                remark=UNGUARDED if scene.vehicle is not None else "")
+        plan = unguarded_cueing(compiled.plan) if model_exchange else compiled.plan  # (no steps to guard at)
+        path = write_system_fmu(plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange,
+                                remark=UNGUARDED if scene.vehicle is not None and model_exchange else "")
     except ParameterError as error:
         raise scene_error(scene, error) from None
     except SettingsError as error:  # what the one FMU cannot carry (a step control that chooses its steps)
         key = f"coupling.{error.setting}" if error.setting else "coupling"
         raise SceneError(f"{scene.document.where(key)}: {error}") from None
-    plan = compiled.plan
     if model_exchange:
         return Exported([path], model_exchange_lines(scene, plan, fmi))
     steps = sorted({h for h in (plan.control.step, plan.control.startup_step if plan.control.startup_time else None)
@@ -249,14 +250,12 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
              f"{len(plan.structure.components)} FMUs, coupled inside as `cosim run` couples them ({plan.algorithm.kind}, "
              f"extrapolation order {plan.algorithm.order}, steps of {', '.join(f'{h:g}' for h in steps)} s with its finer "
              f"start and edges); at a communication step that is a multiple of {plan.control.step:g} s its outputs are "
-             "`cosim run`'s bit for bit" + (" wherever `cosim run`'s guard leaves the cueing's reference as it comes "
-                                            "(below)" if scene.vehicle is not None else "") +
+             "`cosim run`'s bit for bit" + (" (the cueing's reference held within the platform's envelope by the cueing "
+                                            "FMU's own guard, as in `cosim run`)" if scene.vehicle is not None else "") +
              ", a shorter one steps finer inside",
              f"note: its variables: the {len(plan.record)} recorded outputs as the results name them, the inputs no "
              "connection feeds and every parameter as 'component.variable', the scene's values as their starts "
              "(the drives' design and the tables inside)"]
-    if scene.vehicle is not None:
-        lines.append(f"note: {UNGUARDED} (its description says so too)")
     return Exported([path], lines)
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from ...engine.outcome import Outcome, Report
 from ...engine.run import Plan, run
+from ...engine.settings import FixedStep, control_name
 from ..core import gravity_of
 from ..perception import (CHANNELS, TWIST, Perceived, perceive, platform_motion, quality, quality_lines,
                           second_opinion, vehicle_motion)
@@ -25,6 +26,7 @@ from ..report.limits import result_excursion_lines
 from ..report.plots import units
 from ..scene import Scene, SceneError
 from .alone import workspace_problem
+from .envelope import GUARD_KINDS, GUARD_OUTPUTS, held_line
 from .compile import CompiledScene, compile_scene, run_label
 from .errors import BUILD_ERRORS, scene_error
 
@@ -81,15 +83,17 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
     try:
         compiled = compile_scene(scene)
         plan, notes = compiled.plan, compiled.notes
-        if adapt is None and scene.vehicle is not None:
-            from .guard import guarded_plan
-            adapt = guarded_plan  # a cueing output is held within the platform's envelope
-        if adapt is not None:
+        if adapt is not None:  # (a cueing scene's reference is held by the cueing FMU's own guard: compile.py)
             plan, remark = adapt(compiled)
             if remark:
                 notes = [*notes, remark]
                 if progress:  # the command line: before the run starts
                     print(f"note: {remark}", flush=True)
+        if scene.vehicle is not None and not plan.model_exchange and not isinstance(plan.control, FixedStep):
+            raise SceneError(f"{scene.document.where('coupling.step_control')}: a guarded reference takes fixed steps, "
+                             "held within its envelope at each (a cueing scene's: the cueing FMU's guard); the step "
+                             f"control '{control_name(plan.control)}' chooses its steps as it goes: set step_control = "
+                             "fixed")
         guarded = plan.real_time is not None and plan.real_time.live is not None and plan.real_time.live.guarded
         problem = None if guarded else workspace_problem(scene, compiled.mechanics)  # (a guard holds it)
         if problem is not None:  # before the run, not when the mechanics stops part way
@@ -128,6 +132,9 @@ def scene_report(compiled: CompiledScene, result: np.ndarray, outcome: Outcome) 
         report.remarks.append("FMI 3.0: FMI 3.0 has no input derivatives; the master gives each input's rate and "
                               "curvature through the FMUs' own inputs fmi.rate.* and fmi.curvature.*, so the run "
                               "couples as on the FMI 2.0 FMUs, at the scene's step")
+    if scene.vehicle is not None and len(result) and GUARD_OUTPUTS[0] in result.dtype.names:
+        held = held_line({kind: int(result[name][-1]) for kind, name in zip(GUARD_KINDS, GUARD_OUTPUTS)})
+        report.remarks += [held] if held else []  # (the cueing FMU's own guard: compile.guarded_cueing)
     if scene.vehicle is not None and len(result) > 1:
         report.remarks.append(tilt_line(scene, result))
         if len(result) > 3:

@@ -17,6 +17,7 @@ from typing import Mapping, Sequence
 from ...engine import Bond, Component, Connection, Experiment, SystemStructure, fmu_path
 from ..perception import CHANNELS, TWIST
 from ..ports import BODY_WRENCH, DRIVES, LEGS, POSE, WRENCH, drive_names
+from .envelope import GUARD_OUTPUTS
 
 
 def platform_structure(drive: str, mechanics_values: Mapping[str, object] | None = None,
@@ -89,7 +90,8 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
     corrected by their slopes) the efforts the mechanics applied, <effort>_applied[i]; with
     `cueing` the pose reference from the cueing FMU, its tilt (tilt.roll, tilt.pitch), the vehicle's
     motion it took (vehicle.<channel>) and the platform's twist: what the occupant's perception is
-    judged by (cosim.platform.perception)."""
+    judged by (cosim.platform.perception); and the steps its guard held the reference back so far,
+    by what held it (guard.held.<kind>)."""
     effort = DRIVES[drive].effort[0]
     record = [*[(pose_source(cueing), f"pose_ref.{a}") for a in POSE], *[("mechanics", f"pose.{a}") for a in POSE],
               *[("mechanics", n) for n in mechanics_outputs],
@@ -101,6 +103,6 @@ def columns(drive: str, mechanics_outputs: Sequence[str] = (), drive_outputs: Se
         taken = [f"vehicle.{c}" for c in CHANNELS]
         twist = [n for n in TWIST if n not in mechanics_outputs]
         record += [("cueing", "tilt.roll"), ("cueing", "tilt.pitch"), *[("cueing", n) for n in taken],
-                   *[("mechanics", n) for n in twist]]
-        names += ["tilt.roll", "tilt.pitch", *taken, *twist]
+                   *[("mechanics", n) for n in twist], *[("cueing", n) for n in GUARD_OUTPUTS]]
+        names += ["tilt.roll", "tilt.pitch", *taken, *twist, *GUARD_OUTPUTS]
     return record, names
