@@ -20,16 +20,11 @@
 #include "motion_guard.h"
 #include "mpc.h"
 
-enum { DOF = 6 };
+enum { DOF = 6, HELD_KINDS = 5 };
 
-static const int POSE[DOF] = {VR_pose_ref_x, VR_pose_ref_y, VR_pose_ref_z, VR_pose_ref_roll, VR_pose_ref_pitch,
-                              VR_pose_ref_yaw};
-static const int POSE_RATE[DOF] = {VR_pose_ref_rate_x, VR_pose_ref_rate_y, VR_pose_ref_rate_z, VR_pose_ref_rate_roll,
-                                   VR_pose_ref_rate_pitch, VR_pose_ref_rate_yaw};
-static const int NEUTRAL[DOF] = {VR_neutral_x, VR_neutral_y, VR_neutral_z, VR_neutral_roll, VR_neutral_pitch,
-                                 VR_neutral_yaw};
-static const int HELD[GUARD_KINDS] = {VR_guard_held_stroke, VR_guard_held_joint, VR_guard_held_leg_velocity,
-                                      VR_guard_held_leg_acceleration, VR_guard_held_return, 0, 0, 0};
+/* The outputs counting the steps held, per bit of what held the reference (envelope.h's ENVELOPE_*). */
+static const int HELD[HELD_KINDS] = {VR_guard_held_stroke, VR_guard_held_joint, VR_guard_held_leg_velocity,
+                                     VR_guard_held_leg_acceleration, VR_guard_held_return};
 
 struct CueingGuard {
     PlatformEnvelope envelope;
@@ -85,8 +80,7 @@ int cueing_guard_state_valid(FmuInstance *fmu) {
 
 void cueing_guard_initialize(FmuInstance *fmu) {
     memset(&fmu->s.internal.guard, 0, sizeof fmu->s.internal.guard);
-    for (int k = 0; k < GUARD_KINDS; k++)
-        if (HELD[k]) *fmu_real(fmu, HELD[k]) = 0.0;
+    for (int k = 0; k < HELD_KINDS; k++) *fmu_real(fmu, HELD[k]) = 0.0;
 }
 
 /* The guard's motion over the next step from the cueing's own at the step's end: carried over the
@@ -98,28 +92,18 @@ static void take_step(FmuInstance *fmu, CueingGuard *guard, const double own[3 *
                            platform_envelope_recovery, &guard->envelope};
     if (s->active >= 2) motion_guard_carry(DOF, &s->motion[0][0], s->step);
     const int held = motion_guard_follow(&g, &s->motion[0][0], &s->active, own, s->step);
-    for (int k = 0; k < GUARD_KINDS; k++)
-        if (held > 0 && (held & (1 << k)) && HELD[k]) *fmu_real(fmu, HELD[k]) += 1.0;
+    for (int k = 0; k < HELD_KINDS; k++)
+        if (held > 0 && (held & (1 << k))) *fmu_real(fmu, HELD[k]) += 1.0;
 }
 
-void cueing_guard_outputs(FmuInstance *fmu, CueingGuard *guard, const double pose[6][4]) {
+void cueing_guard_hand_on(FmuInstance *fmu, CueingGuard *guard, double reference[3][6]) {
     GuardState *s = &fmu->s.internal.guard;
     if (!guard) return;
     if (s->pending) {
-        double own[3 * DOF];
-        for (int d = 0; d < DOF; d++) {
-            own[d] = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
-            own[DOF + d] = pose[d][1];
-            own[2 * DOF + d] = pose[d][2];
-        }
-        take_step(fmu, guard, own);
+        take_step(fmu, guard, &reference[0][0]);
         s->pending = 0;
     }
-    if (s->active != 2) return;
-    for (int d = 0; d < DOF; d++) {
-        *fmu_real(fmu, POSE[d]) = s->motion[0][d];
-        *fmu_real(fmu, POSE_RATE[d]) = s->motion[1][d];
-    }
+    if (s->active == 2) memcpy(reference, s->motion, sizeof s->motion);
 }
 
 int cueing_guard_derivative(const FmuInstance *fmu, int d, int rate, int order, double *value) {

@@ -18,10 +18,11 @@ int cueing_guard_state_valid(FmuInstance *fmu);
 /* At the start: nothing held, nothing counted. */
 void cueing_guard_initialize(FmuInstance *fmu);
 
-/* The pose reference handed on (outputs pose_ref.*, pose_ref_rate.* and their derivatives) from
- * the cueing's own, pose[d][k] from the neutral pose: where a step has just ended, the guard takes
- * the cueing's motion there (once a step); while it holds the reference, the reference's own. */
-void cueing_guard_outputs(FmuInstance *fmu, CueingGuard *guard, const double pose[6][4]);
+/* The pose reference handed on (outputs pose_ref.*, pose_ref_rate.* and their derivatives) in
+ * `reference`, which comes in as the cueing's own (value, rate, acceleration per DOF): where a step
+ * has just ended, the guard takes the cueing's motion there (once a step); while it holds the
+ * reference, the reference's own replaces it. guard NULL: off, the cueing's own as it is. */
+void cueing_guard_hand_on(FmuInstance *fmu, CueingGuard *guard, double reference[3][6]);
 
 /* The derivative of that order (1, 2) of output d's value (rate = 0) or rate (rate = 1) while the
  * guard holds the reference, into *value; 0 where the cueing's own is handed on. */

@@ -461,11 +461,15 @@ void model_compute_outputs(FmuInstance *fmu) {
         if (fmu->model_exchange) tilt_rate(fmu, NULL);
         classical_pose(fmu, pose);
     }
+    double reference[3][6]; /* the pose reference's value, rate and acceleration: the cueing's, or the guard's */
+    for (int d = 0; d < 6; d++)
+        reference[0][d] = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0], reference[1][d] = pose[d][1],
+        reference[2][d] = pose[d][2];
+    cueing_guard_hand_on(fmu, guard_of(fmu), reference);
     for (int d = 0; d < 6; d++) {
-        *fmu_real(fmu, POSE[d]) = *fmu_real(fmu, NEUTRAL[d]) + pose[d][0];
-        *fmu_real(fmu, POSE_RATE[d]) = pose[d][1];
+        *fmu_real(fmu, POSE[d]) = reference[0][d];
+        *fmu_real(fmu, POSE_RATE[d]) = reference[1][d];
     }
-    cueing_guard_outputs(fmu, guard_of(fmu), (const double(*)[4])pose);
     for (int k = 0; k < 6; k++) *fmu_real(fmu, VEHICLE[k]) = motion(fmu, k, t, NULL);
     fmu->s.v.tilt_roll = fmu->s.internal.tilt[0][0];
     fmu->s.v.tilt_pitch = fmu->s.internal.tilt[1][0];
