@@ -53,7 +53,7 @@ CASES = {
         '[scene]\nduration = 1.0\n[load]\npulses = [{component = "force.z", value = 1.0, start = 2.0, end = 1.0}]\n',
         ":4: load.pulses (load.force.z.pulse[1].end): rejected by trajectory:"),
     "step longer than the run": ("[scene]\nduration = 0.0005\nstep = 0.001\n",
-                                 ":3: scene.step = 0.001 s, duration 0.0005 s: the macro step 0.001 s does not fit once"),
+                                 ":3: 'scene.step' = 0.001: is longer than the scene's duration (0.0005 s)"),
     # found by mutating the shipped scene (issue 28): each was an internal-error traceback
     "sines as a number": (MENG.replace("sines = [{amplitude = 0.1, frequency = 0.2}]", "sines = 0", 1),
                           ":17: 'trajectory.x.sines' = 0: must be a list of inline tables"),

@@ -110,3 +110,15 @@ def test_view_shows_the_reference_motion_without_a_co_simulation(tmp_path, capsy
     text = (tmp_path / "meng_eq35_view.html").read_text()
     assert 'id="platform-view"' in text and not re.search(r'<(script|link|img)[^>]+(src|href)="https?://', text)
     assert main(["view", str(ROOT / "scenes" / "sumnu_case_1.toml"), "--out", str(tmp_path)]) == 0
+
+
+def test_view_refuses_a_step_longer_than_the_scene_in_one_line(tmp_path, capsys):
+    """A macro step longer than the scene's duration runs nothing: `view` refuses it at the key's
+    line as `run` does, one line, exit 2 (CI's input fuzzer found view's ZeroDivisionError)."""
+    scene = tmp_path / "scene.toml"
+    scene.write_text((ROOT / "scenes" / "meng_eq35.toml").read_text().replace("step = 1e-3", "step = 1e300", 1))
+    assert "step = 1e300" in scene.read_text()
+    assert main(["view", str(scene), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'scene.step' = 1e+300: is longer than the scene's duration" in err, err
+    assert err.startswith(f"error: {scene}:")

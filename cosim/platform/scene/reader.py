@@ -326,6 +326,9 @@ def _settings(doc: Document, drive: str, duration: float, pulses: tuple[Pulse, .
 def _control(doc: Document, duration: float, pulses: tuple[Pulse, ...]) -> StepControl:
     """The macro-step control."""
     step = float(doc.value("scene", "step"))
+    if step > duration:
+        raise doc.fail("scene.step", f"is longer than the scene's duration ({duration:g} s): the run would not take "
+                       "one whole step", step)
     given = {key: float(doc.value("coupling", key)) for key in ("rtol", "h_min", "h_max")
              if doc.value("coupling", key) is not None}
     atol = doc.value("coupling", "atol")

@@ -33,7 +33,7 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
     Table("scene", "The run.", (
         Key("name", Text(), "the name its reports show (default: the file's name)"),
         Key("duration", SECONDS, "the simulated time", REQUIRED),
-        Key("step", SECONDS, "the macro step", 1e-3),
+        Key("step", SECONDS, "the macro step (at most the duration)", 1e-3),
         Key("fmi", Number("", 2, 3, whole=True), "the FMI version of our FMUs the run takes: 2, or 3 (the same models "
             "as FMI 3.0 Co-Simulation FMUs, which take their inputs' derivatives through inputs of their own, "
             "fmi.rate.* and fmi.curvature.*: the same run, bit for bit; docs/guide/fmus.md)", 2)),
