@@ -391,6 +391,23 @@ def test_a_reference_the_platform_cannot_take_is_refused_before_its_run(tmp_path
     assert not list((tmp_path / "out").glob("*.csv"))
 
 
+@pytest.mark.parametrize("command", [["run", "--no-plots", "--out", "{out}"], ["export", "--ssp", "{out}/a.ssp"],
+                                     ["export", "--fmu", "{out}/a.fmu"], ["export", "--fmu", "{out}/a.fmu", "--me"]])
+def test_a_reference_no_tool_could_run_is_refused_by_run_and_every_export(tmp_path, capsys, command):
+    """A height of 1e300 m crosses the joints at the start: `run` and every export refuse it at the
+    line of the DOF that asks it, one line, nothing written (CI's input fuzzer found the SSP
+    export's traceback: its start-up sweep ran into the mechanics' refusal)."""
+    scene = tmp_path / "high.toml"
+    scene.write_text('[scene]\nduration = 1.0\n[mechanics]\nparameter_set = "meng2010"\n[trajectory.x]\n'
+                     'sines = [{amplitude = 0.01, frequency = 1.0}]\n[trajectory.z]\noffset = 1e300\n')
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main([command[0], str(scene), *(a.format(out=out) for a in command[1:])]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"error: {scene}:7: the reference takes leg "), err
+    assert "(the joints would cross)" in err and not list(out.iterdir())
+
+
 @pytest.mark.parametrize("scale, says", [
     (1.0, "the drive ends at 0.39 s, the scene at 0.5 s: its last row is held for the rest"),
     (1000.0, "its rows are 10 apart and it ends at 390: are its times milliseconds?"),

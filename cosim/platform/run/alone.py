@@ -9,7 +9,7 @@ import numpy as np
 from ...engine import Algorithm, Component, Experiment, FixedStep, SystemStructure, fmu_path
 from ...engine.run import Plan, run
 from ..ports import POSE
-from ..scene import Scene
+from ..scene import Scene, SceneError
 from ..scene.signals import scene_trajectory
 
 TRAJECTORY_OUTPUTS = (*(f"pose_ref.{a}" for a in POSE), *(f"load.force.{a}" for a in "xyz"))
@@ -72,7 +72,8 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
     if scene.vehicle is not None or scene.duration / step > WORKSPACE_SAMPLES:
         return None  # (a run that long is refused by what it would record)
     times, poses, _ = play(scene_trajectory(scene), scene.duration, step)
-    kinematics = Core(values=mechanics_values).pose_kinematics(poses)
+    core = Core(values=mechanics_values)
+    kinematics = core.pose_kinematics(poses)
     tilt = np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])
     bad = (kinematics["length"] <= 0.0) | ~(tilt < TILT_IMPOSSIBLE)
     if not bad.any():
@@ -84,5 +85,19 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
     hint = (f"; its {wide} reaches {largest.max():.3g} rad ({np.degrees(largest.max()):.0f} deg): a scene's angles "
             "are radians" if largest.max() > np.pi / 2 else "")
     how = "to no length" if kinematics["length"][k, leg - 1] <= 0 else "past a right angle from its neutral direction"
-    return (f"trajectory.{wide}" if hint else "trajectory",
+    # without a hint, the DOF farthest from neutral then (translations against the legs' length there, angles in
+    # radians), where the file gives it its own table; else the file
+    neutral = core.neutral_pose
+    away = np.abs(poses[k] - neutral) / np.r_[[core.pose_kinematics(neutral[None])["length"].max()] * 3, [1.0] * 3]
+    farthest = f"trajectory.{POSE[int(np.nanargmax(np.where(np.isfinite(away), away, np.inf)))]}"
+    key = f"trajectory.{wide}" if hint else farthest if scene.document.line(farthest) else "trajectory"
+    return (key,
             f"the reference takes leg {leg} {how} at t = {times[k]:.3f} s (the joints would cross){hint}")
+
+
+def check_workspace(scene: Scene, mechanics_values: dict) -> None:
+    """SceneError at the scene's key where its own reference asks what no platform of its kind can
+    do (workspace_problem): before a run, or an export that another tool would run into the same."""
+    problem = workspace_problem(scene, mechanics_values)
+    if problem is not None:
+        raise SceneError(f"{scene.document.where(problem[0])}: {problem[1]}")

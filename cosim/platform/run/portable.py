@@ -26,7 +26,8 @@ from ...engine.structure import SystemStructure
 from ...engine.tools import FLOOR, ToolMaster, ToolStep, fmi3_lines, largest_steps
 from ..scene import Scene
 from .accuracy import Judgement, converged_twin, judge, probe_duration
-from .compile import scene_record, scene_structure
+from .alone import check_workspace
+from .compile import scene_record, scene_structure, scene_values
 
 def row(measured: ToolStep) -> str:
     """A row of the export's table: the tool, its master, the step written, the verdict, the pose
@@ -68,6 +69,7 @@ def portable_structure(scene: Scene, fmi2_warnings: bool = False) -> tuple[Syste
     from ...engine.checks import check_parameters, variables
     structure = scene_structure(scene)
     check_parameters(structure)  # ParameterError before a run on values the FMUs refuse
+    check_workspace(scene, scene_values(scene)[0])  # a reference no tool could run, as `cosim run` refuses it
     lines, without = [], {"fmi.extrapolate_inputs": [], "fmi.warnings_as_ok": []}
     switches = ("fmi.extrapolate_inputs", *(() if fmi2_warnings else ("fmi.warnings_as_ok",)))
     for component in structure.components:
@@ -234,6 +236,7 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
     from .errors import SceneError
     try:
         compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
+        check_workspace(scene, compiled.mechanics)  # a reference no tool could run, as `cosim run` refuses it
         plan = unguarded_cueing(compiled.plan) if model_exchange else compiled.plan  # (no steps to guard at)
         path = write_system_fmu(plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange,
                                 remark=UNGUARDED if scene.vehicle is not None and model_exchange else "")

@@ -25,7 +25,7 @@ from ..ports import DRIVES, POSE, per_leg
 from ..report.limits import result_excursion_lines
 from ..report.plots import units
 from ..scene import Scene, SceneError
-from .alone import workspace_problem
+from .alone import check_workspace
 from .envelope import GUARD_KINDS, GUARD_OUTPUTS, held_line
 from .compile import CompiledScene, compile_scene, run_label
 from .errors import BUILD_ERRORS, scene_error
@@ -95,9 +95,8 @@ def run_scene(scene: Scene, out: Path | None = None, plots: bool = False, progre
                              f"control '{control_name(plan.control)}' chooses its steps as it goes: set step_control = "
                              "fixed")
         guarded = plan.real_time is not None and plan.real_time.live is not None and plan.real_time.live.guarded
-        problem = None if guarded else workspace_problem(scene, compiled.mechanics)  # (a guard holds it)
-        if problem is not None:  # before the run, not when the mechanics stops part way
-            raise SceneError(f"{scene.document.where(problem[0])}: {problem[1]}")
+        if not guarded:  # (a guard holds it) before the run, not when the mechanics stops part way
+            check_workspace(scene, compiled.mechanics)
 
         def report(outcome: Outcome, result: np.ndarray) -> RunReport:
             made = scene_report(compiled, result, outcome)
