@@ -10,16 +10,19 @@ PYTHON=${PYTHON:-python3}
 # /usr/lib/wine, off the PATH).
 missing=""
 ldconfig -p 2>/dev/null | grep -q "libtbb.so.12" || missing="$missing libtbb12"
+# the peers' fmusim (Reference-FMUs, the tests' third-party importer) links against libxml2 and minizip
+ldconfig -p 2>/dev/null | grep -q "libminizip.so.1" || missing="$missing libminizip1"
+ldconfig -p 2>/dev/null | grep -q "libxml2.so.2" || missing="$missing libxml2"
 command -v openssl > /dev/null 2>&1 || missing="$missing openssl"
 command -v x86_64-w64-mingw32-gcc > /dev/null 2>&1 || missing="$missing gcc-mingw-w64-x86-64"
 { command -v wine64 > /dev/null 2>&1 || [ -x /usr/lib/wine/wine64 ]; } || missing="$missing wine64"
 if [ -z "$missing" ]; then
-  echo "setup: the system packages are present (TBB, openssl, MinGW-w64, Wine)"
+  echo "setup: the system packages are present (TBB, minizip, libxml2, openssl, MinGW-w64, Wine)"
 else
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   # shellcheck disable=SC2086
   $SUDO apt-get update -qq > apt.log 2>&1 && $SUDO apt-get install -y -qq $missing >> apt.log 2>&1 \
-    || { cat apt.log; echo "could not install$missing (needed by ecospy, the win64 binaries and the tests)" >&2; exit 1; }
+    || { cat apt.log; echo "could not install$missing (needed by ecospy, the win64 binaries, fmusim and the tests)" >&2; exit 1; }
 fi
 # Each step once: the environment is made again only when what it is made from changed (the pinned
 # requirements, pyproject.toml, the Python), and CMake builds only what changed.
