@@ -5,8 +5,9 @@ drives).
 
 Seven cueings per drive: the classical washout at the scene's values, and as `cosim tune` tunes it
 for that drive (its default ranges, seed 1); the MPC with 3 s of foresight (reading the recorded
-drive ahead), and without (as a live drive comes), its prediction held or decaying (CUEINGS); the
-MPC as `cosim tune` tunes it for that drive (its weights and its prediction's decay), with and
+drive ahead), and without (as a live drive comes), its prediction held, decaying, or continued along
+its trend and decaying (CUEINGS); the MPC as `cosim tune` tunes it for that drive (its weights and its
+prediction's decay and trend), with and
 without foresight (TUNINGS): tuned against tuned, and how much foresight is worth at best.
 
 Reported per drive and cueing: the summed perceived error (rms per channel past its threshold, in
@@ -59,12 +60,16 @@ TUNINGS = {TUNED: {"cueing.algorithm": "classical"},
 
 # the cueings compared: the classical washout; the MPC reading the recorded drive 3 s ahead
 # (foresight), and as a live drive comes (no foresight), the motion it read held or returning to rest
-# over 1 s (mpc.prediction_decay)
+# over 1 s (mpc.prediction_decay), and that along its trend as the past shows it, fading over 0.5 s
+# (mpc.prediction_trend)
 CUEINGS = {"classical": {"cueing.algorithm": "classical"},
            "MPC, foresight 3 s": {"cueing.algorithm": "mpc", "cueing.preview": 3.0},
            "MPC, no foresight, held": {"cueing.algorithm": "mpc", "cueing.preview": 0.0},
            "MPC, no foresight, decaying 1 s": {"cueing.algorithm": "mpc", "cueing.preview": 0.0,
-                                               "mpc.prediction_decay": 1.0}}
+                                               "mpc.prediction_decay": 1.0},
+           "MPC, no foresight, trend 0.5 s, decaying 1 s": {"cueing.algorithm": "mpc", "cueing.preview": 0.0,
+                                                            "mpc.prediction_decay": 1.0,
+                                                            "mpc.prediction_trend": 0.5}}
 
 
 def variant(path: Path, cueing: str):
@@ -171,8 +176,9 @@ def main() -> None:
               "drive (its default ranges, seed 1; tuned by the same perception measure, within every limit); the MPC at "
               "its defaults but for what each row says: reading the recorded drive 3 s ahead (foresight, which a live "
               "drive does not give; the shipped default is none) or not, the motion it read then held over its horizon "
-              "(the default) or returning to rest over 1 s; the MPC tuned by `cosim tune` for the drive (its weights "
-              "and its prediction's decay, default ranges, seed 1), with and without foresight. The stroke is Meng's, "
+              "(the default) or returning to rest over 1 s, or first continued along its trend (its rate over the last "
+              "20 ms, from the past alone) fading over 0.5 s; the MPC tuned by `cosim tune` for the drive (its weights "
+              "and its prediction's decay and trend, default ranges, seed 1), with and without foresight. The stroke is Meng's, "
               "1.535-2.2 m. The co-simulation's real-time factor is the whole call's (compiling the scene included), the "
               "best of five in one run, every drive's cueings taken in turn in each round after every tuning is done, on a "
               "machine running nothing else. "

@@ -7,7 +7,8 @@
  * linearised about neutral (small angles, as the classical washout's tilt): the specific force
  *     s_x = a_x - g pitch,  s_y = a_y + g roll,  s_z = a_z,
  * and the angular rate (roll', pitch', yaw'). The vehicle's r (its specific force less g along z,
- * its angular rate) is known ahead where vehicle.file gives it, else held at its value now. The
+ * its angular rate) is read ahead of now as far as mpc.preview (a recording, vehicle.file), beyond
+ * predicted from there (cueing_vehicle_ahead: held, along its trend, returning to rest). The
  * error e = s - r goes through the vestibular models (perception.py gives the same constants):
  *     otoliths (Young and Meiry 1968):     K (1 + tau_a s) / ((1 + tau_L s)(1 + tau_S s)),
  *     semicircular canals (Telban and Cardullo 2005, after Zacharias 1978):

@@ -10,7 +10,8 @@
 double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
 /* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t as the MPC predicts it at t_now:
  * the recorded motion (vehicle.file) up to mpc.preview ahead of now, the input now for a live drive;
- * beyond, the last of it held or (mpc.prediction_decay) returning to rest. */
+ * beyond, the last of it held, continued along its trend (mpc.prediction_trend) and returning to rest
+ * (mpc.prediction_decay). */
 double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
 
 /* The platform of the joints geometry.* at the neutral pose neutral.* (the mechanics' layout, as

@@ -190,6 +190,9 @@ X(Real, mpc_preview, "mpc.preview", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
 X(Real, mpc_prediction_decay, "mpc.prediction_decay", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
   "MPC: the vehicle's motion beyond what it reads, predicted from the last it read: held (0), or returning to rest " \
   "(no acceleration, no rotation) with this time constant") \
+X(Real, mpc_prediction_trend, "mpc.prediction_trend", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
+  "MPC: the vehicle's motion beyond what it reads continued along its trend there (its rate over the last " \
+  "mpc.period, from the past alone as a live feed shows it), the trend fading with this time constant (0: none)") \
 MPC_WEIGHT(X, specific_force, "s4/m2", 1.0, "MPC: weight of the perceived specific force's error (per axis)") \
 MPC_WEIGHT(X, angular_rate, "s2/rad2", 30.0, "MPC: weight of the perceived angular rate's error (per axis)") \
 MPC_WEIGHT(X, position, "1/m2", 1.0, "MPC: weight of the platform's translation from neutral (the washout)") \

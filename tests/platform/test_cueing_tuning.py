@@ -167,11 +167,11 @@ def test_a_wrong_vehicle_motion_in_a_study_is_one_line(tmp_path, motion, message
 
 def test_the_mpc_is_tuned_by_its_weights(braking):
     """With [cueing] algorithm = "mpc" the search's default ranges are the MPC's weights and its
-    prediction's decay (what a live drive's cueing can choose: tests/models/test_cueing_mpc.py); a short
+    prediction's decay and trend (what a live drive's cueing can choose: tests/models/test_cueing_mpc.py); a short
     search over two of them lands inside them, both its confirmations stay within every limit (the
     MPC holds the envelope whatever its weights) and feel closer than the classical washout."""
     from cosim.platform.design.cueing import DEFAULT_RANGES
-    assert DEFAULT_RANGES["mpc"] and all(k.startswith("mpc.weight.") or k == "mpc.prediction_decay"
+    assert DEFAULT_RANGES["mpc"] and all(k.startswith("mpc.weight.") or k.startswith("mpc.prediction_")
                                          for k in DEFAULT_RANGES["mpc"])
     ranges = {"mpc.weight.position": (0.2, 3.0), "mpc.weight.acceleration": (0.03, 0.5)}
     tuning = tune(braking.changed({"cueing.algorithm": "mpc"}), ranges, workers=0, seed=3, iterations=1, population=3)

@@ -35,7 +35,8 @@ from .cueing_bound import CueingBound, scene_bound
 # searched where the scene's [cueing.tune] names no ranges, per [cueing] algorithm: for the classical
 # washout the horizontal channels and the tilt, the ones a ground vehicle's motion exercises most;
 # for the MPC its weights (each a decade or more about its default) and how fast its prediction of the
-# vehicle's motion returns to rest beyond what it reads (mpc.prediction_decay)
+# vehicle's motion returns to rest beyond what it reads (mpc.prediction_decay) and how long its trend
+# there carries on (mpc.prediction_trend)
 DEFAULT_RANGES = {
     "classical": {"translation.x.gain": (0.1, 1.0), "translation.x.frequency": (0.5, 5.0),
                   "translation.y.gain": (0.1, 1.0), "translation.y.frequency": (0.5, 5.0),
@@ -43,7 +44,8 @@ DEFAULT_RANGES = {
                   "rotation.yaw.gain": (0.1, 1.0), "rotation.yaw.frequency": (0.1, 2.0)},
     "mpc": {"mpc.weight.specific_force": (0.2, 5.0), "mpc.weight.angular_rate": (3.0, 100.0),
             "mpc.weight.position": (0.1, 5.0), "mpc.weight.angle": (0.1, 5.0),
-            "mpc.weight.acceleration": (0.01, 1.0), "mpc.prediction_decay": (0.2, 5.0)}}
+            "mpc.weight.acceleration": (0.01, 1.0), "mpc.prediction_decay": (0.2, 5.0),
+            "mpc.prediction_trend": (0.0, 2.0)}}
 # the drive's effort per ampere, by drive kind: the PMSM's torque constant, the linear motor's force constant
 PER_AMPERE = {"pmsm": "motor.torque_constant", "linear": "motor.force_constant"}
 CURRENT = {"pmsm": "current.q", "linear": "current"}
