@@ -190,8 +190,8 @@ def main() -> None:
               "(cosim.platform.design.cueing_bound, by each model): no cueing, live or with foresight, is closer. "
               "Every "
               f"cueing run is guarded: its reference is held within the envelope ({envelope.words()}), which the MPC "
-              "also plans within; the steps the guard held it back are counted (the classical washout needs it on the "
-              "emergency stop)."]
+              "also plans within; the steps the guard held it back are counted (its column: where a cueing runs to the "
+              "envelope's edge)."]
     publish("cueing_mpc", "python benchmarks/cueing_mpc.py", lines)
 
 

@@ -120,8 +120,8 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
         Key("head", Row((Number("m"),) * 3), "the occupant's head in the platform's frame, from its origin: where "
             "the platform's motion is felt and judged against the vehicle's (docs/guide/cueing.md)", [0.0, 0.0, 0.0]),
         Key("preview", Number("s", 0), "how far ahead of now the MPC may read the recorded drive: foresight, which "
-            "a live driver does not give (0: none, as live; the motion beyond predicted from the last it read: the "
-            "cueing FMU's mpc.prediction_decay)", 0.0))),
+            "a live driver does not give (0: none, as live; the motion beyond predicted from what it read: the "
+            "cueing FMU's mpc.prediction_trend and mpc.prediction_decay)", 0.0))),
     Table("cueing.tune", "What `cosim tune SCENE` searches (docs/guide/cueing.md): the cueing parameters that "
           "feel most like the vehicle within the platform's limits, by differential evolution on Dask.", (
         Key("ranges", Free("cueing FMU parameter = [low, high]"), "the parameters searched and their ranges (default: "
