@@ -31,7 +31,7 @@ def main(args: argparse.Namespace) -> int:
     iterations, population, seed = scene.cueing_search
     with security(args):
         tuning = tune(scene, workers=workers(args), scheduler=args.scheduler, seed=seed, iterations=iterations,
-                      population=population, progress=True)
+                      population=population, progress=True, judge=scene.cueing_judge)
     lines = tuning.lines()
     print("\n".join(lines))
     written = [write_tuned(scene, tuning, args.out),

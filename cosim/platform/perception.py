@@ -123,6 +123,9 @@ SECOND_OTOLITH = Vestibular("otoliths (Reid and Nahon 1985)", (-1.0 / 10.0,), (-
                             0.4 * 10.0 / (5.0 * 0.016))
 SECOND_CANAL = Vestibular("semicircular canals (Reid and Nahon 1985)", (0.0, 0.0), (-1.0 / 80.0, -1.0 / 5.73), 1.0)
 SECOND_ORGANS = (SECOND_OTOLITH,) * 3 + (SECOND_CANAL,) * 3
+# by what a cueing may be tuned (`[cueing.tune] judge`): the project's model, or both alike (the mean of
+# the two perceived errors)
+JUDGES = ("project", "both")
 
 
 def rotations(poses: np.ndarray) -> np.ndarray:

@@ -2,7 +2,8 @@
 tune`): the run's report gives the perceived quality per channel with its figures; the kinematic
 screening agrees with the co-simulation it stands in for; the tuned parameters beat the scene's
 own in perceived error within every limit, confirmed by co-simulation, the same on Dask as in
-this process; the tuned scene runs; a wrong [cueing.tune] is one line."""
+this process; judged by both perception models, closer by each; the tuned scene runs; a wrong
+[cueing.tune] is one line."""
 
 from __future__ import annotations
 
@@ -72,6 +73,27 @@ def test_tuning_beats_the_scenes_cueing_within_every_limit_and_is_the_same_on_da
     assert on_dask.best == here.best and on_dask.evaluations == here.evaluations
 
 
+def test_a_tuning_judged_by_both_perception_models_feels_closer_by_both(braking):
+    """[cueing.tune] judge = "both": the search minimises the mean of the perceived errors by the
+    project's model and the second (Reid and Nahon's), which differ on the same motions; the tuned
+    cueing, co-simulated, feels closer than the scene's own by each model alone, within every limit,
+    and the summary gives both models' figures."""
+    from cosim.platform.perception import second_opinion
+    from cosim.platform.run.runner import run_scene
+    ranges = {"tilt.gain": (0.1, 1.0), "translation.x.gain": (0.1, 1.0)}
+    both = tune(braking, ranges, workers=0, seed=3, iterations=3, population=4, judge="both")
+    own, tuned = both.confirmed["scene"], both.confirmed["tuned"]
+    assert abs(own.second - own.perceived_error) > 0.05 * own.perceived_error  # two models, not one twice
+    _, report = run_scene(braking)
+    assert own.second == pytest.approx(second_opinion(report.perceived), rel=1e-9)
+    assert both.better and tuned.within
+    assert tuned.perceived_error < own.perceived_error and tuned.second < own.second
+    assert tuned.judged("both") == pytest.approx(0.5 * (tuned.perceived_error + tuned.second))
+    summary = "\n".join(both.lines())
+    assert "the mean of the perceived errors by the project's model and the second" in summary
+    assert f"by the second model {tuned.second:.3f}" in summary
+
+
 def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     """... and shows its search's progress as it goes (not silent for minutes): the screenings out of
     the most the search takes, each generation."""
@@ -86,7 +108,8 @@ def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     summary = (tmp_path / "out" / "short_tuning.txt").read_text()
     gain = float(re.search(r"tilt.gain = ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["tilt.gain"] == pytest.approx(gain, rel=1e-3)
-    floor = re.search(r"the floor: .* tilting no faster than 2.5 deg/s, feels closer than ([0-9.]+)", summary)
+    floor = re.search(r"the floor: .* tilting no faster than 2.5 deg/s, feels closer by the project's model than "
+                      r"([0-9.]+)", summary)
     assert 0 <= float(floor.group(1)) < float(re.search(r"co-simulated: perceived error ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["translation.x.gain"] == 0.5  # the scene's own values kept
     assert "# 2.5 deg/s: a margin" in (tmp_path / "out" / "short_tuned.toml").read_text()  # and its comments
@@ -102,7 +125,7 @@ def test_a_drive_the_cueing_renders_exactly_is_on_the_floor(tmp_path, capsys):
         + '\n[cueing.tune]\nranges = {"tilt.gain" = [0.2, 0.8]}\niterations = 1\npopulation = 2\n')
     assert main(["tune", str(scene), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
     summary = (tmp_path / "out" / "cruise_tuning.txt").read_text()
-    assert "feels closer than 0.000" in summary and "nothing is left to gain" in summary
+    assert "feels closer by the project's model than 0.000" in summary and "nothing is left to gain" in summary
 
 
 def test_tuning_a_scene_without_a_vehicle_is_one_line(capsys):
@@ -117,6 +140,7 @@ def test_tuning_a_scene_without_a_vehicle_is_one_line(capsys):
     ('ranges = {"tilt.frequency" = [-1.0, 2.0]}', "at an end"),
     ('ranges = {"tilt.gain" = 0.5}', "must be [low, high]"),
     ("iterations = 0", "must be"),
+    ('judge = "second"', "use 'project' or 'both'"),
 ])
 def test_a_wrong_tuning_table_is_one_line(tmp_path, text, message):
     (tmp_path / "drive.csv").write_text((EXAMPLE.parent / "drive.csv").read_text())

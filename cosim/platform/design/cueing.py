@@ -3,6 +3,11 @@ the platform's motion feel most like the vehicle's (cosim.platform.perception: t
 the perceived motion, each in thresholds of its channel, summed) while every leg stays in its
 stroke, every joint within its angle and every drive within its current.
 
+What the search minimises is the perceived error by the project's perception model, or by it and a
+second one (Reid and Nahon's, perception.SECOND_ORGANS) alike: `[cueing.tune] judge`, so that a
+cueing tuned by one model does not spend the stroke on what another feels less. Every figure gives
+both.
+
 Two judges, as the design studies have them: the kinematic screening plays the cueing FMU alone
 and takes the platform on its reference (leg lengths and joint angles from the dynamics core, the
 currents from its inverse dynamics along the reference); scipy's differential evolution searches
@@ -22,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core import Core, gravity_of, mechanics_value
-from ..perception import ChannelQuality, perceive, perceived_error, platform_motion, quality, vehicle_motion
+from ..perception import (JUDGES, ChannelQuality, Perceived, perceive, perceived_error, platform_motion, quality, second_opinion,
+                          vehicle_motion)
 from ..ports import DRIVES, LEGS, POSE
 from ..run.compile import scene_cueing, scene_values
 from ..run.errors import BUILD_ERRORS, scene_error
@@ -92,24 +98,36 @@ def scene_limits(scene: Scene) -> Limits:
 
 @dataclass
 class Judged:
-    """A cueing's parameters judged: the perceived error, per channel, and the limits' margins."""
+    """A cueing's parameters judged: the perceived error (by the project's model, per channel, and by
+    the second model), and the limits' margins."""
     parameters: dict[str, float]
     perceived_error: float
     channels: list[ChannelQuality]
     margins: dict[str, float]
     how: str  # "screened" (the platform on its reference) or "co-simulated"
+    second: float  # the perceived error by the second model (perception.SECOND_ORGANS)
+
+    @classmethod
+    def of(cls, parameters: dict[str, float], felt: Perceived, margins: dict[str, float], how: str) -> "Judged":
+        channels = quality(felt)
+        return cls(dict(parameters), perceived_error(channels), channels, margins, how, second_opinion(felt))
 
     @property
     def within(self) -> bool:
         return all(m >= 0.0 for m in self.margins.values())
 
-    def objective(self) -> float:
-        """What the search minimises: the perceived error, plus PENALTY per fraction a limit is passed by."""
-        return self.perceived_error + PENALTY * sum(max(0.0, -m) for m in self.margins.values())
+    def judged(self, judge: str = "project") -> float:
+        """The perceived error by the judge (JUDGES): the project's model's, or the mean of both models'."""
+        return self.perceived_error if judge == "project" else 0.5 * (self.perceived_error + self.second)
+
+    def objective(self, judge: str = "project") -> float:
+        """What the search minimises: the perceived error by the judge, plus PENALTY per fraction a limit
+        is passed by."""
+        return self.judged(judge) + PENALTY * sum(max(0.0, -m) for m in self.margins.values())
 
     def line(self) -> str:
         worst = min(self.margins, key=self.margins.get)
-        return (f"{self.how}: perceived error {self.perceived_error:.3f}, "
+        return (f"{self.how}: perceived error {self.perceived_error:.3f} (by the second model {self.second:.3f}), "
                 + ", ".join(f"{k} margin {v:.1%}" for k, v in self.margins.items())
                 + (" (within every limit)" if self.within else f" (past the {worst} limit)"))
 
@@ -132,14 +150,13 @@ def screen(scene: Scene, parameters: dict[str, float]) -> Judged:
     gravity = gravity_of(mechanics)
     felt = perceive(times, vehicle_motion(taken[:, :3], taken[:, 3:], float(np.linalg.norm(gravity))),
                     platform_motion(times, poses, twist, np.array(scene.head), gravity))
-    channels = quality(felt)
     core = _core(scene)
     kinematics = core.pose_kinematics(poses)
     efforts = core.inverse_dynamics_many(poses, rates, accelerations)
     limits = scene_limits(scene)
     margins = limits.margins(kinematics["length"], np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]),
                              efforts / limits.per_ampere)
-    return Judged(dict(parameters), perceived_error(channels), channels, margins, "screened")
+    return Judged.of(parameters, felt, margins, "screened")
 
 
 def euler_angular_velocity(poses: np.ndarray, rates: np.ndarray) -> np.ndarray:
@@ -177,13 +194,12 @@ def confirm(scene: Scene, parameters: dict[str, float]) -> Judged:
     currents = np.column_stack([result[f"{current}[{i}]"] for i in LEGS])
     margins = scene_limits(scene).margins(kinematics["length"], np.maximum(kinematics["lower_angle"],
                                                                           kinematics["upper_angle"]), currents)
-    channels = quality(report.perceived)
-    return Judged(dict(parameters), perceived_error(channels), channels, margins, "co-simulated")
+    return Judged.of(parameters, report.perceived, margins, "co-simulated")
 
 
-def _objective(x: np.ndarray, scene: Scene, keys: tuple[str, ...]) -> float:
+def _objective(x: np.ndarray, scene: Scene, keys: tuple[str, ...], judge: str) -> float:
     try:
-        return screen(scene, dict(zip(keys, map(float, x)))).objective()
+        return screen(scene, dict(zip(keys, map(float, x)))).objective(judge)
     except Exception:  # the FMU refused these values (none in the ranges should): the worst there is
         return math.inf
 
@@ -198,16 +214,20 @@ class Tuning:
     screened: dict[str, Judged] = field(default_factory=dict)   # "scene", "tuned"
     confirmed: dict[str, Judged] = field(default_factory=dict)  # "scene", "tuned"
     floor: CueingBound | None = None  # the least error any cueing could reach on the drive (cueing_bound)
+    judge: str = "project"  # what the search minimised (JUDGES)
 
     @property
     def better(self) -> bool:
-        """The tuned parameters feel better than the scene's own in co-simulation, within every limit."""
+        """The tuned parameters feel better than the scene's own by the judge in co-simulation, within
+        every limit."""
         tuned, own = self.confirmed["tuned"], self.confirmed["scene"]
-        return tuned.within and tuned.perceived_error < own.perceived_error
+        return tuned.within and tuned.judged(self.judge) < own.judged(self.judge)
 
     def lines(self) -> list[str]:
-        out = [f"tuned {len(self.ranges)} cueing parameters by differential evolution: {self.evaluations} screenings "
-               f"in {self.seconds:.0f} s"]
+        judged = ("the perceived error" if self.judge == "project" else
+                  "the mean of the perceived errors by the project's model and the second")
+        out = [f"tuned {len(self.ranges)} cueing parameters by differential evolution ({judged} least): "
+               f"{self.evaluations} screenings in {self.seconds:.0f} s"]
         for name in ("scene", "tuned"):
             out.append("the scene's cueing:" if name == "scene" else "the tuned cueing:")
             out += [f"  {judged.line()}" for judged in (self.screened[name], self.confirmed[name])]
@@ -216,7 +236,7 @@ class Tuning:
             tuned = self.confirmed["tuned"].perceived_error
             left = max(0.0, tuned - self.floor.perceived_error)
             out.append(f"the floor: no cueing within the platform's stroke and joints, tilting no faster than "
-                       f"{math.degrees(self.floor.tilt_rate_limit):.3g} deg/s, feels closer than "
+                       f"{math.degrees(self.floor.tilt_rate_limit):.3g} deg/s, feels closer by the project's model than "
                        f"{self.floor.perceived_error:.3f}, even knowing the whole drive ("
                        + (f"the tuned cueing is {left:.3f} above it: at most {left / tuned:.0%} of its error is left to gain"
                           if left > 0.0 else "the tuned cueing is on it: nothing is left to gain")
@@ -229,11 +249,12 @@ class Tuning:
 
 def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, workers: int | None = 0,
          scheduler: str | None = None, seed: int = 1, iterations: int = 15, population: int = 6,
-         progress: bool = False) -> Tuning:
+         progress: bool = False, judge: str = "project") -> Tuning:
     """The cueing parameters within `ranges` (default: the scene's [cueing.tune] ranges, or
     DEFAULT_RANGES of its algorithm) whose screened objective is least (Judged.objective), searched on Dask
     (workers, scheduler as for a sweep), then it and the scene's own confirmed by co-simulation;
-    `progress`: the search's progress shown (the command line's)."""
+    `progress`: the search's progress shown (the command line's); `judge`: by which perception
+    model (JUDGES: the project's, or the mean of it and the second model's)."""
     ranges = dict(ranges or scene.cueing_ranges or DEFAULT_RANGES[scene.cueing_algorithm])
     keys = tuple(ranges)
     start = time.perf_counter()
@@ -244,10 +265,10 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
         if mapped is None:
             raise
         raise mapped from None
-    result = evolve(partial(_objective, scene=scene, keys=keys), [tuple(map(float, ranges[k])) for k in keys],
+    result = evolve(partial(_objective, scene=scene, keys=keys, judge=judge), [tuple(map(float, ranges[k])) for k in keys],
                     workers, scheduler, seed, iterations, population, progress="tune: screenings" if progress else None)
     best = dict(zip(keys, map(float, result.x)))
-    tuning = Tuning(ranges, best, int(result.nfev), time.perf_counter() - start)
+    tuning = Tuning(ranges, best, int(result.nfev), time.perf_counter() - start, judge=judge)
     for name, parameters in (("scene", {}), ("tuned", best)):
         tuning.screened[name] = own if name == "scene" else screen(scene, parameters)
         tuning.confirmed[name] = confirm(scene, parameters)

@@ -102,6 +102,7 @@ class Scene:
     head: tuple[float, float, float] = field(init=False)  # [cueing] head: the occupant's head, platform frame [m]
     cueing_ranges: dict[str, tuple[float, float]] | None = field(init=False)  # [cueing.tune] ranges
     cueing_search: tuple[int, int, int] = field(init=False)  # [cueing.tune] iterations, population, seed
+    cueing_judge: str = field(init=False)  # [cueing.tune] judge: "project" or "both" (perception.JUDGES)
     interpolation: str = field(init=False)
     pulses: tuple[Pulse, ...] = field(init=False)
     outputs_mechanics: tuple[str, ...] = field(init=False)

@@ -90,6 +90,7 @@ def derive(scene: Scene) -> dict[str, Any]:
         _mpc_checks(doc, out["cueing_parameters"], float(doc.value("scene", "step")))
     out["cueing_ranges"] = _cueing_ranges(doc)
     out["cueing_search"] = tuple(int(doc.value("cueing.tune", k)) for k in ("iterations", "population", "seed"))
+    out["cueing_judge"] = doc.value("cueing.tune", "judge")
     out["pulses"] = _pulses(doc)
     out["algorithm"], out["control"] = _settings(doc, out["drive"], out["duration"], out["pulses"])
     out["interface_jacobian"] = doc.value("coupling", "interface_jacobian")

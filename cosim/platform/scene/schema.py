@@ -9,6 +9,7 @@ from ...engine.errors import InputError
 from ...engine.schema import Key, Schema, Table
 from ...engine.values import REQUIRED, Choice, Either, Flag, Free, Items, ListOf, Number, Row, Text
 from ...engine.settings import COUPLING_KEYS
+from ..perception import JUDGES
 from ..ports import DRIVES, LEGS, POSE
 
 FRAMES = {"base": 1, "platform": 2}  # as the trajectory FMU's pulse[k].frame numbers them
@@ -130,7 +131,10 @@ SCHEMA = Schema("scene file", "A scene (`cosim run SCENE`): one run of the platf
             "acceleration, and its prediction's decay)"),
         Key("iterations", Number("", 1, whole=True), "generations of the search", 15),
         Key("population", Number("", 1, whole=True), "points per parameter in a generation", 6),
-        Key("seed", Number("", 0, whole=True), "the search's seed: the same seed, the same answer", 1))),
+        Key("seed", Number("", 0, whole=True), "the search's seed: the same seed, the same answer", 1),
+        Key("judge", Choice(JUDGES), "by which perception model the search judges a cueing: the project's, or "
+            "both alike (the mean of its perceived error and the second model's, Reid and Nahon's): a cueing tuned "
+            "by one model may spend the stroke on what the other feels less", "project"))),
     Table("live", "A live input's limits (`cosim run SCENE --listen udp://HOST:PORT`, docs/guide/realtime.md): the "
           "reference moves towards each pose received, braking in time, within these; refused packets and a silent "
           "sender leave it where it is going.", (
