@@ -123,23 +123,33 @@ static double motion(FmuInstance *fmu, int k, double t, double *rate) {
 
 double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate) { return motion(fmu, k, t, rate); }
 
-/* Beyond what it read (at seen), the MPC predicts the vehicle's motion from there: the last of it
- * held, or continued along its trend (mpc.prediction_trend: its rate over the last mpc.period, as a
- * live feed shows it, from the past alone, fading with that time constant: it adds at most the rate
- * times it), and returning to rest (mpc.prediction_decay). */
-double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t) {
+/* How far ahead of t_now the MPC reads motion k: a recording's up to mpc.preview on, a live input's now. */
+static double seen_until(const FmuInstance *fmu, int k, double t_now) {
     const ModelData *data = (const ModelData *)fmu->model_data;
-    const ModelVariables *v = &fmu->s.v;
     const int recorded = data && data->vehicle && data->vehicle->column_of[k] >= 0;
-    const double seen = recorded ? fmin(t, t_now + v->mpc_preview) : t_now; /* read ahead: a recording's */
+    return recorded ? t_now + fmu->s.v.mpc_preview : t_now;
+}
+
+void cueing_vehicle_rate(FmuInstance *fmu, double t_now, double rate[6]) {
+    const double period = fmu->s.v.mpc_period;
+    for (int k = 0; k < 6; k++) {
+        const double seen = seen_until(fmu, k, t_now);
+        rate[k] = (motion(fmu, k, seen, NULL) - motion(fmu, k, seen - period, NULL)) / period;
+    }
+}
+
+/* Beyond what it read (at seen), the MPC predicts the vehicle's motion from there: the last of it
+ * held, or continued along its trend (mpc.prediction_trend: the rate there as the solve took it,
+ * cueing_vehicle_rate smoothed by mpc.trend_smoothing, fading with that time constant: it adds at
+ * most the rate times it), and returning to rest (mpc.prediction_decay). */
+double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t) {
+    const ModelVariables *v = &fmu->s.v;
+    const double seen = fmin(t, seen_until(fmu, k, t_now));
     const double last = motion(fmu, k, seen, NULL);
     if (t <= seen) return last;
     const double ahead = t - seen, trend = v->mpc_prediction_trend, decay = v->mpc_prediction_decay;
     double predicted = last;
-    if (trend > 0.0) {
-        const double rate = (last - motion(fmu, k, seen - v->mpc_period, NULL)) / v->mpc_period;
-        predicted += rate * trend * (1.0 - exp(-ahead / trend));
-    }
+    if (trend > 0.0) predicted += fmu->s.internal.mpc.trend_rate[k] * trend * (1.0 - exp(-ahead / trend));
     if (!(decay > 0.0)) return predicted;
     const double rest = k == 2 ? v->gravity : 0.0; /* standing: gravity's specific force alone */
     return rest + (predicted - rest) * exp(-ahead / decay);

@@ -8,7 +8,8 @@
  *     s_x = a_x - g pitch,  s_y = a_y + g roll,  s_z = a_z,
  * and the angular rate (roll', pitch', yaw'). The vehicle's r (its specific force less g along z,
  * its angular rate) is read ahead of now as far as mpc.preview (a recording, vehicle.file), beyond
- * predicted from there (cueing_vehicle_ahead: held, along its trend, returning to rest). The
+ * predicted from there (cueing_vehicle_ahead: held, along its trend, returning to rest; the trend's
+ * rate taken once per solve, smoothed over solves by mpc.trend_smoothing: update_trend). The
  * error e = s - r goes through the vestibular models (perception.py gives the same constants):
  *     otoliths (Young and Meiry 1968):     K (1 + tau_a s) / ((1 + tau_L s)(1 + tau_S s)),
  *     semicircular canals (Telban and Cardullo 2005, after Zacharias 1978):
@@ -457,12 +458,29 @@ static void form_qp(FmuInstance *fmu, MpcData *m, double t, const Motion *at) {
     }
 }
 
+/* The rate the prediction continues (mpc.prediction_trend) at a solve at t: the vehicle's rate where
+ * the MPC's reading ends, through a first-order low-pass of time constant mpc.trend_smoothing
+ * sampled every solve (the first solve takes the rate as it is). */
+static void update_trend(FmuInstance *fmu, double t) {
+    const ModelVariables *v = &fmu->s.v;
+    MpcState *state = &fmu->s.internal.mpc;
+    if (!(v->mpc_prediction_trend > 0.0)) return;
+    double rate[DOF];
+    cueing_vehicle_rate(fmu, t, rate);
+    const int smooth = state->trend_known && v->mpc_trend_smoothing > 0.0;
+    const double keep = smooth ? exp(-v->mpc_period / v->mpc_trend_smoothing) : 0.0;
+    for (int d = 0; d < DOF; d++)
+        state->trend_rate[d] = smooth ? keep * state->trend_rate[d] + (1.0 - keep) * rate[d] : rate[d];
+    state->trend_known = 1;
+}
+
 /* The QP at time t for the motion now (state mpc), solved: the first interval's accelerations. */
 static void solve(FmuInstance *fmu, MpcData *m, double t) {
     const ModelVariables *v = &fmu->s.v;
     MpcState *state = &fmu->s.internal.mpc;
     Motion now;
     memcpy(&now, fmu->s.x, sizeof now);
+    update_trend(fmu, t);
     form_qp(fmu, m, t, &now);
     DAQPResult result;
     double solution[Z], multipliers[Z + M]; /* u */

@@ -10,9 +10,12 @@
 double cueing_vehicle(FmuInstance *fmu, int k, double t, double *rate);
 /* The vehicle's motion k (0-2 specific force, 3-5 angular rate) at t as the MPC predicts it at t_now:
  * the recorded motion (vehicle.file) up to mpc.preview ahead of now, the input now for a live drive;
- * beyond, the last of it held, continued along its trend (mpc.prediction_trend) and returning to rest
- * (mpc.prediction_decay). */
+ * beyond, the last of it held, continued along its trend (mpc.prediction_trend: the rate the last
+ * solve took, fmu->s.internal.mpc.trend_rate) and returning to rest (mpc.prediction_decay). */
 double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
+/* The vehicle's rate per DOF where what the MPC reads at t_now ends (now, or mpc.preview on into a
+ * recording): over the last mpc.period, from the past alone, as a live feed shows it. */
+void cueing_vehicle_rate(FmuInstance *fmu, double t_now, double rate[6]);
 
 /* The platform of the joints geometry.* at the neutral pose neutral.* (the mechanics' layout, as
  * the MPC's envelope and the guard's take it); 0 with a logged reason if a leg has no length. */

@@ -40,6 +40,8 @@ typedef struct {
     double a[6];             /* the pose's acceleration until the next solve */
     double since;            /* [s] since the last solve (Co-Simulation) */
     double solved_at;        /* [s] the time of the last solve (Model Exchange: the next is a period on) */
+    double trend_rate[6];    /* the vehicle's rate its prediction continues (mpc.prediction_trend), smoothed */
+    int trend_known;         /* trend_rate holds a solve's rate (the first solve takes its rate as it is) */
     int iterations, softened;
 } MpcState;
 
@@ -193,6 +195,9 @@ X(Real, mpc_prediction_decay, "mpc.prediction_decay", parameter, fixed, "s", 0.0
 X(Real, mpc_prediction_trend, "mpc.prediction_trend", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
   "MPC: the vehicle's motion beyond what it reads continued along its trend there (its rate over the last " \
   "mpc.period, from the past alone as a live feed shows it), the trend fading with this time constant (0: none)") \
+X(Real, mpc_trend_smoothing, "mpc.trend_smoothing", parameter, fixed, "s", 0.0, 0.0, FMU_INF, \
+  "MPC: time constant of a first-order low-pass, updated at each solve, on the rate the trend continues (0: the " \
+  "rate as it comes; a noisy feed's rate needs it, or the trend predicts the noise on)") \
 MPC_WEIGHT(X, specific_force, "s4/m2", 1.0, "MPC: weight of the perceived specific force's error (per axis)") \
 MPC_WEIGHT(X, angular_rate, "s2/rad2", 30.0, "MPC: weight of the perceived angular rate's error (per axis)") \
 MPC_WEIGHT(X, position, "1/m2", 1.0, "MPC: weight of the platform's translation from neutral (the washout)") \
