@@ -15,7 +15,8 @@
  *     l = w_n^2 / (s^2 + 2 zeta w_n s + w_n^2) u, the sustained part of the specific force, stood
  *     for by gravity: pitch_t = -asin(l_x / g), roll_t = asin(l_y / g) (R = Rz Ry Rx: a pitch theta
  *     is felt as f_x = -g sin theta, a roll phi as f_y = g sin phi), at most tilt.limit; the tilt
- *     follows its target with the tilt vector (roll, pitch) turning at no more than tilt.rate_limit.
+ *     follows its target with the tilt vector (roll, pitch) turning at no more than tilt.rate_limit
+ *     (with tilt.pitch_rate_limit: within the ellipse of the two, pitch counted in roll's measure).
  *
  * The pose reference is the neutral pose plus p and b, with the tilt added to roll and pitch; its
  * rate and acceleration (fmi2GetRealOutputDerivatives) are the filters' own, exact. The filters are
@@ -284,12 +285,22 @@ static void tilt_target(FmuInstance *fmu, int j, double t, double out[4]) {
     out[3] = sign * (ddds / c + (3.0 * s * ds * dds + ds * ds * ds) / (c2 * c) + 3.0 * s * s * ds * ds * ds / (c2 * c2 * c));
 }
 
+/* Pitch's rate in roll's measure: the factor that turns the ellipse of tilt.rate_limit (roll) and
+ * tilt.pitch_rate_limit into the circle of tilt.rate_limit (1 exactly when pitch has no limit of
+ * its own: the tilt vector's circle, bit for bit). */
+double cueing_pitch_rate_scale(const FmuInstance *fmu) {
+    const ModelVariables *v = &fmu->s.v;
+    return v->tilt_pitch_rate_limit > 0.0 ? v->tilt_rate_limit / v->tilt_pitch_rate_limit : 1.0;
+}
+
 /* The tilt at t after the target has moved: towards it at no more than the rate limit over h (h
  * = 0: on it, at the start). The limit is on the tilt vector's rate (roll and pitch together: the
  * rate the semicircular canals feel), not per axis: a diagonal tilt turns no faster than one
- * about a single axis. */
+ * about a single axis. Pitch counts in roll's measure (its rate scaled), so that with a pitch limit
+ * of its own the vector stays within their ellipse. */
 static void tilt_follow(FmuInstance *fmu, double t, double h) {
     const double limit = fmu->s.v.tilt_rate_limit;
+    const double measure[N_TILT] = {cueing_pitch_rate_scale(fmu), 1.0}; /* j: 0 pitch, 1 roll */
     double target[N_TILT][4], gap[N_TILT], *tilt[N_TILT], *angle[N_TILT];
     for (int j = 0; j < N_TILT; j++) {
         tilt_target(fmu, j, t, target[j]);
@@ -297,9 +308,11 @@ static void tilt_follow(FmuInstance *fmu, double t, double h) {
         angle[j] = fmu->s.x + CUEING_TILT_STATE + 1 - j;
         gap[j] = target[j][0] - *angle[j];
     }
-    const double distance = sqrt(gap[0] * gap[0] + gap[1] * gap[1]); /* (not hypot: glibc 2.35 versions it anew) */
+    const double along[N_TILT] = {measure[0] * gap[0], measure[1] * gap[1]};
+    const double distance = sqrt(along[0] * along[0] + along[1] * along[1]); /* (not hypot: glibc 2.35 versions it anew) */
     if (h == 0.0 || distance <= limit * h) { /* on its target, turning at most at the limit */
-        const double speed = sqrt(target[0][1] * target[0][1] + target[1][1] * target[1][1]);
+        const double rate[N_TILT] = {measure[0] * target[0][1], measure[1] * target[1][1]};
+        const double speed = sqrt(rate[0] * rate[0] + rate[1] * rate[1]);
         const int within = speed < limit;
         for (int j = 0; j < N_TILT; j++) {
             *angle[j] = target[j][0];
@@ -319,12 +332,13 @@ static void tilt_follow(FmuInstance *fmu, double t, double h) {
 /* Model Exchange's tilt (its angles states of the importer's solver): the rate limit in continuous
  * time. Co-Simulation's tilt snaps onto its target once within a step's reach; this one closes
  * the gap within TILT_CATCH_UP: its rate is the target's plus gap / TILT_CATCH_UP, the tilt
- * vector's rate at most tilt.rate_limit. The rates (roll, pitch) into rate where given, and into
+ * vector's rate (pitch in roll's measure) at most tilt.rate_limit. The rates (roll, pitch) into rate where given, and into
  * internal.tilt[.][1] (the higher derivatives 0). */
 static const double TILT_CATCH_UP = 1e-4;
 
 static void tilt_rate(FmuInstance *fmu, double *rate) {
     const double limit = fmu->s.v.tilt_rate_limit;
+    const double measure[N_TILT] = {1.0, cueing_pitch_rate_scale(fmu)}; /* k: 0 roll, 1 pitch (in roll's measure) */
     double *tilt[N_TILT] = {fmu->s.internal.tilt[0], fmu->s.internal.tilt[1]}, speed = 0.0;
     for (int j = 0; j < N_TILT; j++) { /* target j: 0 pitch from x, 1 roll from y */
         double target[4];
@@ -332,7 +346,7 @@ static void tilt_rate(FmuInstance *fmu, double *rate) {
         const int k = 1 - j;
         tilt[k][1] = target[1] + (target[0] - fmu->s.x[CUEING_TILT_STATE + k]) / TILT_CATCH_UP;
         tilt[k][2] = tilt[k][3] = 0.0;
-        speed += tilt[k][1] * tilt[k][1];
+        speed += measure[k] * tilt[k][1] * measure[k] * tilt[k][1];
     }
     speed = sqrt(speed);
     for (int k = 0; k < N_TILT; k++) {

@@ -33,7 +33,8 @@
  *     direction across n_0 (2 components, in the base frame at the lower joint, in the platform's
  *     at the upper; sin of the tilt is its length) linearised alike, within an octagon inscribed in
  *     the circle of sin(limit.joint_angle),
- *     the platform's roll and pitch rate (the vector) within tilt.rate_limit plus the vehicle's own
+ *     the platform's roll and pitch rate (the vector; pitch in roll's measure when
+ *     tilt.pitch_rate_limit gives it an ellipse) within tilt.rate_limit plus the vehicle's own
  *     roll and pitch rate there: the tilt that stands for sustained force turns below what the
  *     canals notice, a rotational cue as fast as the vehicle's own (an octagon inscribed in that
  *     circle: 4 pairs of facets),
@@ -421,6 +422,7 @@ static void form_qp(FmuInstance *fmu, MpcData *m, double t, const Motion *at) {
     const double low = v->limit_leg_length_min + v->limit_stroke_margin;
     const double high = v->limit_leg_length_max - v->limit_stroke_margin;
     const double facet = v->tilt_rate_limit * cos(PI / 8.0); /* the octagon inscribed in the circle */
+    const double measure = cueing_pitch_rate_scale(fmu); /* pitch in roll's measure: the circle of its ellipse */
     memset(m->f, 0, sizeof m->f);
     for (int k = 0; k < N; k++) {
         double r[DOF], y[DOF];
@@ -449,10 +451,10 @@ static void form_qp(FmuInstance *fmu, MpcData *m, double t, const Motion *at) {
             }
         }
         /* the roll and pitch rate: the threshold, and as fast as the vehicle's own turns */
-        const double radius = facet + sqrt(r[3] * r[3] + r[4] * r[4]) * cos(PI / 8.0);
+        const double radius = facet + sqrt(r[3] * r[3] + measure * r[4] * measure * r[4]) * cos(PI / 8.0);
         for (int j = 0; j < 4; j++) {
             double row[DOF] = {0};
-            row[3] = cos(j * PI / 4.0), row[4] = sin(j * PI / 4.0);
+            row[3] = cos(j * PI / 4.0), row[4] = sin(j * PI / 4.0) * measure;
             constrain(m, k * ROWS + 12 + j, row, m->sv[k], x.v, -radius, radius);
         }
     }

@@ -16,6 +16,8 @@ double cueing_vehicle_ahead(FmuInstance *fmu, int k, double t_now, double t);
 /* The vehicle's rate per DOF where what the MPC reads at t_now ends (now, or mpc.preview on into a
  * recording): over the last mpc.period, from the past alone, as a live feed shows it. */
 void cueing_vehicle_rate(FmuInstance *fmu, double t_now, double rate[6]);
+/* Pitch's rate in roll's measure (model.c): tilt.rate_limit / tilt.pitch_rate_limit, 1 without the latter. */
+double cueing_pitch_rate_scale(const FmuInstance *fmu);
 
 /* The platform of the joints geometry.* at the neutral pose neutral.* (the mechanics' layout, as
  * the MPC's envelope and the guard's take it); 0 with a logged reason if a leg has no length. */

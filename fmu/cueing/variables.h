@@ -142,7 +142,12 @@ X(Real, tilt_frequency, "tilt.frequency", parameter, fixed, "rad/s", 2.0, FMU_PO
 X(Real, tilt_damping, "tilt.damping", parameter, fixed, "1", 1.0, FMU_POSITIVE, FMU_INF, "zeta of that low-pass") \
 X(Real, tilt_rate_limit, "tilt.rate_limit", parameter, fixed, "rad/s", 0.04363323129985824, FMU_POSITIVE, FMU_INF, \
   "Largest tilt rate (default 2.5 deg/s: a margin below the 3 deg/s at which the semicircular canals notice a roll, " \
-  "for the platform, whose drives lag the reference, turns up to about 12 % faster than commanded)") \
+  "for the platform, whose drives lag the reference, turns up to about 12 % faster than commanded); the tilt " \
+  "vector's, roll and pitch together, unless tilt.pitch_rate_limit gives pitch its own") \
+X(Real, tilt_pitch_rate_limit, "tilt.pitch_rate_limit", parameter, fixed, "rad/s", 0.0, 0.0, FMU_INF, \
+  "Largest tilt rate in pitch (0: tilt.rate_limit's, a circle). Else the tilt's rate within the ellipse " \
+  "(roll'/tilt.rate_limit)^2 + (pitch'/tilt.pitch_rate_limit)^2 <= 1: the canals notice a pitch at 3.6 deg/s, " \
+  "a roll at 3 deg/s, so pitch may take 3 deg/s at the same margin as roll's 2.5") \
 X(Real, tilt_limit, "tilt.limit", parameter, fixed, "rad", 0.349065850398866, 0.0, 1.5707963267948966, \
   "Largest tilt angle (default 20 deg)") \
 X(String, vehicle_file, "vehicle.file", parameter, fixed, "", 0, 0, 0, \

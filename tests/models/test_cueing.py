@@ -182,6 +182,34 @@ def test_a_diagonal_acceleration_turns_the_tilt_vector_within_the_rate_limit(cue
     assert np.abs(np.diff(rows[:, 6]) / h).max() < 0.75 * limit  # each axis alone: about 1/sqrt(2) of it
 
 
+@pytest.mark.parametrize("direction", [(1.0, 0.0), (1.0, 1.0), (1.0, -0.4)])
+def test_with_a_pitch_rate_limit_of_its_own_the_tilt_turns_within_their_ellipse(cueing, direction):
+    """tilt.pitch_rate_limit (here 4 deg/s, roll's 3): the tilt's rates stay within the ellipse
+    (roll'/3)^2 + (pitch'/4)^2 <= 1 every step and on it where the limit holds them back; a surge
+    alone pitches at 4 deg/s, a diagonal turns each axis slower than its own limit."""
+    def motion(t):
+        u = np.zeros((len(t), 6))
+        u[:, 0], u[:, 1] = (2.0 * c * (t >= 1.0) for c in direction)
+        u[:, 2] = G
+        return u
+
+    h = 1e-3
+    roll_limit, pitch_limit = np.radians(3.0), np.radians(4.0)  # stated here: the mechanism, whatever the default
+    t, _, rows, rates, _ = drive(cueing({"translation.x.gain": 1.0, "translation.y.gain": 1.0, "tilt.gain": 1.0,
+                                         "tilt.rate_limit": roll_limit, "tilt.pitch_rate_limit": pitch_limit}),
+                                 motion, h, 30000, POSE + ["tilt.roll", "tilt.pitch"])
+    for roll, pitch in ((np.diff(rows[:, 6]) / h, np.diff(rows[:, 7]) / h), (rates[:, 6], rates[:, 7])):
+        within = np.hypot(roll / roll_limit, pitch / pitch_limit)
+        assert within.max() <= 1 + 1e-9 and within.max() > 0.99  # within the ellipse, and held back on it
+    pitch_rate, roll_rate = np.abs(np.diff(rows[:, 7]) / h).max(), np.abs(np.diff(rows[:, 6]) / h).max()
+    if direction[1] == 0.0:
+        assert pitch_rate == pytest.approx(pitch_limit, rel=1e-9) and roll_rate == 0.0  # pitch at its own limit
+    else:
+        assert pitch_rate < pitch_limit and roll_rate < roll_limit
+    felt = -G * np.sin(rows[-1, 4]), G * np.sin(rows[-1, 3])
+    assert np.allclose(felt, [2.0 * c for c in direction], atol=1e-6)  # the whole acceleration, through tilt alone
+
+
 def test_the_platform_comes_back_to_neutral_after_a_manoeuvre(cueing):
     """Braking, a lane change and a curve, then driving straight on: every cue washes out."""
     def motion(t):

@@ -132,6 +132,27 @@ def test_a_sustained_acceleration_is_rendered_by_tilt():
     assert abs(poses[-1, 0]) < 0.05
 
 
+def test_with_a_pitch_rate_limit_of_its_own_it_pitches_faster_within_their_ellipse():
+    """tilt.pitch_rate_limit 3.5 deg/s, roll's 2.5: a sustained braking pitches the platform faster
+    than roll's limit allows, and the platform's roll and pitch rates stay within their ellipse (pitch
+    counted in roll's measure, scaled by 2.5 / 3.5) plus the vehicle's own turning."""
+    roll_limit, pitch_limit = np.radians(2.5), np.radians(3.5)  # stated here: the mechanism, whatever the default
+
+    def braking(t):
+        u = at_rest(t)
+        u[t >= 0.5, 0] = -2.0
+        u[(t >= 3.0) & (t < 6.0), 3] = 0.05  # and a roll of the vehicle's own
+        return u
+    t, poses, rates, u = run({"tilt.rate_limit": roll_limit, "tilt.pitch_rate_limit": pitch_limit}, braking, 10.0,
+                             h=2e-3)
+    measure = roll_limit / pitch_limit
+    turning, allowed = np.hypot(rates[:, 3], measure * rates[:, 4]), roll_limit + np.hypot(u[:, 3], measure * u[:, 4])
+    assert (turning <= allowed * (1 + RELATIVE_SLACK)).all(), np.degrees((turning - allowed).max())
+    still = np.hypot(u[:, 3], u[:, 4]) == 0.0  # the vehicle not turning: the tilt's limit alone
+    assert np.abs(rates[still, 4]).max() > 1.1 * roll_limit  # pitch past roll's limit: its own holds it
+    assert np.abs(rates[still, 4]).max() <= pitch_limit * (1 + RELATIVE_SLACK)
+
+
 def test_its_derivatives_are_its_own():
     """pose_ref's rate (the output derivative) is the derivative of pose_ref: its integral over
     the run equals the change of the pose (the MPC's motion is piecewise quadratic, exact)."""

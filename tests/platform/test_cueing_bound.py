@@ -108,6 +108,18 @@ def test_the_floor_falls_as_the_tilt_may_turn_faster(emergency_stop, floor):
     assert floor.perceived_error > faster[0] > faster[1]
 
 
+def test_a_braking_is_held_back_by_the_pitch_rate_alone(emergency_stop, floor):
+    """The emergency stop brakes straight (no sway, no roll): with a pitch rate limit of its own
+    (tilt.pitch_rate_limit) the floor is that of both axes at pitch's limit; roll's limit raised alone
+    leaves it where it was."""
+    fast = math.radians(5.0)
+    both = scene_bound(emergency_stop, fast).perceived_error
+    assert scene_bound(emergency_stop, LIMIT, pitch_rate_limit=fast).perceived_error == pytest.approx(both, rel=1e-4)
+    assert scene_bound(emergency_stop, fast, pitch_rate_limit=LIMIT).perceived_error == pytest.approx(
+        floor.perceived_error, rel=1e-4)
+    assert both < 0.9 * floor.perceived_error
+
+
 @pytest.mark.parametrize("changes", [{"cueing.algorithm": "classical"},
                                      {"cueing.algorithm": "mpc", "cueing.preview": 3.0},
                                      {"cueing.algorithm": "mpc", "cueing.preview": 0.0}],

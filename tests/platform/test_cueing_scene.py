@@ -160,3 +160,21 @@ def test_model_predictive_cueing_feels_closer_within_the_stroke(drive_run):
     assert kinematics["length"].min() > 1.535 and kinematics["length"].max() < 2.2  # Meng's stroke, as simulated
     assert np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]).max() < np.radians(20.0)
     assert not mpc.report.warnings
+
+
+def test_pitch_turns_at_its_own_limit_as_the_run_reports_it():
+    """The emergency stop (8 m/s^2 from 2 s to 5 s) with `tilt.pitch_rate_limit` 3 deg/s, roll's
+    2.5: the classical washout pitches the co-simulated platform past roll's limit, at most at
+    pitch's as commanded, and the run's tilt line says so, pitch's rate counted in roll's measure."""
+    from cosim.platform.run.runner import tilt_rates
+    roll_limit, pitch_limit = np.radians(2.5), np.radians(3.0)
+    scene = load_scene(ROOT / "examples" / "vehicle" / "emergency_stop.toml", {"scene.duration": 7.0})
+    parameters = {**scene.cueing_parameters, "tilt.rate_limit": roll_limit, "tilt.pitch_rate_limit": pitch_limit}
+    result = cosim.simulate(scene.changed({"cueing.parameters": parameters}))
+    pitch_rate = np.abs(np.gradient(result["tilt.pitch"], result["time"]))
+    assert roll_limit * 1.1 < pitch_rate.max() <= pitch_limit * (1 + 1e-9)
+    _, commanded, _ = tilt_rates(result, roll_limit / pitch_limit)
+    assert commanded.max() <= roll_limit * (1 + 1e-9)  # in roll's measure, within roll's limit
+    line = next(n for n in result.report.notes() if n.startswith("motion cueing: tilt up to"))
+    assert "its limit 2.50 deg/s; pitch's 3.00 deg/s, its rate counted at 0.833 of itself" in line
+    assert f"{np.degrees(commanded.max()):.2f} deg/s as commanded" in line

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import Core, gravity_of, mechanics_value
-from ..perception import (JUDGES, ChannelQuality, Perceived, perceive, perceived_error, platform_motion, quality, second_opinion,
+from ..perception import (ChannelQuality, Perceived, perceive, perceived_error, platform_motion, quality, second_opinion,
                           vehicle_motion)
 from ..ports import DRIVES, LEGS, POSE
 from ..run.compile import scene_cueing, scene_values
@@ -236,7 +236,7 @@ class Tuning:
             tuned = self.confirmed["tuned"].perceived_error
             left = max(0.0, tuned - self.floor.perceived_error)
             out.append(f"the floor: no cueing within the platform's stroke and joints, tilting no faster than "
-                       f"{math.degrees(self.floor.tilt_rate_limit):.3g} deg/s, feels closer by the project's model than "
+                       f"{_tilt_rates(self.floor)}, feels closer by the project's model than "
                        f"{self.floor.perceived_error:.3f}, even knowing the whole drive ("
                        + (f"the tuned cueing is {left:.3f} above it: at most {left / tuned:.0%} of its error is left to gain"
                           if left > 0.0 else "the tuned cueing is on it: nothing is left to gain")
@@ -245,6 +245,13 @@ class Tuning:
                                                     "confirmed by co-simulation" if self.better else
                                                     "is not confirmed better within every limit by co-simulation"))
         return out
+
+
+def _tilt_rates(floor: CueingBound) -> str:
+    """The floor's tilt rate limit, in words: one for both axes, or roll's and pitch's."""
+    if floor.pitch_rate_limit is None:
+        return f"{math.degrees(floor.tilt_rate_limit):.3g} deg/s"
+    return f"{math.degrees(floor.tilt_rate_limit):.3g} deg/s in roll and {math.degrees(floor.pitch_rate_limit):.3g} in pitch"
 
 
 def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, workers: int | None = 0,
@@ -272,9 +279,10 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
     for name, parameters in (("scene", {}), ("tuned", best)):
         tuning.screened[name] = own if name == "scene" else screen(scene, parameters)
         tuning.confirmed[name] = confirm(scene, parameters)
-    rate_limit = ranges.get("tilt.rate_limit", (None, None))[1]  # searched: the fastest it may take
+    rate_limit, pitch_rate_limit = (ranges.get(key, (None, None))[1]  # searched: the fastest it may take
+                                    for key in ("tilt.rate_limit", "tilt.pitch_rate_limit"))
     try:
-        tuning.floor = scene_bound(scene, rate_limit)
+        tuning.floor = scene_bound(scene, rate_limit, pitch_rate_limit=pitch_rate_limit)
     except RuntimeError:  # the solver did not converge: the report goes without its floor
         tuning.floor = None
     return tuning

@@ -59,8 +59,9 @@ class CueingBound:
     platform: np.ndarray      # n x 6: the best motion, in the six channels
     excursions: np.ndarray    # n x 6: its DOFs from neutral (x, y, z [m], roll, pitch, yaw [rad])
     ranges: np.ndarray        # 6 x 2: each DOF's excursion allowed, least and largest
-    tilt_rate_limit: float    # [rad/s]
+    tilt_rate_limit: float    # [rad/s] roll's (and pitch's, unless pitch_rate_limit)
     step: float               # [s]
+    pitch_rate_limit: float | None = None  # [rad/s] pitch's own (tilt.pitch_rate_limit), None: tilt_rate_limit
 
 
 def excursion_ranges(core: Core, leg_length: tuple[float, float], joint_angle: float, starts: int = 3,
@@ -217,12 +218,13 @@ def _felt_rows(prog: _Program, channel: int, terms: list, organ: Vestibular, fel
 
 def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.ndarray, tilt_rate_limit: float,
                           gravity: float = 9.81, step: float = 0.01,
-                          organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True) -> CueingBound:
+                          organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True,
+                          pitch_rate_limit: float | None = None) -> CueingBound:
     """The least perceived error (cosim.platform.perception's measure, by `organs`) of any platform
     motion for the vehicle's motion (n x 6 at `times`, the six channels as vehicle_motion gives
     them), knowing all of it, in the relaxed model above: each DOF within its `ranges` (6 x 2, from
-    neutral), roll and pitch each turning no faster than `tilt_rate_limit` [rad/s] beyond the
-    vehicle's own rate about that axis, from rest at neutral, accelerations and rates constant
+    neutral), roll and pitch each turning no faster than `tilt_rate_limit` [rad/s] (pitch than
+    `pitch_rate_limit` where given) beyond the vehicle's own rate about that axis, from rest at neutral, accelerations and rates constant
     between samples `step` apart. The floor is the program's dual bound; the motion found is
     measured by the project's measure (`reached`: the same number to the solver's tolerance).
     dead_zone False: the program counts every error, below the thresholds too (as the MPC's quadratic
@@ -233,7 +235,8 @@ def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.nda
     n = len(grid)
     at = np.column_stack([np.interp(grid, times, vehicle[:, c]) for c in range(6)])
     felt_vehicle = np.column_stack([organs[c].perceive(grid, at[:, c]) for c in range(6)])
-    rate_bound = {dof: tilt_rate_limit + np.abs(at[:, dof]) for dof in TILTS}  # roll about x, pitch about y
+    limits = dict(zip(TILTS, (tilt_rate_limit, pitch_rate_limit or tilt_rate_limit)))  # roll about x, pitch about y
+    rate_bound = {dof: limits[dof] + np.abs(at[:, dof]) for dof in TILTS}
     platform, excursions, floor = np.zeros((n, 6)), np.zeros((n, 6)), 0.0
     eye = sp.identity(n, format="csr")
     for problem in SUBPROBLEMS:
@@ -252,15 +255,18 @@ def least_perceived_error(times: np.ndarray, vehicle: np.ndarray, ranges: np.nda
                 excursions[:, int(name[3:])] = x[block]
     channels = quality(perceive(grid, at, platform, step=step, organs=organs))
     return CueingBound(floor, perceived_error(channels), {c: q.rms_felt_error / q.threshold for c, q in zip(CHANNELS, channels)},
-                       grid, platform, excursions, np.asarray(ranges, float), float(tilt_rate_limit), step)
+                       grid, platform, excursions, np.asarray(ranges, float), float(tilt_rate_limit), step,
+                       float(pitch_rate_limit) if pitch_rate_limit else None)
 
 
 def scene_bound(scene, tilt_rate_limit: float | None = None, step: float = 0.01,
-                organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True) -> CueingBound:
+                organs: tuple[Vestibular, ...] = ORGANS, dead_zone: bool = True,
+                pitch_rate_limit: float | None = None) -> CueingBound:
     """The floor under every cueing of a scene's vehicle motion (least_perceived_error): its
     platform's excursions within its mechanics' stroke and joint angle (the margins not taken off;
     widened by WIDEN),
-    its tilt rate limit (the scene's `tilt.rate_limit`, or the cueing FMU's default; or as given),
+    its tilt rate limits (the scene's `tilt.rate_limit` and `tilt.pitch_rate_limit`, or the cueing
+    FMU's defaults; or as given),
     the vehicle's motion as the cueing FMU reads it from the scene's file (dead_zone: as
     least_perceived_error's)."""
     from ..core import gravity_of
@@ -269,13 +275,16 @@ def scene_bound(scene, tilt_rate_limit: float | None = None, step: float = 0.01,
     from .cueing import _core, scene_limits
     mechanics, _ = scene_values(scene)
     values = {**scene_cueing(scene, mechanics), "algorithm": CUEING_ALGORITHMS["classical"]}  # the motion it reads, cheaply
+    from ...engine.artifacts import fmu_path
+    from ...engine.checks import variables
+    defaults = variables(fmu_path("cueing"))
     if tilt_rate_limit is None:
-        from ...engine.artifacts import fmu_path
-        from ...engine.checks import variables
-        tilt_rate_limit = float(values.get("tilt.rate_limit", variables(fmu_path("cueing"))["tilt.rate_limit"].start))
+        tilt_rate_limit = float(values.get("tilt.rate_limit", defaults["tilt.rate_limit"].start))
+    if pitch_rate_limit is None:
+        pitch_rate_limit = float(values.get("tilt.pitch_rate_limit", defaults["tilt.pitch_rate_limit"].start))
     times, _, _, taken = play_cueing(values, scene.duration, step)
     gravity = float(np.linalg.norm(gravity_of(mechanics)))
     limits = scene_limits(scene)
     ranges = WIDEN * excursion_ranges(_core(scene), limits.leg_length, limits.joint_angle)
     return least_perceived_error(times, vehicle_motion(taken[:, :3], taken[:, 3:], gravity), ranges,
-                                 float(tilt_rate_limit), gravity, step, organs, dead_zone)
+                                 float(tilt_rate_limit), gravity, step, organs, dead_zone, pitch_rate_limit or None)

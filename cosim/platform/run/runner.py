@@ -166,34 +166,38 @@ def cueing_value(scene: Scene, name: str) -> float:
     return float(scene.cueing_parameters.get(name, variables(fmu_path("cueing"))[name].start))
 
 
-def tilt_rates(result: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def tilt_rates(result: np.ndarray, pitch_measure: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A cueing run's tilt: times, the commanded tilt vector's rate (the cueing FMU's tilt.roll and
     tilt.pitch) and the realised one (the simulated platform's roll and pitch less the rest of the
-    reference: pose - (pose_ref - tilt)), each |(roll', pitch')| [rad/s], by differences in time."""
+    reference: pose - (pose_ref - tilt)), each |(roll', pitch_measure * pitch')| [rad/s] (pitch in
+    roll's measure where pitch has a rate limit of its own), by differences in time."""
     t = result["time"]
     keep = np.r_[True, np.diff(t) > 0]
     t = t[keep]
     commanded = np.column_stack([result[f"tilt.{a}"][keep] for a in ("roll", "pitch")])
     realised = np.column_stack([(result[f"pose.{a}"] - result[f"pose_ref.{a}"] + result[f"tilt.{a}"])[keep]
                                 for a in ("roll", "pitch")])
-    rate = [np.hypot(*np.gradient(angles, t, axis=0).T) for angles in (commanded, realised)]
+    measure = np.array([1.0, pitch_measure])
+    rate = [np.hypot(*(np.gradient(angles, t, axis=0) * measure).T) for angles in (commanded, realised)]
     return t, rate[0], rate[1]
 
 
 def tilt_line(scene: Scene, result: np.ndarray) -> str:
     """What the tilt coordination of a scene's motion cueing did: its largest roll and pitch, and
-    the tilt vector's peak rate, commanded and as the simulated platform realised it, against the
-    limit (below which the semicircular canals do not notice it), with the time the platform
-    turned faster."""
-    limit = cueing_value(scene, "tilt.rate_limit")
+    the tilt vector's peak rate (pitch in roll's measure where tilt.pitch_rate_limit gives it a limit
+    of its own), commanded and as the simulated platform realised it, against the limit (below which
+    the semicircular canals do not notice it), with the time the platform turned faster."""
+    limit, pitch_limit = cueing_value(scene, "tilt.rate_limit"), cueing_value(scene, "tilt.pitch_rate_limit")
     largest = [np.abs(result[f"tilt.{a}"]).max() for a in ("roll", "pitch")]
-    t, commanded, realised = tilt_rates(result)
+    t, commanded, realised = tilt_rates(result, limit / pitch_limit if pitch_limit > 0.0 else 1.0)
     over = float(np.sum(np.diff(t)[realised[1:] > limit * 1.05])) if len(t) > 1 else 0.0
+    own = (f"; pitch's {np.degrees(pitch_limit):.2f} deg/s, its rate counted at {limit / pitch_limit:.3g} of itself"
+           if pitch_limit > 0.0 else "")
     return (f"motion cueing: tilt up to {np.degrees(largest[0]):.2f} deg in roll and {np.degrees(largest[1]):.2f} deg "
             f"in pitch, the tilt vector turning at most {np.degrees(commanded.max()):.2f} deg/s as commanded and "
             f"{np.degrees(realised.max()):.2f} deg/s as the platform realised it (its limit "
-            f"{np.degrees(limit):.2f} deg/s" + (f"; the platform beyond it by more than 5 % for {over:.2f} s)" if over
-                                                 else ")"))
+            f"{np.degrees(limit):.2f} deg/s{own}" + (f"; the platform beyond it by more than 5 % for {over:.2f} s)" if over
+                                                      else ")"))
 
 
 def write_figures(compiled: CompiledScene, result: np.ndarray, report: RunReport, outcome: Outcome,
