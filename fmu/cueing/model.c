@@ -371,6 +371,13 @@ fmi2Status model_validate(FmuInstance *fmu) { /* the bounds, "> 0" among them, a
         fmu_set_model_data(fmu, data, free_data);
     }
     for (int e = 0; e < KEPT; e++) data->cache->h[e] = 0.0; /* the parameters may have changed */
+    const double measure = cueing_pitch_rate_scale(fmu); /* the MPC's rows and the tilt's ellipse scale by it */
+    if (!(measure >= 1e-3 && measure <= 1e3)) {
+        fmu_log(fmu, fmi2Error, "logStatusError", "tilt.pitch_rate_limit = %g rad/s: more than a thousand times "
+                "tilt.rate_limit (%g rad/s) or less than a thousandth of it (0: pitch takes tilt.rate_limit's)",
+                v->tilt_pitch_rate_limit, v->tilt_rate_limit);
+        return fmi2Error;
+    }
     const char *path = v->vehicle_file.text;
     if (!path[0]) {
         fmu_table_free(fmu, data->vehicle);

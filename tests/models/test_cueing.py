@@ -230,8 +230,12 @@ def test_the_platform_comes_back_to_neutral_after_a_manoeuvre(cueing):
 
 
 @pytest.mark.parametrize("name, value", [("translation.y.frequency", 0.0), ("rotation.yaw.damping", -1.0),
-                                         ("tilt.rate_limit", 0.0), ("tilt.frequency", float("nan"))])
+                                         ("tilt.rate_limit", 0.0), ("tilt.frequency", float("nan")),
+                                         ("tilt.pitch_rate_limit", -0.05), ("tilt.pitch_rate_limit", 1e-310),
+                                         ("tilt.pitch_rate_limit", 1e3)])
 def test_wrong_parameters_are_refused_by_name(cueing, name, value):
+    """A bound the table states, and tilt.pitch_rate_limit more than a thousand times from roll's (its
+    scale enters the MPC's constraint rows: 1e-310 would make them infinite)."""
     with pytest.raises(FmuError) as caught:
         cueing({name: value})
     assert name in str(caught.value)
