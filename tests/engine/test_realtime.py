@@ -98,3 +98,15 @@ def test_a_key_file_is_read_whole_and_its_length_checked(tmp_path):
             read_key(good)
     with pytest.raises(UsageError, match="--listen-key .*missing"):
         read_key(tmp_path / "missing")
+
+
+def test_a_live_input_replaces_no_more_outputs_than_the_kernel_has_room_for():
+    """The master's bound on a live input's outputs (MAX_LIVE) is the C kernel's: realtime.c sizes its
+    scratch by motion_guard.h's MOTION_GUARD_CHANNELS (one number, read here from the header)."""
+    import re
+
+    from cosim.engine.artifacts import ROOT
+    from cosim.engine.realtime.session import MAX_LIVE
+    header = (ROOT / "fmu" / "common" / "motion_guard.h").read_text()
+    assert int(re.search(r"MOTION_GUARD_CHANNELS = (\d+)", header).group(1)) == MAX_LIVE
+    assert "3 * MOTION_GUARD_CHANNELS" in (ROOT / "cosim" / "engine" / "kernel" / "realtime.c").read_text()

@@ -137,13 +137,13 @@ static void take_packet(Kernel *s, RealTime *r, ssize_t size, const void *from, 
     const int n = r->n_live;
     uint16_t version, count;
     uint64_t session, sequence;
-    double time, values[3 * 64];
+    double time, values[3 * MOTION_GUARD_CHANNELS];
     if (size < 8 || memcmp(p, "CREF", 4) != 0) { r->counts[LIVE_MALFORMED]++; return; }
     memcpy(&version, p + 4, 2);
     memcpy(&count, p + 6, 2);
     if (version == LIVE_OLD_VERSION_1) { r->counts[LIVE_OLD_VERSION]++; return; }
     const ssize_t mac = r->key_size > 0 ? LIVE_MAC : 0;
-    if (version != LIVE_VERSION || (count != n && count != 2 * n && count != 3 * n) || count > 3 * 64 ||
+    if (version != LIVE_VERSION || (count != n && count != 2 * n && count != 3 * n) || count > 3 * MOTION_GUARD_CHANNELS ||
         size != LIVE_HEADER + 8 * (ssize_t)count + mac) {
         r->counts[size == LIVE_HEADER + 8 * (ssize_t)count && mac && version == LIVE_VERSION ? LIVE_UNAUTHENTICATED
                                                                                              : LIVE_MALFORMED]++;
@@ -217,7 +217,7 @@ static void carry_reference(RealTime *r, double h) {
  * exact motion over the step. */
 static void advance_reference(RealTime *r, double t_new, double h) {
     const int n = r->n_live;
-    double since = t_new - r->target_time, goal[3 * 64];
+    double since = t_new - r->target_time, goal[3 * MOTION_GUARD_CHANNELS];
     if (fabs(since) > r->watchdog) since = copysign(r->watchdog, since); /* never extrapolated further */
     for (int i = 0; i < n; i++) {
         const double target = r->live[TARGET * n + i], target_rate = r->live[TARGET_RATE * n + i],
@@ -260,7 +260,7 @@ static void live_step(Kernel *s, RealTime *r, double t_new, double h, double *ro
     }
     carry_reference(r, h);
     if (!r->live_target) { /* no live target: the outputs' own motion, guarded where asked */
-        double own[3 * 64];
+        double own[3 * MOTION_GUARD_CHANNELS];
         if (!r->guard_source) return;
         own_motion(s, r, own);
         /* passed on as it is while the guard would take it, kept as the reference's motion: what the

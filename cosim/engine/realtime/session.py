@@ -28,7 +28,7 @@ from .datagrams import MAC_SIZE, MAX_VALUES, REFERENCE, SAMPLE, address, is_loop
 LIVE_KINDS = ("accepted", "outside", "late", "future", "repeated", "out_of_order", "malformed", "old_version",
               "non_finite", "beyond_limits", "foreign", "unauthenticated", "watchdog")
 GUARD_KINDS = 8  # the guard's limits, as bits (kernel.h)
-MAX_LIVE = 64    # the outputs a live input replaces, at most (realtime.c's scratch)
+MAX_LIVE = 64    # the outputs a live input replaces, at most (realtime.c's scratch: motion_guard.h's MOTION_GUARD_CHANNELS)
 
 
 @dataclass(frozen=True)
