@@ -391,6 +391,24 @@ def test_a_reference_the_platform_cannot_take_is_refused_before_its_run(tmp_path
     assert not list((tmp_path / "out").glob("*.csv"))
 
 
+@pytest.mark.parametrize("column, value, hint", [("z", -10.0, ""),
+                                                 ("roll", 3.0, "its roll reaches 3 rad (172 deg): a scene's angles")])
+def test_a_table_the_platform_cannot_take_names_its_row(tmp_path, capsys, column, value, hint):
+    """A trajectory table (a comment, its header, rows 10 ms apart) whose z (below the base) or roll
+    (upside down) jumps past any joint from 0.5 s: refused before the run in one line at the scene's table line,
+    naming the table's row there (its file and line), not the scene's file alone."""
+    rows = [f"{t / 100:g},{value if t >= 50 else 0.0:g}" for t in range(101)]
+    (tmp_path / "reference.csv").write_text("# a reference\n" + f"time,{column}\n" + "\n".join(rows) + "\n")
+    scene = tmp_path / "table.toml"
+    scene.write_text('[scene]\nduration = 1.0\n[mechanics]\nparameter_set = "meng2010"\n[trajectory]\n'
+                     'table = "reference.csv"\n[trajectory.z]\noffset = "neutral"\n')
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{scene}:6: the reference takes leg" in err, err
+    assert "at t = 0.500 s (the joints would cross)" in err and hint in err
+    assert err.rstrip().endswith(f"the table's row there: {tmp_path / 'reference.csv'}:53"), err  # t = 0.5: line 53
+
+
 @pytest.mark.parametrize("command", [["run", "--no-plots", "--out", "{out}"], ["export", "--ssp", "{out}/a.ssp"],
                                      ["export", "--fmu", "{out}/a.fmu"], ["export", "--fmu", "{out}/a.fmu", "--me"]])
 def test_a_reference_no_tool_could_run_is_refused_by_run_and_every_export(tmp_path, capsys, command):

@@ -61,6 +61,28 @@ TILT_IMPOSSIBLE = np.pi / 2  # [rad] a leg turned past a right angle from its ne
 WORKSPACE_SAMPLES = 1e6  # the most a workspace check plays
 
 
+def table_row(path, t: float) -> tuple[list[str], int | None]:
+    """A trajectory table's columns and the line (1-based) of its first row at or after t [s] (None:
+    no such row, or the file unreadable); its comments and blank lines passed over."""
+    columns: list[str] = []
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as file:
+            for number, line in enumerate(file, 1):
+                if not line.strip() or line.lstrip().startswith("#"):
+                    continue
+                if not columns:
+                    columns = [c.strip() for c in line.split(",")]
+                    continue
+                try:
+                    if float(line.split(",", 1)[0]) >= t - 1e-9:
+                        return columns, number
+                except ValueError:
+                    continue
+    except OSError:
+        pass
+    return columns, None
+
+
 def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] | None:
     """What a scene's own reference asks that no platform of its kind can do, found before its run,
     as (the scene's key to blame, what): None for nothing; a leg of no length or turned past a right angle from its neutral direction at
@@ -85,14 +107,19 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
     hint = (f"; its {wide} reaches {largest.max():.3g} rad ({np.degrees(largest.max()):.0f} deg): a scene's angles "
             "are radians" if largest.max() > np.pi / 2 else "")
     how = "to no length" if kinematics["length"][k, leg - 1] <= 0 else "past a right angle from its neutral direction"
-    # without a hint, the DOF farthest from neutral then (translations against the legs' length there, angles in
-    # radians), where the file gives it its own table; else the file
+    # the DOF to blame: the wide angle of a hint, else the one farthest from neutral then (translations
+    # against the legs' length there, angles in radians); at the trajectory table where that gives it
+    # (its row there named), else at its own [trajectory.<dof>] in the file
     neutral = core.neutral_pose
     away = np.abs(poses[k] - neutral) / np.r_[[core.pose_kinematics(neutral[None])["length"].max()] * 3, [1.0] * 3]
-    farthest = f"trajectory.{POSE[int(np.nanargmax(np.where(np.isfinite(away), away, np.inf)))]}"
-    key = f"trajectory.{wide}" if hint else farthest if scene.document.line(farthest) else "trajectory"
+    dof = wide if hint else POSE[int(np.nanargmax(np.where(np.isfinite(away), away, np.inf)))]
+    columns, line = table_row(scene.table, times[k]) if scene.table is not None else ([], None)
+    if dof in columns:
+        key, row = "trajectory.table", f"; the table's row there: {scene.table}:{line}" if line else ""
+    else:
+        key, row = f"trajectory.{dof}" if scene.document.line(f"trajectory.{dof}") else "trajectory", ""
     return (key,
-            f"the reference takes leg {leg} {how} at t = {times[k]:.3f} s (the joints would cross){hint}")
+            f"the reference takes leg {leg} {how} at t = {times[k]:.3f} s (the joints would cross){hint}{row}")
 
 
 def check_workspace(scene: Scene, mechanics_values: dict) -> None:
