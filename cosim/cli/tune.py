@@ -15,6 +15,9 @@ def add(commands) -> argparse.ArgumentParser:
     tune = commands.add_parser("tune", help="tune a vehicle scene's motion cueing: perceived error least within the "
                                "platform's stroke, joint and current limits")
     tune.add_argument("scene", type=Path, help="a scene with a [motion] vehicle (its [cueing.tune] says what to search)")
+    tune.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                      help="any of the scene's keys as table.key, its value as TOML writes it, over the file (as for "
+                      "cosim run): a variant tuned without writing it; the tuned scene carries it")
     add_cluster(tune, "the search", None)
     tune.add_argument("--out", type=Path, default=Path("out"), help="folder for <scene>_tuned.toml and "
                       "<scene>_tuning.txt")
@@ -25,7 +28,8 @@ def main(args: argparse.Namespace) -> int:
     from ..engine.files import write_text
     from ..platform.design.cueing import tune, write_tuned
     from ..platform.scene import load_scene
-    scene = load_scene(args.scene)
+    from .run import set_values
+    scene = load_scene(args.scene, *set_values(args.set))
     if scene.vehicle is None:
         raise UsageError(f"{args.scene}: has no [motion] vehicle: motion cueing tunes a vehicle's motion")
     iterations, population, seed = scene.cueing_search

@@ -183,9 +183,22 @@ class Document:
     def where(self, full: str) -> str:
         """Where a key's value comes from, as an error names it: 'file:line', or how it was set over
         the file ('--set step=-1e-3 (over file)')."""
-        given = self.given_for(full)
-        line = self.line(full)
+        given, line = self.given_for(full), self.line(full)
+        if given is None and not self._in_file(full):  # a table the file has not: made by what was set in it
+            given = next((how for key, how in self.given.items() if _parts(key)[:len(_parts(full))] == _parts(full)), None)
         return f"{given} (over {self.path})" if given else f"{self.path}:{line}" if line else f"{self.path}"
+
+    def _in_file(self, full: str) -> bool:
+        """Whether the file's own text gives the key or table (an indexed one is taken as given)."""
+        try:
+            found: Any = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError:
+            return True
+        for part in _parts(full):
+            if not isinstance(found, dict) or part not in found:
+                return "[" in part
+            found = found[part]
+        return True
 
     def fail(self, full: str, problem: str, value: Any = None) -> InputError:
         """The schema's error for the key `full`: `file:line: 'full' = value: problem`, or

@@ -228,6 +228,8 @@ def test_set_on_a_scene_sets_its_keys_or_refuses_in_one_line(tmp_path, capsys):
     # an error about a value --set gave names the option, not the shipped file's line
     for setting, message in (("bogus=1", "--set bogus=1: 'bogus' is not a run setting a scene takes"),
                              ("scene.bogus=1", "--set scene.bogus=1 (over "),
+                             ("bogus.key=1", "--set bogus.key=1 (over "),  # a table the file has not
+                             ("mechanics.parameterz.mass=1", "--set mechanics.parameterz.mass=1 (over "),
                              ("step=fast", "--set step=fast (over "),
                              ("step=-1e-3", "--set step=-1e-3 (over "),
                              ('mechanics.parameters."platform.mass"=-5',

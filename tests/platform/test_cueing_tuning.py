@@ -96,23 +96,33 @@ def test_a_tuning_judged_by_both_perception_models_feels_closer_by_both(braking)
 
 def test_the_command_writes_a_tuned_scene_that_runs(tmp_path, capsys):
     """... and shows its search's progress as it goes (not silent for minutes): the screenings out of
-    the most the search takes, each generation."""
+    the most the search takes, each generation. A variant set on the command line (--set, as for
+    `cosim run`) is what is tuned, and the tuned scene carries it, marked, beside the tuned values;
+    the files it names (a vehicle's motion relative to the scene) by absolute paths, so that it runs
+    from its own folder."""
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "drive.csv").write_text((EXAMPLE.parent / "drive.csv").read_text())
     scene = tmp_path / "short.toml"
-    scene.write_text(EXAMPLE.read_text().replace("duration = 20.0", "duration = 3.0").replace(
-        'vehicle = "drive.csv"', f'vehicle = "{EXAMPLE.parent / "drive.csv"}"')
-        + '\n[cueing.tune]\nranges = {"tilt.gain" = [0.2, 0.8]}\niterations = 1\npopulation = 3\n')
-    assert main(["tune", str(scene), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
+    scene.write_text(EXAMPLE.read_text().replace('vehicle = "drive.csv"', 'vehicle = "data/drive.csv"')
+                     + '\n[cueing.tune]\nranges = {"tilt.gain" = [0.2, 0.8]}\niterations = 1\npopulation = 3\n')
+    assert main(["tune", str(scene), "--set", "scene.duration=3.0", "--set", 'cueing.parameters."translation.y.gain"=0.4',
+                 "--workers", "0", "--out", str(tmp_path / "out")]) == 0
     progress = [line for line in capsys.readouterr().err.splitlines() if line.startswith("tune: screenings")]
     assert progress and re.search(r"tune: screenings: \d+(/6)? done", progress[-1]), progress  # at most (1 + 1) x 3 x 1
+    written = (tmp_path / "out" / "short_tuned.toml").read_text()
     tuned = load_scene(tmp_path / "out" / "short_tuned.toml")
     summary = (tmp_path / "out" / "short_tuning.txt").read_text()
     gain = float(re.search(r"tilt.gain = ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["tilt.gain"] == pytest.approx(gain, rel=1e-3)
+    assert re.search(r'"tilt.gain" = [0-9.]+ # tuned \(cosim tune\)', written)
     floor = re.search(r"the floor: .* tilting no faster than 2.5 deg/s, feels closer by the project's model than "
                       r"([0-9.]+)", summary)
     assert 0 <= float(floor.group(1)) < float(re.search(r"co-simulated: perceived error ([0-9.]+)", summary).group(1))
     assert tuned.cueing_parameters["translation.x.gain"] == 0.5  # the scene's own values kept
-    assert "# 2.5 deg/s: a margin" in (tmp_path / "out" / "short_tuned.toml").read_text()  # and its comments
+    assert "# 2.5 deg/s: a margin" in written  # and its comments
+    assert tuned.duration == 3.0 and tuned.cueing_parameters["translation.y.gain"] == 0.4  # what was set, marked
+    assert "duration = 3.0 # --set scene.duration=3.0" in written
+    assert tuned.vehicle == (tmp_path / "data" / "drive.csv").resolve() and f'"{tuned.vehicle}"' in written
     assert np.isfinite(cosim.simulate(tuned)["pose.x"]).all()
 
 
@@ -132,6 +142,17 @@ def test_tuning_a_scene_without_a_vehicle_is_one_line(capsys):
     assert main(["tune", str(ROOT / "scenes" / "meng_eq35.toml"), "--workers", "0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "has no [motion] vehicle" in err
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("scene.duration=-1.0", "--set scene.duration=-1.0"),
+    ('cueing.parameters."tilt.gian"=0.5', "--set cueing.parameters.\"tilt.gian\"=0.5"),
+    ("duration", "--set 'duration': expected NAME=VALUE"),
+])
+def test_a_wrong_setting_to_tune_is_one_line_naming_it(setting, message, capsys):
+    assert main(["tune", str(EXAMPLE), "--set", setting, "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
 
 
 @pytest.mark.parametrize("text, message", [

@@ -289,16 +289,47 @@ def tune(scene: Scene, ranges: dict[str, tuple[float, float]] | None = None, wor
 
 
 def tuned_scene_text(scene: Scene, best: dict[str, float]) -> str:
-    """The scene's file (its comments kept) with the tuned values in its [cueing.parameters] and its
-    vehicle file's path absolute, so that it runs from anywhere."""
+    """The scene's file (its comments kept) with what was set over it (`cosim tune --set`, each
+    marked so) and the tuned values in its [cueing.parameters], every file it names by an absolute
+    path, so that it runs from anywhere; the tuned values marked so."""
     import tomlkit
+    from ...engine.schema import split_key
     document = tomlkit.parse(scene.text)
+    for key, value in scene.overrides.items():
+        *tables, name = split_key(key)
+        table = document
+        for part in tables:
+            table = table.setdefault(part, tomlkit.table())
+        table[name] = _marked(value, scene.given.get(key, "set over the scene"))
     cueing = document.setdefault("cueing", tomlkit.table())
     parameters = cueing.setdefault("parameters", tomlkit.table())
     for name, value in best.items():
-        parameters[name] = float(f"{value:.6g}")
-    document["motion"]["vehicle"] = str(scene.vehicle)
+        parameters[name] = _marked(float(f"{value:.6g}"), "tuned (cosim tune)")
+    for table, key in _path_keys(document):
+        if not Path(table[key]).is_absolute():
+            table[key] = str((scene.path.parent / table[key]).resolve())
     return tomlkit.dumps(document)
+
+
+def _marked(value: object, how: str):
+    """A value as the tuned scene writes it, a comment saying how it was set (a table's cannot)."""
+    import tomlkit
+    item = tomlkit.item(value)
+    return item if isinstance(item, (tomlkit.items.Table, tomlkit.items.AoT)) else item.comment(how)
+
+
+def _path_keys(document) -> list[tuple[dict, str]]:
+    """Every file's path in a scene's document (the schema's path keys): (its table, its key)."""
+    from ..scene.schema import SCHEMA
+    found = []
+    for table in SCHEMA.tables:
+        for key in (k.name for k in table.keys if getattr(k.type, "path", False)):
+            places = [document]
+            for part in table.name.split("."):
+                places = [t[name] for t in places for name in (t if part.startswith("<") else [part])
+                          if isinstance(t.get(name), dict)]
+            found += [(t, key) for t in places if isinstance(t.get(key), str)]
+    return found
 
 
 def write_tuned(scene: Scene, tuning: Tuning, out: Path) -> Path:
