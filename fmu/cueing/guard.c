@@ -10,7 +10,8 @@
  * outside the envelope is brought back in. So a tool that runs this FMU (or the one-FMU export of a
  * cueing scene) gets the platform `cosim run` gets, bit for bit.
  *
- * Co-Simulation only: the guard acts at the end of each step (Model Exchange refuses guard = true). */
+ * Model Exchange steps the guard alike at time events guard.period apart (a scene's step): the
+ * reference it holds is its motion carried from its last step (its acceleration constant). */
 #include "guard.h"
 
 #include <math.h>
@@ -70,7 +71,7 @@ void cueing_guard_free(FmuInstance *fmu, CueingGuard *guard) { fmu_free(fmu, gua
 
 int cueing_guard_state_valid(FmuInstance *fmu) {
     const GuardState *s = &fmu->s.internal.guard;
-    int finite = isfinite(s->step) && s->step >= 0.0;
+    int finite = isfinite(s->step) && s->step >= 0.0 && isfinite(s->taken_at);
     for (int k = 0; k < 3 * DOF; k++) finite = finite && isfinite((&s->motion[0][0])[k]);
     if (finite && (s->active == 0 || s->active == 2 || s->active == 3) && (s->pending == 0 || s->pending == 1))
         return 1;
@@ -80,6 +81,7 @@ int cueing_guard_state_valid(FmuInstance *fmu) {
 
 void cueing_guard_initialize(FmuInstance *fmu) {
     memset(&fmu->s.internal.guard, 0, sizeof fmu->s.internal.guard);
+    fmu->s.internal.guard.taken_at = fmu->s.time;
     for (int k = 0; k < HELD_KINDS; k++) *fmu_real(fmu, HELD[k]) = 0.0;
 }
 
@@ -102,8 +104,24 @@ void cueing_guard_hand_on(FmuInstance *fmu, CueingGuard *guard, double reference
     if (s->pending) {
         take_step(fmu, guard, &reference[0][0]);
         s->pending = 0;
+        s->taken_at = fmu->s.time;
     }
-    if (s->active == 2) memcpy(reference, s->motion, sizeof s->motion);
+    if (s->active != 2) return;
+    memcpy(reference, s->motion, sizeof s->motion);
+    const double since = fmu->s.time - s->taken_at; /* Model Exchange, between the guard's steps */
+    if (since > 0.0) motion_guard_carry(DOF, &reference[0][0], since);
+}
+
+int cueing_guard_time_event(FmuInstance *fmu, CueingGuard *guard) {
+    GuardState *s = &fmu->s.internal.guard;
+    if (!guard || fmu->s.time < s->taken_at + (1.0 - 1e-9) * fmu->s.v.guard_period) return 0;
+    s->pending = 1;
+    s->step = fmu->s.time - s->taken_at;
+    return 1;
+}
+
+double cueing_guard_next_step(const FmuInstance *fmu, const CueingGuard *guard) {
+    return guard ? fmu->s.internal.guard.taken_at + fmu->s.v.guard_period : INFINITY;
 }
 
 int cueing_guard_derivative(const FmuInstance *fmu, int d, int rate, int order, double *value) {

@@ -21,8 +21,16 @@ void cueing_guard_initialize(FmuInstance *fmu);
 /* The pose reference handed on (outputs pose_ref.*, pose_ref_rate.* and their derivatives) in
  * `reference`, which comes in as the cueing's own (value, rate, acceleration per DOF): where a step
  * has just ended, the guard takes the cueing's motion there (once a step); while it holds the
- * reference, the reference's own replaces it. guard NULL: off, the cueing's own as it is. */
+ * reference, the reference's own replaces it (carried from the guard's last step to now, between
+ * Model Exchange's steps of it). guard NULL: off, the cueing's own as it is. */
 void cueing_guard_hand_on(FmuInstance *fmu, CueingGuard *guard, double reference[3][6]);
+
+/* Model Exchange: where guard.period has passed since the guard last took the cueing's motion, a
+ * step of it ends now (1: the outputs take it, model_compute_outputs); 0 otherwise or guard NULL. */
+int cueing_guard_time_event(FmuInstance *fmu, CueingGuard *guard);
+
+/* Model Exchange: when the guard's next step ends (INFINITY for guard NULL). */
+double cueing_guard_next_step(const FmuInstance *fmu, const CueingGuard *guard);
 
 /* The derivative of that order (1, 2) of output d's value (rate = 0) or rate (rate = 1) while the
  * guard holds the reference, into *value; 0 where the cueing's own is handed on. */

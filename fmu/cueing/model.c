@@ -532,12 +532,11 @@ double model_output_derivative(FmuInstance *fmu, int vr, int order) {
     return 0.0;
 }
 
-/* ---- Model Exchange (fmi2_me.c): the filters' own equations; the MPC's solves time events ---- */
+/* ---- Model Exchange (fmi2_me.c): the filters' own equations; the MPC's solves and the guard's steps time events ---- */
 
 const char *model_exchange_refusal(const FmuInstance *fmu) {
-    return fmu->s.v.guard ? "guard = true is refused: the guard holds the reference at the end of each communication "
-                            "step, a Co-Simulation's (import the Co-Simulation FMU, or set guard = false)"
-                          : NULL;
+    (void)fmu; /* every algorithm and the guard run as Model Exchange */
+    return NULL;
 }
 
 int model_derivatives(FmuInstance *fmu, double *dxdt) {
@@ -568,15 +567,16 @@ fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
 
 void model_time_event(FmuInstance *fmu) {
     if (mpc_of(fmu)) mpc_time_event(fmu, mpc_of(fmu));
+    if (cueing_guard_time_event(fmu, guard_of(fmu))) model_compute_outputs(fmu); /* the guard takes the motion now */
 }
 
-/* The MPC's next solve, a period after the last, or the vehicle table's next row (a corner of its
- * linear interpolation, which a Model Exchange solver would otherwise step over), whichever comes
- * first; at a time too large for the period to show in it (a start near the largest double), the
+/* The MPC's next solve, a period after the last, the guard's next step, or the vehicle table's next
+ * row (a corner of its linear interpolation, which a Model Exchange solver would otherwise step
+ * over), whichever comes first; at a time too large for the period to show in it (a start near the largest double), the
  * next time there is: an event time is always after now. */
 double model_next_time_event(FmuInstance *fmu) {
     const ModelData *data = (const ModelData *)fmu->model_data;
-    double next = mpc_of(fmu) ? mpc_next_solve(fmu) : INFINITY;
+    double next = fmin(mpc_of(fmu) ? mpc_next_solve(fmu) : INFINITY, cueing_guard_next_step(fmu, guard_of(fmu)));
     if (data && data->vehicle) next = fmin(next, fmu_table_next_row(data->vehicle, fmu->s.time));
     return isfinite(next) ? fmax(next, nextafter(fmu->s.time, INFINITY)) : INFINITY;
 }

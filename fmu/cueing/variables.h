@@ -51,6 +51,7 @@ typedef struct {
     int active;          /* 0: not started, 2: the guard's own motion handed on, 3: the cueing's passed on */
     int pending;         /* a step has ended and the guard has not yet taken its motion */
     double step;         /* [s] the step that ended */
+    double taken_at;     /* [s] when the guard last took the cueing's motion (Model Exchange: the next is guard.period on) */
 } GuardState;
 
 typedef struct {
@@ -244,10 +245,13 @@ X(Real, guard_held_##kind, "guard.held." #kind, output, discrete, "1", 0.0, 0.0,
 /* clang-format off */
 #define GUARD_VARIABLES(X) \
 X(Boolean, guard, "guard", parameter, fixed, "", 0, 0, 1, \
-  "Hold the pose reference within the platform's envelope (Co-Simulation): every leg within limit.leg_length_min/max " \
+  "Hold the pose reference within the platform's envelope: every leg within limit.leg_length_min/max " \
   "less limit.stroke_margin, every joint within limit.joint_angle, the legs' speeds and accelerations within " \
   "limit.leg_velocity and limit.leg_acceleration, braking in time within guard.*_max; the motion passed on as it is " \
   "while it keeps there (as cosim run's master guards it: on for a tool that runs this FMU without it)") \
+X(Real, guard_period, "guard.period", parameter, fixed, "s", 1e-3, FMU_POSITIVE, FMU_INF, \
+  "guard: Model Exchange's guard steps, a time event each this far apart, as a co-simulation's steps of it (a " \
+  "scene's step; Co-Simulation: its communication steps)") \
 X(Real, guard_velocity_max, "guard.velocity_max", parameter, fixed, "m/s", 0.25, FMU_POSITIVE, FMU_INF, \
   "guard: the reference's largest speed along x, y, z where the guard holds it (a scene's [live] velocity_max)") \
 X(Real, guard_angular_velocity_max, "guard.angular_velocity_max", parameter, fixed, "rad/s", 0.5, FMU_POSITIVE, FMU_INF, \

@@ -7,7 +7,8 @@ round-off of its fall, the drives as their inner step shrinks (their error falli
 events), the cueing's washout what its exact steps converge to as they shrink and its MPC what
 they give (its solves time events). A Model Exchange instance refuses Co-Simulation's calls and
 the reverse (and a Co-Simulation instance the Model Exchange states' value references); a configuration with events the FMU does not give (the PMSM drive's switching
-inverter) is refused at initialization with its reason."""
+inverter) is refused at initialization with its reason; the cueing's guard steps at time events as
+its Co-Simulation at that step."""
 
 from __future__ import annotations
 
@@ -269,19 +270,36 @@ def test_the_switching_inverter_is_refused_with_its_reason(capsys):
     drive.freeInstance()
 
 
-def test_the_cueings_guard_is_refused_with_its_reason(capsys):
-    """The cueing's guard holds its reference at the end of each communication step: as Model
-    Exchange, which has none, guard = true is refused at initialization in one line."""
-    from fmpy.fmi1 import FMICallException
-    cueing, vrs = instantiated("cueing", True)
-    cueing.setupExperiment(startTime=0.0)
-    cueing.enterInitializationMode()
-    cueing.setBoolean([vrs["guard"]], [True])
-    with pytest.raises(FMICallException):
-        cueing.exitInitializationMode()
-    assert "as Model Exchange, guard = true is refused: the guard holds the reference at the end of each " \
-           "communication step" in capsys.readouterr().out
-    cueing.freeInstance()
+def test_the_cueings_guard_steps_as_model_exchange_as_its_co_simulation(tmp_path):
+    """The cueing's guard as Model Exchange: its steps time events guard.period apart, the reference
+    between them its motion carried from the last (its acceleration constant), as the Co-Simulation
+    steps it at that communication step. A car braking at 8 m/s^2, strongly cued (the washout alone
+    takes Meng's joints past 20 deg: tests/models/test_cueing.py): integrated by CVODE, the guard
+    holds the same steps back by the same limit as the Co-Simulation at 1 ms, the reference within
+    1e-6 of its range of it, and the joints within their 20 deg at every millisecond."""
+    from cosim.platform.core import Core
+    t = np.arange(0.0, 3.0 + 1e-9, 0.01)
+    braking = -8.0 * np.clip((t - 0.5) / 0.15, 0.0, 1.0)
+    motion = np.column_stack([t, braking, 0 * t, np.full_like(t, 9.80665), 0 * t, 0 * t, 0 * t])
+    np.savetxt(tmp_path / "braking.csv", motion, delimiter=",", comments="", fmt="%.10g",
+               header="time," + ",".join(f"specific_force.{a}" for a in "xyz") + "," +
+               ",".join(f"angular_rate.{a}" for a in "xyz"))
+    values = {"vehicle.file": str(tmp_path / "braking.csv"), "translation.x.gain": 1.0, "translation.x.limit": 10.0,
+              "translation.x.frequency": 1.0, "tilt.gain": 1.0, "tilt.rate_limit": 0.3, "guard": True,
+              "guard.period": 1e-3}
+    held = [f"guard.held.{kind}" for kind in ("stroke", "joint", "leg_velocity", "leg_acceleration", "return")]
+    me = simulate_fmu(str(fmu_path("cueing", model_exchange=True)), fmi_type="ModelExchange", solver="CVode",
+                      relative_tolerance=1e-10, stop_time=3.0, output_interval=1e-3, output=POSE_REF + held,
+                      start_values=values)
+    cs = simulate_fmu(str(fmu_path("cueing")), stop_time=3.0, step_size=1e-3, output_interval=1e-3,
+                      output=POSE_REF + held, start_values=values)
+    assert me["guard.held.joint"][-1] > 1000
+    for name in held:
+        assert me[name][-1] == cs[name][-1], name
+    for name in POSE_REF:
+        assert np.abs(np.interp(cs["time"], me["time"], me[name]) - cs[name]).max() <= 1e-6 * (np.ptp(cs[name]) + 1e-3)
+    kinematics = Core().pose_kinematics(np.column_stack([me[name] for name in POSE_REF]))
+    assert np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]).max() <= np.radians(20.0) + 1e-12
 
 
 POSE_REF = [f"pose_ref.{dof}" for dof in ("x", "y", "z", "roll", "pitch", "yaw")]

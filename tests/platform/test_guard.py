@@ -26,13 +26,20 @@ from cosim.platform.core import Core
 from cosim.platform.ports import POSE
 from cosim.platform.realtime import Envelope, guarded_plan
 from cosim.platform.realtime.margins import directions, measure, probe_scene
-from cosim.platform.run.compile import scene_values, unguarded_cueing
+from cosim.platform.run.compile import scene_values
 from cosim.platform.run.envelope import GUARD_KINDS, GUARD_OUTPUTS
 from cosim.platform.run.runner import run_scene
 from cosim.platform.scene import load_scene
 
 SHIPPED = ("meng_eq35", "meng_eq35_linear", "sumnu_case_1", "sumnu_case_1_pmsm")  # every platform and drive kind
 GUIDE_POSE = [0, 0.05, 1.72, 0, 0, 0.1]  # the guide's three-command example
+
+
+def unguarded_cueing(plan):
+    """The plan with its cueing FMU's guard off: what the cueing would do to the platform unguarded."""
+    components = [replace(c, parameters={**c.parameters, "guard": False}) if c.name == "cueing" else c
+                  for c in plan.structure.components]
+    return replace(plan, structure=replace(plan.structure, components=components))
 
 
 def columns(run, prefix: str) -> np.ndarray:
@@ -315,17 +322,18 @@ def test_the_cueing_fmus_guard_is_the_masters_bit_for_bit(tmp_path):
 
 
 def test_the_one_fmu_export_holds_the_cueing_as_cosim_run_does(tmp_path, capsys):
-    """The cueing FMU's guard goes with it into the one-FMU Co-Simulation export: in fmpy the exported
-    emergency stop is `cosim run`'s bit for bit at the scene's step, the reference within the
-    envelope; the Model Exchange export, which has no steps to hold it at, says in a line and in
-    its description (what a tool shows of an FMU it imports) that it runs the reference unguarded."""
+    """The cueing FMU's guard goes with it into the one-FMU exports: in fmpy the exported emergency
+    stop as Co-Simulation is `cosim run`'s bit for bit at the scene's step, the reference within the
+    envelope; as Model Exchange, integrated by fmpy's CVODE through the braking (the guard's steps
+    its time events at the scene's step), the reference within the envelope at every output and the
+    platform's joints within their limit; each says so in a line and in its description (what a
+    tool shows of an FMU it imports)."""
     from fmpy import read_model_description, simulate_fmu
     from cosim.cli import main
     model, fmu, me = emergency_stop(tmp_path), tmp_path / "stop.fmu", tmp_path / "stop_me.fmu"
+    guarded = "held within the platform's envelope by the cueing FMU's own guard"
     assert main(["export", model, "--fmu", str(fmu)]) == 0
-    said = capsys.readouterr().out
-    assert "held within the platform's envelope by the cueing FMU's own guard" in said and "not inside it" not in said
-    assert "not inside it" not in read_model_description(str(fmu)).description
+    assert guarded in capsys.readouterr().out and guarded in read_model_description(str(fmu)).description
     envelope, core = limits_of(model)
     run = cosim.simulate(model)
     step = load_scene(model).step
@@ -337,8 +345,13 @@ def test_the_one_fmu_export_holds_the_cueing_as_cosim_run_does(tmp_path, capsys)
         assert np.array_equal(result[name][1:], run[name][at]), name
     assert_reference_inside(np.column_stack([result[f"pose_ref.{a}"] for a in POSE]), envelope, core)
     assert main(["export", model, "--fmu", str(me), "--me"]) == 0
-    assert "is not inside it" in capsys.readouterr().out
-    assert "is not inside it" in read_model_description(str(me)).description
+    said = capsys.readouterr().out
+    assert f"{guarded}, as in `cosim run`, its steps time events {step:g} s apart" in said
+    assert guarded in read_model_description(str(me)).description
+    integrated = simulate_fmu(str(me), fmi_type="ModelExchange", stop_time=4.0, output=names)
+    assert integrated["guard.held.joint"][-1] > 1000
+    assert_reference_inside(np.column_stack([integrated[f"pose_ref.{a}"] for a in POSE]), envelope, core)
+    assert_platform_within_its_limits(integrated, envelope, core)
 
 
 def test_a_paper_scene_keeps_its_trajectory_and_reports_each_excursion():

@@ -133,9 +133,12 @@ def test_fmusim_and_omsimulator_hold_the_exported_cueing_as_cosim_run_does(fmi, 
     """The classical washout's emergency stop, whose reference the cueing FMU's guard holds at the
     joints' limit for thousands of steps, exported as one FMU: fmusim and OMSimulator run it at the
     scene's step as `cosim run` runs it (to the digits each writes), the reference within the
-    envelope and the guard's count of the steps it held the same."""
+    envelope and the guard's count of the steps it held the same. Exported as one Model Exchange
+    FMU, fmusim's CVODE integrates it through the guard's steps (its time events): the reference
+    within the envelope at every output, the platform within its stroke and joints, the guard's
+    count within 1 % of `cosim run`'s."""
     from peers import fmusim, omsimulator
-    from test_guard import assert_reference_inside, emergency_stop, limits_of
+    from test_guard import assert_platform_within_its_limits, assert_reference_inside, emergency_stop, limits_of
     model = emergency_stop(tmp_path)
     scene = cosim.load(model)
     ours = run_scene(scene)[0]
@@ -161,6 +164,16 @@ def test_fmusim_and_omsimulator_hold_the_exported_cueing_as_cosim_run_does(fmi, 
     envelope, core = limits_of(model)
     assert_reference_inside(np.column_stack([table[f"pose_ref.{a}"] for a in POSE]), envelope, core)
     assert table["guard.held.joint"][-1] == ours["guard.held.joint"][-1] > 1000
+    me = export_fmu(scene, tmp_path / "stop_me.fmu", fmi=fmi, model_exchange=True).files[0]
+    done = subprocess.run([str(fmusim()), "--interface-type", "me", "--solver", "cvode", "--stop-time", "10.0",
+                           "--output-interval", repr(scene.step), "--output-file", str(out), str(me)],
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    assert table["time"][-1] == pytest.approx(10.0)
+    assert_reference_inside(np.column_stack([table[f"pose_ref.{a}"] for a in POSE]), envelope, core)
+    assert_platform_within_its_limits({f"pose.{a}": table[f"pose.{a}"] for a in POSE}, envelope, core)
+    assert table["guard.held.joint"][-1] == pytest.approx(ours["guard.held.joint"][-1], rel=0.01)
 
 
 @each(FMI2)

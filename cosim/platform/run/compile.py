@@ -207,7 +207,8 @@ def _wire(scene: Scene, legs: list[dict], mechanics_values: dict, fmus: list[Pat
     structure = platform_structure(scene.drive, mechanics_values, {}, scene_trajectory(scene), leg_values=legs,
                                    name=scene.path.stem, experiment=Experiment(0.0, scene.duration, scene.step),
                                    interface_jacobian=scene.interface_jacobian, drive_fmus=fmus,
-                                   cueing_values=guarded_cueing(scene_cueing(scene, mechanics_values)), fmi=scene.fmi)
+                                   cueing_values=guarded_cueing(scene_cueing(scene, mechanics_values), scene.step),
+                                   fmi=scene.fmi)
     structure.settings = {**to_strings(algorithm, scene.control), **output_settings(*record, scene.output_interval)}
     return structure
 
@@ -242,19 +243,12 @@ def scene_cueing(scene: Scene, mechanics_values: dict) -> dict | None:
             "mpc.preview": scene.cueing_preview, **scene.cueing_parameters}
 
 
-def guarded_cueing(values: dict | None) -> dict | None:
+def guarded_cueing(values: dict | None, step: float) -> dict | None:
     """The cueing FMU's values with its guard on (fmu/cueing/guard.c): its pose reference held within
-    the platform's envelope (the limits and joints scene_cueing gives it) at the end of each step,
-    in `cosim run` and in every tool its system goes to. Every motion-cueing scene runs so."""
-    return None if values is None else {**values, "guard": True}
-
-
-def unguarded_cueing(plan: Plan) -> Plan:
-    """The plan with its cueing FMU's guard off: Model Exchange, which has no steps to hold the
-    reference at (the cueing FMU refuses its guard there)."""
-    components = [replace(c, parameters={**c.parameters, "guard": False}) if c.name == "cueing" else c
-                  for c in plan.structure.components]
-    return replace(plan, structure=replace(plan.structure, components=components))
+    the platform's envelope (the limits and joints scene_cueing gives it) at the end of each step
+    (as Model Exchange at time events a scene's `step` apart: guard.period), in `cosim run` and in
+    every tool its system goes to. Every motion-cueing scene runs so."""
+    return None if values is None else {"guard.period": step, **values, "guard": True}
 
 
 def scene_algorithm(scene: Scene) -> Algorithm:
@@ -273,7 +267,7 @@ def model_exchange_plan(compiled: CompiledScene) -> tuple[Plan, str]:
     model_exchange_structure(compiled.plan.structure)  # every component has a Model Exchange FMU, or one line
     remark = ("run as one Model Exchange FMU of the scene's FMUs (the connections carried inside its derivatives) "
               f"under CVODE (BDF, relative tolerance {RELATIVE_TOLERANCE:g}): no coupling, no macro step")
-    if compiled.scene.vehicle is not None:  # the cueing FMU's guard acts at a co-simulation's steps: none here
-        remark += ("; the cueing's reference unguarded (the envelope's guard holds it in a co-simulation's steps, "
-                   "not here): any excursion past the platform's limits below is the cueing's own")
-    return replace(unguarded_cueing(compiled.plan), model_exchange=True), remark
+    if compiled.scene.vehicle is not None:  # the cueing FMU's guard steps at time events
+        remark += (f"; the cueing's reference held within the platform's envelope by its guard, stepped at time "
+                   f"events {compiled.scene.step:g} s apart (the scene's step)")
+    return replace(compiled.plan, model_exchange=True), remark

@@ -215,10 +215,9 @@ def carried(structure: SystemStructure, lines: list[str]) -> list[str]:
     return ours
 
 
-# what the one-FMU Model Exchange export of a motion-cueing scene says of itself, and its description too
-# (the cueing FMU's guard acts at the end of a co-simulation step: the Co-Simulation export holds it)
-UNGUARDED = ("the FMU runs the cueing's reference as it comes: the guard that holds it within the platform's "
-             "envelope at each step of `cosim run` and of the Co-Simulation export is not inside it")
+# what the one-FMU exports of a motion-cueing scene say of its guard
+GUARDED = ("the cueing's reference held within the platform's envelope by the cueing FMU's own guard, as in "
+           "`cosim run`")
 
 
 def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = False) -> Exported:
@@ -231,15 +230,15 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
     from ...engine import ParameterError
     from ...engine.settings import SettingsError
     from ...engine.system_fmu import system_binaries, write_system_fmu
-    from .compile import compile_scene, unguarded_cueing
+    from .compile import compile_scene
     from .errors import scene_error
     from .errors import SceneError
     try:
         compiled = compile_scene(scene.changed({"scene.fmi": 2}) if scene.fmi != 2 else scene)
         check_workspace(scene, compiled.mechanics)  # a reference no tool could run, as `cosim run` refuses it
-        plan = unguarded_cueing(compiled.plan) if model_exchange else compiled.plan  # (no steps to guard at)
+        plan = compiled.plan
         path = write_system_fmu(plan, target, model_name=scene.name, fmi=fmi, model_exchange=model_exchange,
-                                remark=UNGUARDED if scene.vehicle is not None and model_exchange else "")
+                                remark=GUARDED if scene.vehicle is not None else "")
     except ParameterError as error:
         raise scene_error(scene, error) from None
     except SettingsError as error:  # what the one FMU cannot carry (a step control that chooses its steps)
@@ -253,8 +252,7 @@ def export_fmu(scene: Scene, target: Path, fmi: int = 2, model_exchange: bool = 
              f"{len(plan.structure.components)} FMUs, coupled inside as `cosim run` couples them ({plan.algorithm.kind}, "
              f"extrapolation order {plan.algorithm.order}, steps of {', '.join(f'{h:g}' for h in steps)} s with its finer "
              f"start and edges); at a communication step that is a multiple of {plan.control.step:g} s its outputs are "
-             "`cosim run`'s bit for bit" + (" (the cueing's reference held within the platform's envelope by the cueing "
-                                            "FMU's own guard, as in `cosim run`)" if scene.vehicle is not None else "") +
+             "`cosim run`'s bit for bit" + (f" ({GUARDED})" if scene.vehicle is not None else "") +
              ", a shorter one steps finer inside",
              f"note: its variables: the {len(plan.record)} recorded outputs as the results name them, the inputs no "
              "connection feeds and every parameter as 'component.variable', the scene's values as their starts "
@@ -275,7 +273,7 @@ def model_exchange_lines(scene: Scene, plan, fmi: int) -> list[str]:
              "unconnected inputs and parameters (as the Co-Simulation FMU's), and each component's states and their "
              "derivatives as 'component.ode.x[k]'"]
     if scene.vehicle is not None:
-        lines.append(f"note: {UNGUARDED} (its description says so too)")
+        lines.append(f"note: {GUARDED}, its steps time events {scene.step:g} s apart (the scene's step)")
     return lines
 
 
