@@ -140,7 +140,7 @@ class MonolithicSystem:
         self.propagate()
         for member in self.members.values():
             self._call(member, "fmi2ExitInitializationMode", member.fmu.exitInitializationMode)
-        self.first_event = self.event(enter=False)  # the initial event's iteration (each FMU in Event Mode)
+        self.first_event = self.event(enter=False)[0]  # the initial event's iteration (each FMU in Event Mode)
 
     def _call(self, member: _Member, what: str, function, *args, **kwargs):
         start = time.perf_counter()
@@ -251,25 +251,27 @@ class MonolithicSystem:
         times them, as fmpy and fmusim set it)."""
         self._each_part("fmi2GetNominalsOfContinuousStates", "getNominalsOfContinuousStates", pointer)
 
-    def event(self, enter: bool = True) -> float:
+    def event(self, enter: bool = True) -> tuple[float, bool]:
         """Every FMU through Event Mode (entered unless it is there: after initialization); the
-        next time event of any (inf: none)."""
-        following = math.inf
+        next time event of any (inf: none), and whether any changed its states or right-hand side
+        there (the solver restarts; an event that changed nothing lets it step on)."""
+        following, changed = math.inf, False
         for member in self.members.values():
             fmu = member.fmu
             if enter:
                 self._call(member, "fmi2EnterEventMode", fmu.enterEventMode)
             needed = True
             while needed:
-                needed, terminate, _, _, defined, at = self._call(member, "fmi2NewDiscreteStates",
-                                                                  fmu.newDiscreteStates)
+                needed, terminate, _, values_changed, defined, at = self._call(member, "fmi2NewDiscreteStates",
+                                                                               fmu.newDiscreteStates)
+                changed = changed or bool(values_changed)
             if terminate:
                 raise Stopped(f"{member.name}: asked to terminate at t = {self.time:.9g} s")
             if defined:
                 following = min(following, at)
             self._call(member, "fmi2EnterContinuousTimeMode", fmu.enterContinuousTimeMode)
         self.propagate()
-        return following
+        return following, changed
 
     def completed_step(self) -> None:
         start = time.perf_counter()
@@ -429,8 +431,9 @@ def integrate(structure: SystemStructure, stop_time: float, record: Sequence[tup
                 system.set_time(t)
                 system.propagate()
             if reached(next_event):
-                next_event = system.event()
-                solver.reset(t)
+                next_event, changed = system.event()
+                if changed:
+                    solver.reset(t)
             if reached(target):
                 rows.append([t, *system.outputs(record)])
                 grid += 1

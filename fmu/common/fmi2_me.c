@@ -146,14 +146,16 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     }
     memset(info, 0, sizeof *info); /* no new discrete states, nothing changed */
 #if MODEL_TIME_EVENTS
-    model_time_event(fmu);
+    const int changed = model_time_event(fmu);
     const double next = model_next_time_event(fmu);
     if (isfinite(next)) info->nextEventTimeDefined = fmi2True, info->nextEventTime = next;
-    /* A time event changes the right-hand side (a pulse's edge, a table's corner, the MPC's new plan):
-     * the importer's solver is told to take the states afresh and restart there, as the standard
-     * has it after a change of states (Reference-FMUs' fmusim, for one, lets CVODE step on past an
-     * event otherwise, on a solution of the right-hand side before it). */
-    info->valuesOfContinuousStatesChanged = fmi2True;
+    /* A time event that changes the right-hand side (a pulse's edge, a table's corner, the MPC's new
+     * plan, the guard's new motion): the importer's solver is told to take the states afresh and
+     * restart there, as the standard has it after a change of states (Reference-FMUs' fmusim, for
+     * one, lets CVODE step on past an event otherwise, on a solution of the right-hand side before
+     * it). One that changes nothing (the guard passing the cueing's motion on as before, another
+     * model's event) lets the solver step on: no restart for it. */
+    info->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
 #endif
     fmu->outputs_stale = 1; /* what the event changed (a pulse's edge, a new solve) shows in the outputs */
     return fmi2OK;

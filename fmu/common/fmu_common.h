@@ -112,8 +112,10 @@ void model_state_nominals(const FmuInstance *fmu, double *nominals);
 /* The next time after fmu->s.time at which the model changes discontinuously (INFINITY: none). */
 double model_next_time_event(FmuInstance *fmu);
 /* At an event (fmi2NewDiscreteStates), before the next is asked for: the model's discrete state
- * updated for fmu->s.time (a sampled controller's new output). */
-void model_time_event(FmuInstance *fmu);
+ * updated for fmu->s.time (a sampled controller's new output). Returns 1 where the model changes
+ * discontinuously there (its right-hand side or outputs: the importer's solver restarts), 0 where
+ * nothing does (an event of another model of the system, or a sample that changed nothing). */
+int model_time_event(FmuInstance *fmu);
 #endif
 #endif
 

@@ -565,9 +565,19 @@ fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
     return fmi2OK;
 }
 
-void model_time_event(FmuInstance *fmu) {
-    if (mpc_of(fmu)) mpc_time_event(fmu, mpc_of(fmu));
-    if (cueing_guard_time_event(fmu, guard_of(fmu))) model_compute_outputs(fmu); /* the guard takes the motion now */
+/* A new plan of the MPC, a corner of the vehicle table's interpolation, or a step of the guard that
+ * does not pass the cueing's motion on as before (it holds it, or hands it back). */
+int model_time_event(FmuInstance *fmu) {
+    const ModelData *data = (const ModelData *)fmu->model_data;
+    const double t = fmu->s.time, near = 1e-12 * fmax(1.0, fabs(t));
+    int changed = mpc_of(fmu) ? mpc_time_event(fmu, mpc_of(fmu)) : 0;
+    if (data && data->vehicle && fabs(fmu_table_next_row(data->vehicle, t - near) - t) <= near) changed = 1;
+    const int passed_on = fmu->s.internal.guard.active == 3;
+    if (cueing_guard_time_event(fmu, guard_of(fmu))) { /* the guard takes the motion now */
+        model_compute_outputs(fmu);
+        if (!(passed_on && fmu->s.internal.guard.active == 3)) changed = 1;
+    }
+    return changed;
 }
 
 /* The MPC's next solve, a period after the last, the guard's next step, or the vehicle table's next

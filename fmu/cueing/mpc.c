@@ -609,8 +609,10 @@ void mpc_state_nominals(const MpcData *m, double *nominals) {
     }
 }
 
-void mpc_time_event(FmuInstance *fmu, MpcData *m) {
-    if (fmu->s.time >= mpc_next_solve(fmu) - 1e-9 * fmu->s.v.mpc_period) solve(fmu, m, fmu->s.time);
+int mpc_time_event(FmuInstance *fmu, MpcData *m) {
+    if (fmu->s.time < mpc_next_solve(fmu) - 1e-9 * fmu->s.v.mpc_period) return 0;
+    solve(fmu, m, fmu->s.time);
+    return 1;
 }
 
 double mpc_next_solve(const FmuInstance *fmu) { return fmu->s.internal.mpc.solved_at + fmu->s.v.mpc_period; }

@@ -45,7 +45,8 @@ void mpc_derivatives(FmuInstance *fmu, const MpcData *data, double *dxdt);
  * thresholds, so that an importer's solver (absolute tolerance: the relative one times the nominal)
  * holds the perceived errors, not only the motion, to its tolerance. */
 void mpc_state_nominals(const MpcData *data, double *nominals);
-void mpc_time_event(FmuInstance *fmu, MpcData *data);
+/* A solve where a period has passed since the last (1: solved, a new plan), else 0. */
+int mpc_time_event(FmuInstance *fmu, MpcData *data);
 double mpc_next_solve(const FmuInstance *fmu);
 /* The pose reference (value and first three derivatives per DOF, from neutral) into pose. */
 void mpc_pose(const FmuInstance *fmu, double pose[6][4]);

@@ -144,7 +144,18 @@ fmi2Status model_completed_integrator_step(FmuInstance *fmu) {
     return fmi2OK;
 }
 
-void model_time_event(FmuInstance *fmu) { (void)fmu; } /* the pulses are functions of time alone */
+/* The pulses are functions of time alone: an event changes the wrench where it is one's edge. */
+int model_time_event(FmuInstance *fmu) {
+    const double t = fmu->s.time;
+    for (int c = 0; c < 6; c++)
+        for (int k = 0; k < 2; k++) {
+            const int *pulse = WRENCH[c].pulse[k];
+            if (*fmu_real(fmu, pulse[0]) == 0.0) continue;
+            for (int edge = 1; edge <= 2; edge++)
+                if (fabs(*fmu_real(fmu, pulse[edge]) - t) <= edge_tolerance(t)) return 1;
+        }
+    return 0;
+}
 
 double model_next_time_event(FmuInstance *fmu) {
     const double t = fmu->s.time;
