@@ -302,6 +302,47 @@ def test_the_cueings_guard_steps_as_model_exchange_as_its_co_simulation(tmp_path
     assert np.maximum(kinematics["lower_angle"], kinematics["upper_angle"]).max() <= np.radians(20.0) + 1e-12
 
 
+def events(fmu, times: tuple[float, ...]) -> list[bool]:
+    """valuesOfContinuousStatesChanged of the FMU's event at each time (time moved on there)."""
+    changed = []
+    for t in times:
+        fmu.setTime(t)
+        fmu.enterEventMode()
+        changed.append(bool(fmu.newDiscreteStates()[3]))
+        fmu.enterContinuousTimeMode()
+    return changed
+
+
+def test_an_event_that_changes_nothing_lets_the_solver_step_on():
+    """A time event reports valuesOfContinuousStatesChanged where it changes the right-hand side, so
+    that an importer's solver restarts there, and not where it changes nothing, so that it steps on:
+    the cueing's guard passing the car drive's motion on (its 1 ms steps) changes nothing, its first
+    step and the vehicle table's 10 ms corners do; a load pulse's edges change the trajectory's
+    wrench, another time does not."""
+    cueing, vrs = instantiated("cueing", True)
+    cueing.setupExperiment(startTime=0.0)
+    cueing.enterInitializationMode()
+    cueing.setString([vrs["vehicle.file"]], [DRIVE])
+    cueing.setBoolean([vrs["guard"]], [True])
+    cueing.exitInitializationMode()
+    cueing.newDiscreteStates()
+    cueing.enterContinuousTimeMode()
+    assert events(cueing, (0.001, 0.002, 0.003, 0.01, 0.011, 0.0115)) == [True, False, False, True, False, False]
+    cueing.terminate()
+    cueing.freeInstance()
+    trajectory, vrs = instantiated("trajectory", True)
+    trajectory.setupExperiment(startTime=0.0)
+    trajectory.enterInitializationMode()
+    names = [f"load.force.z.pulse[1].{key}" for key in ("value", "start", "end")]
+    trajectory.setReal([vrs[n] for n in names], [100.0, 0.5, 0.7])
+    trajectory.exitInitializationMode()
+    trajectory.newDiscreteStates()
+    trajectory.enterContinuousTimeMode()
+    assert events(trajectory, (0.3, 0.5, 0.6, 0.7, 0.8)) == [False, True, False, True, False]
+    trajectory.terminate()
+    trajectory.freeInstance()
+
+
 POSE_REF = [f"pose_ref.{dof}" for dof in ("x", "y", "z", "roll", "pitch", "yaw")]
 TILT_RATE = float(np.radians(3.0))  # the tilt's rate limit these tests state (the default has a margin below it)
 POSE_REF_RATE = [f"pose_ref_rate.{dof}" for dof in ("x", "y", "z", "roll", "pitch", "yaw")]
