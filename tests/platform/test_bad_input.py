@@ -393,6 +393,17 @@ def test_a_reference_the_platform_cannot_take_is_refused_before_its_run(tmp_path
     assert not list((tmp_path / "out").glob("*.csv"))
 
 
+def test_the_dof_an_impossible_pose_needs_is_blamed_not_the_farthest(tmp_path, capsys):
+    """A yaw of 1.5 rad, which Meng's platform takes alone, and a pitch of 1.4, which it does not:
+    the pitch is named (its line), though the yaw is the farther from neutral."""
+    scene = tmp_path / "pitched.toml"
+    scene.write_text('[scene]\nduration = 1.0\n[mechanics]\nparameter_set = "meng2010"\n[trajectory.z]\n'
+                     'offset = "neutral"\n[trajectory.yaw]\noffset = 1.5\n[trajectory.pitch]\noffset = 1.4\n')
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pitched.toml:9: the reference takes leg" in err, err
+
+
 @pytest.mark.parametrize("column, value, hint", [("z", -10.0, ""),
                                                  ("roll", 3.0, "its roll reaches 3 rad (172 deg): a scene's angles")])
 def test_a_table_the_platform_cannot_take_names_its_row(tmp_path, capsys, column, value, hint):

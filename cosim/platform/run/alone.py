@@ -107,12 +107,9 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
     hint = (f"; its {wide} reaches {largest.max():.3g} rad ({np.degrees(largest.max()):.0f} deg): a scene's angles "
             "are radians" if largest.max() > np.pi / 2 else "")
     how = "to no length" if kinematics["length"][k, leg - 1] <= 0 else "past a right angle from its neutral direction"
-    # the DOF to blame: the wide angle of a hint, else the one farthest from neutral then (translations
-    # against the legs' length there, angles in radians); at the trajectory table where that gives it
-    # (its row there named), else at its own [trajectory.<dof>] in the file
-    neutral = core.neutral_pose
-    away = np.abs(poses[k] - neutral) / np.r_[[core.pose_kinematics(neutral[None])["length"].max()] * 3, [1.0] * 3]
-    dof = wide if hint else POSE[int(np.nanargmax(np.where(np.isfinite(away), away, np.inf)))]
+    # the DOF to blame: the wide angle of a hint, else the one the pose then needs (_blamed); at the
+    # trajectory table where that gives it (its row there named), else at its own [trajectory.<dof>]
+    dof = wide if hint else _blamed(core, poses[k])
     columns, line = table_row(scene.table, times[k]) if scene.table is not None else ([], None)
     if dof in columns:
         key, row = "trajectory.table", f"; the table's row there: {scene.table}:{line}" if line else ""
@@ -120,6 +117,27 @@ def workspace_problem(scene: Scene, mechanics_values: dict) -> tuple[str, str] |
         key, row = f"trajectory.{dof}" if scene.document.line(f"trajectory.{dof}") else "trajectory", ""
     return (key,
             f"the reference takes leg {leg} {how} at t = {times[k]:.3f} s (the joints would cross){hint}{row}")
+
+
+def _possible(core, poses: np.ndarray) -> np.ndarray:
+    """Per pose (n x 6): every leg of some length and no joint turned a right angle from neutral."""
+    kinematics = core.pose_kinematics(poses)
+    tilt = np.maximum(kinematics["lower_angle"], kinematics["upper_angle"])
+    return ((kinematics["length"] > 0.0) & (tilt < TILT_IMPOSSIBLE)).all(axis=1)
+
+
+def _blamed(core, pose: np.ndarray) -> str:
+    """The DOF an impossible pose is impossible by: of those whose return to neutral alone makes it
+    possible, the farthest from neutral (translations against the legs' length there, angles in
+    radians); where none alone does, the farthest."""
+    neutral = core.neutral_pose
+    away = np.abs(pose - neutral) / np.r_[[core.pose_kinematics(neutral[None])["length"].max()] * 3, [1.0] * 3]
+    away = np.where(np.isfinite(away), away, np.inf)
+    trials = np.repeat(pose[None], 6, axis=0)
+    trials[np.arange(6), np.arange(6)] = neutral
+    with np.errstate(all="ignore"):
+        curing = _possible(core, trials)
+    return POSE[int(np.argmax(np.where(curing, away, -1.0))) if curing.any() else int(np.argmax(away))]
 
 
 def check_workspace(scene: Scene, mechanics_values: dict) -> None:
